@@ -1,0 +1,55 @@
+"""Model configuration files (``config/model.yaml``): which URDF, and which frames/joints play the
+thesis roles. Unknown keys and wrong types raise :class:`ConfigError` naming the key."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+
+from rns_ros.core.errors import ConfigError
+from rns_ros.core.model import FreeFloatingModel, ModelSpec
+
+_KEYS = {"urdf", "camera_frame", "wrist_frame", "positioning_joints", "wrist_joints"}
+
+
+def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
+    """Read a model YAML file; returns (absolute URDF path, :class:`ModelSpec`).
+
+    A relative ``urdf`` path is taken relative to the YAML file's folder.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"model config not found: {path}")
+    try:
+        content = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: not valid YAML: {exc}") from exc
+    if not isinstance(content, dict):
+        raise ConfigError(f"{path}: expected a mapping with keys {sorted(_KEYS)}")
+    unknown = sorted(set(content) - _KEYS)
+    if unknown:
+        raise ConfigError(f"{path}: unknown key(s) {unknown}; valid keys: {sorted(_KEYS)}")
+    if not isinstance(content.get("urdf"), str):
+        raise ConfigError(f"{path}: 'urdf' must be a file path string, got {content.get('urdf')!r}")
+    for key in ("camera_frame", "wrist_frame"):
+        if key in content and content[key] is not None and not isinstance(content[key], str):
+            raise ConfigError(f"{path}: '{key}' must be a frame name, got {content[key]!r}")
+    joints = {}
+    for key in ("positioning_joints", "wrist_joints"):
+        value = content.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(name, str) for name in value):
+            raise ConfigError(f"{path}: '{key}' must be a list of joint names, got {value!r}")
+        joints[key] = tuple(value)
+    spec = ModelSpec(
+        camera_frame=content.get("camera_frame", "camera"),
+        wrist_frame=content.get("wrist_frame", "wrist"),
+        **joints,
+    )
+    return (path.parent / content["urdf"]).resolve(), spec
+
+
+def load_model(path: str | Path) -> FreeFloatingModel:
+    """Load the :class:`FreeFloatingModel` described by a model YAML file."""
+    urdf, spec = load_model_config(path)
+    return FreeFloatingModel.from_urdf(urdf, spec)

@@ -1,0 +1,137 @@
+"""Generalized inverses for the restricted Jacobian (thesis section 4.3).
+
+Three separate inverses, all through the SVD J = sum_i sigma_i u_i v_i^T (eq. 4.9):
+
+* :func:`pseudoinverse` - Moore-Penrose, eq. (4.9); unbounded as sigma_min -> 0.
+* :func:`damped_least_squares_inverse` - DLS with numerical filtering, eq. (4.10)-(4.12): damping
+  only on the directions inside the singular region; bounded; errors in direction and speed.
+* :func:`singularity_consistent_inverse` - the Singularity-Consistent inverse, eq. (4.13)-(4.14):
+  J J^SC = b prod(sigma) E, so the achieved velocity keeps the commanded direction exactly and only
+  the speed is scaled. It is *not* an SVD filter: it rescales every direction by the same factor.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from rns_ros.core.validation import as_matrix, positive
+
+#: Thesis values, section 4.3.2: singular region epsilon [-], maximum damping lambda_max^2 [-],
+#: SC gain b [-].
+THESIS_EPSILON = 0.2
+THESIS_LAMBDA2_MAX = 2.0
+THESIS_SC_GAIN = 1.7
+
+
+class DampedInverse(NamedTuple):
+    """Result of :func:`damped_least_squares_inverse` for J of shape (m, n).
+
+    Attributes:
+        matrix: J^# of eq. (4.11), shape (n, m).
+        singular_values: sigma_1 >= ... >= sigma_m of J, shape (m,).
+        damping: lambda^2 of eq. (4.12) applied to the smallest singular value [-].
+    """
+
+    matrix: np.ndarray
+    singular_values: np.ndarray
+    damping: float
+
+
+class SingularityConsistentInverse(NamedTuple):
+    """Result of :func:`singularity_consistent_inverse` for J of shape (m, n).
+
+    Attributes:
+        matrix: J^SC = b sum_i mu_i v_i u_i^T of eq. (4.13), shape (n, m).
+        singular_values: sigma_1 >= ... >= sigma_m of J, shape (m,).
+        speed_scale: b prod_i sigma_i = b sqrt(det(J J^T)): J J^SC = speed_scale E [-].
+    """
+
+    matrix: np.ndarray
+    singular_values: np.ndarray
+    speed_scale: float
+
+
+def _wide_svd(jacobian) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    jacobian = as_matrix(jacobian, "jacobian")
+    return np.linalg.svd(jacobian, full_matrices=False)
+
+
+def pseudoinverse(jacobian, rcond: float = 1e-12) -> np.ndarray:
+    """Moore-Penrose pseudoinverse J^+ = sum_i (1/sigma_i) v_i u_i^T, eq. (4.9).
+
+    Args:
+        jacobian: J, shape (m, n).
+        rcond: singular values below rcond * sigma_max are treated as zero [-].
+
+    Returns:
+        J^+, shape (n, m).
+    """
+    u, sigma, vt = _wide_svd(jacobian)
+    keep = sigma > rcond * max(sigma[0], np.finfo(float).tiny)
+    inverse_sigma = np.where(keep, 1.0 / np.where(keep, sigma, 1.0), 0.0)
+    return (vt.T * inverse_sigma) @ u.T
+
+
+def dls_damping(sigma: float, epsilon: float, lambda2_max: float) -> float:
+    """Damping lambda^2 of eq. (4.12) for one singular value sigma.
+
+    lambda^2 = 0 for sigma > epsilon, else (1 - 2 sigma^2/eps^2 + sigma^4/eps^4) lambda2_max,
+    i.e. (1 - (sigma/eps)^2)^2 lambda2_max: continuous with zero slope at sigma = epsilon.
+    """
+    if sigma > epsilon:
+        return 0.0
+    ratio = (sigma / epsilon) ** 2
+    return (1.0 - ratio) ** 2 * lambda2_max
+
+
+def damped_least_squares_inverse(
+    jacobian,
+    epsilon: float = THESIS_EPSILON,
+    lambda2_max: float = THESIS_LAMBDA2_MAX,
+) -> DampedInverse:
+    """DLS inverse with numerical filtering, eq. (4.10)-(4.12).
+
+    J^# = sum_{i<m} (1/sigma_i) v_i u_i^T + sigma_m / (sigma_m^2 + lambda^2) v_m u_m^T, damping
+    only the minimum singular value. Where more than one singular value lies inside the singular
+    region (not covered by the thesis), each is filtered the same way, so J^# stays bounded for
+    any rank loss; with one value inside the region this is exactly eq. (4.11).
+
+    Args:
+        jacobian: J, shape (m, n), m <= n.
+        epsilon: size of the singular region in sigma [-] (thesis 0.2).
+        lambda2_max: maximum damping lambda_max^2 [-] (thesis 2).
+    """
+    epsilon = positive(epsilon, "epsilon")
+    lambda2_max = positive(lambda2_max, "lambda2_max")
+    u, sigma, vt = _wide_svd(jacobian)
+    damping = np.array([dls_damping(s, epsilon, lambda2_max) for s in sigma])
+    denominator = sigma**2 + damping
+    gains = np.divide(sigma, denominator, out=np.zeros_like(sigma), where=denominator > 0.0)
+    return DampedInverse(
+        matrix=(vt.T * gains) @ u.T, singular_values=sigma, damping=float(damping[-1])
+    )
+
+
+def singularity_consistent_inverse(
+    jacobian, gain: float = THESIS_SC_GAIN
+) -> SingularityConsistentInverse:
+    """Singularity-Consistent inverse, eq. (4.13)-(4.14).
+
+    J^SC = b sum_i mu_i v_i u_i^T with mu_i = prod_{j != i} sigma_j. Since J v_i = sigma_i u_i,
+    J J^SC = b (prod_j sigma_j) E: the commanded direction is kept exactly, the speed is scaled by
+    b sqrt(det(J J^T)). Near sigma_m -> 0 the term of v_m dominates instead of blowing up.
+
+    Args:
+        jacobian: J, shape (m, n), m <= n.
+        gain: b of eq. (4.13) [-] (thesis 1.7).
+    """
+    gain = positive(gain, "gain")
+    u, sigma, vt = _wide_svd(jacobian)
+    mu = np.array([np.prod(np.delete(sigma, i)) for i in range(sigma.size)])
+    return SingularityConsistentInverse(
+        matrix=gain * (vt.T * mu) @ u.T,
+        singular_values=sigma,
+        speed_scale=gain * float(np.prod(sigma)),
+    )

@@ -1,0 +1,40 @@
+"""Edge checks shared by the core: shape, finiteness, range; errors name the bad value."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rns_ros.core.errors import ConfigError, InputError
+
+
+def as_vector(value, size: int, name: str) -> np.ndarray:
+    """Return ``value`` as a finite float vector, shape ``(size,)``, else raise InputError."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be numeric, got {value!r}") from exc
+    if array.shape != (size,):
+        raise InputError(f"{name} must have shape ({size},), got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} must be finite, got {array.tolist()}")
+    return array
+
+
+def as_matrix(value, name: str) -> np.ndarray:
+    """Return ``value`` as a finite 2-D float array or raise :class:`InputError`."""
+    array = np.asarray(value, dtype=float)
+    if array.ndim != 2 or 0 in array.shape:
+        raise InputError(f"{name} must be a non-empty 2-D matrix, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} must be finite")
+    return array
+
+
+def positive(value: float, name: str, unit: str = "") -> float:
+    """Return ``value`` as float if it is finite and > 0, else raise :class:`ConfigError`."""
+    number = float(value)
+    if not np.isfinite(number) or number <= 0.0:
+        raise ConfigError(
+            f"{name} must be a finite number > 0 {unit}".rstrip() + f", got {value!r}"
+        )
+    return number

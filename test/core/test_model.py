@@ -1,0 +1,173 @@
+"""The default model matches thesis section 4.1.1 / Table 4.1, and bad descriptions fail clearly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from rns_ros.core import ConfigError, FreeFloatingModel, InputError, ModelError, ModelSpec
+from rns_ros.core.config import load_model_config
+from rns_ros.resources import default_model_config
+
+# Thesis Table 4.1: mass [kg] and principal moments [kg m^2] of links 1-7.
+TABLE_4_1 = {
+    "link_1": (30.0, (0.0671, 0.0671, 0.0851)),
+    "link_2": (30.0, (0.0843, 0.267, 0.267)),
+    "link_3": (45.0, (3.81, 3.81, 0.127)),
+    "link_4": (40.0, (0.113, 2.19, 2.19)),
+    "link_5": (20.0, (0.213, 0.213, 0.0250)),
+    "link_6": (20.0, (0.0250, 0.0292, 0.0292)),
+    "link_7": (25.0, (0.0990, 0.0990, 0.0313)),
+}
+LINK_LENGTHS = (0.10, 0.33, 1.00, 0.81, 0.35, 0.10, 0.20)  # m, docs/model.md
+MOUNT = (-0.79, -0.29, 1.0)  # m, thesis section 4.1.1
+
+
+def _body_inertia(robot: FreeFloatingModel, joint: str) -> pin.Inertia:
+    return robot.model.inertias[robot.model.getJointId(joint)]
+
+
+def test_joint_names_and_counts(robot):
+    assert robot.joint_names == tuple(f"joint_{i}" for i in range(1, 8))
+    assert robot.n == 7
+    assert robot.model.nq == 14
+    assert robot.model.nv == 13
+
+
+def test_gravity_is_zero(robot):
+    assert np.allclose(robot.model.gravity.vector, 0.0)
+
+
+def test_base_mass_and_inertia(robot):
+    base = robot.model.inertias[1]
+    assert base.mass == pytest.approx(2550.0)
+    assert np.allclose(base.lever, 0.0)  # base CoM frame = base link frame
+    assert np.allclose(base.inertia, np.diag([6200.0, 3540.0, 7090.0]))
+
+
+@pytest.mark.parametrize(("index", "link"), list(enumerate(TABLE_4_1, start=1)))
+def test_link_mass_and_principal_moments_match_table_4_1(robot, index, link):
+    mass, moments = TABLE_4_1[link]
+    inertia = _body_inertia(robot, f"joint_{index}")
+    assert inertia.mass == pytest.approx(mass)
+    assert np.allclose(np.sort(np.linalg.eigvalsh(inertia.inertia)), np.sort(moments), atol=1e-12)
+    # The distinct (axial) moment lies along the link, which points along the joint-frame z axis.
+    axial = min(set(moments), key=lambda value: moments.count(value))
+    assert inertia.inertia[2, 2] == pytest.approx(axial)
+    # CoM at mid-length on the link axis.
+    assert np.allclose(inertia.lever, [0.0, 0.0, LINK_LENGTHS[index - 1] / 2])
+
+
+def test_total_mass(robot):
+    assert robot.total_mass == pytest.approx(2550.0 + sum(m for m, _ in TABLE_4_1.values()))
+
+
+def test_mount_position_and_straight_arm_at_zero(robot):
+    model, data = robot.model, robot.data
+    pin.framesForwardKinematics(model, data, robot.neutral())
+    joint_1 = data.oMi[model.getJointId("joint_1")].translation
+    assert np.allclose(joint_1, MOUNT)
+    # theta = 0: straight arm along base +z; only the elbow offset (0.15 m along y) is lateral.
+    camera = data.oMf[robot.camera_frame_id].translation
+    assert np.allclose(camera - joint_1, [0.0, 0.15, sum(LINK_LENGTHS)])
+    wrist = data.oMf[robot.wrist_frame_id].translation
+    joint_6 = data.oMi[model.getJointId("joint_6")].translation
+    assert np.allclose(wrist, joint_6)
+
+
+def test_folded_elbow_puts_forearm_beside_upper_arm(robot):
+    model, data = robot.model, robot.data
+    theta = np.zeros(7)
+    theta[3] = np.pi
+    pin.framesForwardKinematics(model, data, robot.configuration(theta))
+    shoulder = data.oMi[model.getJointId("joint_3")].translation
+    elbow = data.oMi[model.getJointId("joint_4")].translation
+    wrist = data.oMf[robot.wrist_frame_id].translation
+    upper_arm = elbow - shoulder
+    # Forearm + forearm-roll link run back along the upper arm, 0.15 m to the side.
+    assert np.allclose(upper_arm, [0.0, 0.15, 1.0])
+    assert np.allclose(wrist - elbow, [0.0, 0.0, -(0.81 + 0.35)], atol=1e-12)
+
+
+def test_limits(robot):
+    assert np.allclose(robot.lower_limits, -2 * np.pi)
+    assert np.allclose(robot.upper_limits, 2 * np.pi)
+    assert np.allclose(robot.velocity_limits, [0.5, 0.5, 0.5, 0.5, 1.0, 1.0, 1.0])
+
+
+def test_subchains_from_config(robot):
+    assert robot.subchains is not None
+    assert robot.subchains.positioning.tolist() == [0, 1, 2, 3]
+    assert robot.subchains.wrist.tolist() == [4, 5, 6]
+
+
+def test_missing_urdf_names_the_path(tmp_path):
+    with pytest.raises(ModelError, match="not found"):
+        FreeFloatingModel.from_urdf(tmp_path / "nope.urdf")
+
+
+def test_unparsable_urdf():
+    with pytest.raises(ModelError, match="could not be parsed"):
+        FreeFloatingModel.from_urdf_string("<robot name='x'><link></robot>")
+
+
+def test_unknown_frame_lists_the_valid_ones():
+    urdf, _ = load_model_config(default_model_config())
+    with pytest.raises(ModelError, match=r"camera_frame 'eye' .*'camera'"):
+        FreeFloatingModel.from_urdf(urdf, ModelSpec(camera_frame="eye"))
+
+
+def test_unknown_subchain_joint_names_the_valid_ones():
+    urdf, _ = load_model_config(default_model_config())
+    spec = ModelSpec(positioning_joints=("joint_1", "shoulder"), wrist_joints=("joint_5",))
+    with pytest.raises(ModelError, match=r"\['shoulder'\].*joint_7"):
+        FreeFloatingModel.from_urdf(urdf, spec)
+
+
+def test_subchains_must_partition_the_arm():
+    urdf, _ = load_model_config(default_model_config())
+    spec = ModelSpec(positioning_joints=("joint_1", "joint_2"), wrist_joints=("joint_7",))
+    with pytest.raises(ModelError, match="cover all 7 joints"):
+        FreeFloatingModel.from_urdf(urdf, spec)
+
+
+def test_continuous_joint_is_rejected():
+    xml = (
+        "<robot name='c'><link name='base'><inertial><mass value='10'/><inertia ixx='1' iyy='1'"
+        " izz='1' ixy='0' ixz='0' iyz='0'/></inertial></link><link name='l'><inertial><mass"
+        " value='1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' ixz='0' iyz='0'/></inertial></link>"
+        "<joint name='spin' type='continuous'><parent link='base'/><child link='l'/>"
+        "<axis xyz='0 0 1'/></joint><link name='camera'/><joint name='cam' type='fixed'>"
+        "<parent link='l'/><child link='camera'/></joint></robot>"
+    )
+    with pytest.raises(ModelError, match="'spin'"):
+        FreeFloatingModel.from_urdf_string(xml, ModelSpec(wrist_frame=None))
+
+
+def test_configuration_validates_inputs(robot):
+    with pytest.raises(InputError, match=r"joint_angles must have shape \(7,\)"):
+        robot.configuration(np.zeros(6))
+    with pytest.raises(InputError, match="finite"):
+        robot.configuration([0, 0, 0, np.nan, 0, 0, 0])
+    with pytest.raises(InputError, match="non-zero"):
+        robot.configuration(np.zeros(7), base_quaternion=(0, 0, 0, 0))
+    q = robot.configuration(np.zeros(7), base_quaternion=(0, 0, 0, 2.0))
+    assert np.allclose(q[3:7], [0, 0, 0, 1])
+
+
+def test_model_config_rejects_unknown_key(tmp_path):
+    path = tmp_path / "model.yaml"
+    path.write_text("urdf: arm.urdf\ncamera: tip\n")
+    with pytest.raises(ConfigError, match=r"unknown key\(s\) \['camera'\]"):
+        load_model_config(path)
+
+
+def test_model_config_rejects_bad_types(tmp_path):
+    path = tmp_path / "model.yaml"
+    path.write_text("urdf: arm.urdf\nwrist_joints: joint_5\n")
+    with pytest.raises(ConfigError, match="'wrist_joints' must be a list"):
+        load_model_config(path)
+    path.write_text("- just a list\n")
+    with pytest.raises(ConfigError, match="expected a mapping"):
+        load_model_config(path)

@@ -1,0 +1,28 @@
+"""Test helpers shared by the test modules (importable: test/ is on pytest's pythonpath)."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import strategies as st
+
+#: Initial configuration of the thesis satellite-observation scenario (section 4.2.2) [deg].
+SATELLITE_OBSERVATION_DEG = (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)
+
+
+def unit_quaternions():
+    """Uniformly distributed unit quaternions (x, y, z, w)."""
+    return (
+        st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4)
+        .map(np.array)
+        .filter(lambda v: np.linalg.norm(v) > 0.1)
+        .map(lambda v: v / np.linalg.norm(v))
+    )
+
+
+def vectors(size: int, bound: float):
+    return st.lists(st.floats(-bound, bound), min_size=size, max_size=size).map(np.array)
+
+
+def configurations(robot_n: int = 7):
+    """Random free-floating configurations: (base position, base quaternion, theta)."""
+    return st.tuples(vectors(3, 5.0), unit_quaternions(), vectors(robot_n, np.pi))

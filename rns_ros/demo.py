@@ -22,8 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from rns_ros.core import FreeFloatingState, RnsError, load_model, subchain_decomposition
-from rns_ros.core.integration import attitude_deviation, rk4_step
+from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import coupling_angular_momentum
+from rns_ros.core.simulation import FreeFloatingSimulator
 from rns_ros.core.timing import quintic
 from rns_ros.resources import default_model_config
 
@@ -50,7 +51,8 @@ def run(method: str, duration: float, dt: float, config_path: Path) -> RunSummar
     sweep = np.deg2rad(WRIST_SWEEP_DEG)
     positioning = robot.subchains.positioning
 
-    def joint_velocity(t: float, state: FreeFloatingState) -> np.ndarray:
+    def joint_velocity(t: float, q: np.ndarray) -> np.ndarray:
+        state = FreeFloatingState.compute(robot, q)
         wrist_velocity = sweep * quintic(t, duration)[1]
         if method == "reactionless":
             return subchain_decomposition(robot, state).predominant_wrist_motion(wrist_velocity)
@@ -59,16 +61,17 @@ def run(method: str, duration: float, dt: float, config_path: Path) -> RunSummar
         return theta_dot
 
     start = time.perf_counter()
-    q = robot.configuration(np.deg2rad(SATELLITE_OBSERVATION_DEG))
-    initial = FreeFloatingState.compute(robot, q)
+    simulator = FreeFloatingSimulator(
+        robot, dt=dt, initial_q=robot.configuration(np.deg2rad(SATELLITE_OBSERVATION_DEG))
+    )
+    initial = state = FreeFloatingState.compute(robot, simulator.q)
     deviation = positioning_speed = coupling = 0.0
-    state = initial
-    for k in range(round(duration / dt)):
-        theta_dot = joint_velocity(k * dt, state)
+    for _ in range(round(duration / dt)):
+        theta_dot = joint_velocity(simulator.time, simulator.q)
         positioning_speed = max(positioning_speed, np.abs(theta_dot[positioning]).max())
         coupling = max(coupling, np.linalg.norm(coupling_angular_momentum(state, theta_dot)))
-        q = rk4_step(robot, q, k * dt, dt, joint_velocity)
-        state = FreeFloatingState.compute(robot, q)
+        simulator.step(joint_velocity)
+        state = FreeFloatingState.compute(robot, simulator.q)
         deviation = max(deviation, attitude_deviation(initial.base_rotation, state.base_rotation))
     camera_turn = attitude_deviation(initial.camera.rotation, state.camera.rotation)
     return RunSummary(

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Time the math core on this machine: state computation, inverses, one RK4 step.
+"""Time the math core on this machine: state computation, projections and inverses.
 
 Usage: .venv/bin/python scripts/benchmark_core.py [--samples 2000]
 Prints median and p99 per operation in microseconds. Numbers, not a test: nothing asserts them.
@@ -20,7 +20,6 @@ from rns_ros.core import (
     reactionless_joint_velocity,
     singularity_consistent_inverse,
 )
-from rns_ros.core.integration import rk4_step
 from rns_ros.resources import default_model_config
 
 
@@ -44,14 +43,11 @@ def main() -> None:
     restricted = state.restricted_jacobian
     theta_dot = np.full(robot.n, 0.1)
 
-    def joint_velocity(t, s):
-        return reactionless_joint_velocity(s, theta_dot)
-
     operations = {
         "FreeFloatingState.compute": lambda: FreeFloatingState.compute(robot, q),
         "damped_least_squares_inverse": lambda: damped_least_squares_inverse(restricted),
         "singularity_consistent_inverse": lambda: singularity_consistent_inverse(restricted),
-        "rk4_step (kinematic, 4 states)": lambda: rk4_step(robot, q, 0.0, 1e-3, joint_velocity),
+        "reactionless_joint_velocity": lambda: reactionless_joint_velocity(state, theta_dot),
     }
     print(f"{'operation':<34}{'median [us]':>12}{'p99 [us]':>12}")
     for name, function in operations.items():

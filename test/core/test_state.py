@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from rns_testing import SATELLITE_OBSERVATION_DEG, configurations, vectors
 
 from rns_ros.core import FreeFloatingModel, FreeFloatingState, InputError, ModelSpec
@@ -95,6 +95,8 @@ def test_reaction_null_space_projector_is_symmetric_idempotent_rank_four(robot, 
     projector = state.reaction_null_space_projector
     assert np.allclose(projector, projector.T, atol=1e-12)
     assert np.allclose(projector @ projector, projector, atol=1e-12)
+    sigma = state.coupling_singular_values
+    assume(sigma[-1] > 1e-6 * sigma[0])  # away from coupling singularities (see below)
     assert state.reaction_null_space_rank == 4
     assert np.linalg.matrix_rank(projector, tol=1e-8) == 4
     assert np.allclose(state.coupling_angular_momentum_matrix @ projector, 0.0, atol=1e-9)
@@ -244,3 +246,17 @@ def test_model_without_wrist_frame_has_no_wrist_kinematics():
     urdf, _ = load_model_config(default_model_config())
     robot = FreeFloatingModel.from_urdf(urdf, ModelSpec(camera_frame="camera", wrist_frame=None))
     assert FreeFloatingState.compute(robot, robot.neutral()).wrist is None
+
+
+def test_straight_arm_is_a_coupling_singularity_and_p_rns_grows(robot):
+    """theta = 0: det(M~ M~^T) = 0 (second singularity type of section 4.3.1); P_RNS rank 5."""
+    state = FreeFloatingState.compute(robot, robot.neutral())
+    assert state.determinants.coupling < 1e-9 * np.prod(
+        FreeFloatingState.compute(
+            robot, robot.configuration(np.deg2rad(SATELLITE_OBSERVATION_DEG))
+        ).coupling_singular_values
+        ** 2
+    )
+    assert state.reaction_null_space_rank == 5
+    projector = state.reaction_null_space_projector
+    assert np.allclose(state.coupling_angular_momentum_matrix @ projector, 0.0, atol=1e-9)

@@ -1,0 +1,368 @@
+"""Free-floating simulator core: fixed-step RK4 of the satellite + arm, no external wrench.
+
+Two modes (:class:`SimulationMode`):
+
+* ``kinematic`` - the joints follow the commanded joint velocities exactly; the base twist follows
+  from momentum conservation. With the conserved centroidal momentum h_G (world axes, about the
+  system CoM) and Pinocchio's centroidal momentum matrix A_G(q) = [A_b, A_m]:
+  A_b v_b + A_m theta_dot = h_G, i.e. eq. (2.33) solved for the base twist, moved to the CoM.
+* ``dynamic`` - full free-floating forward dynamics (Pinocchio ABA, zero gravity) driven by joint
+  torques from a joint servo. The servo runs once per step (zero-order hold, like a digital servo
+  at 1/dt) with computed-torque feedforward on the free-floating joint-space dynamics
+  (eq. 2.18-2.19 with the base eliminated):
+
+      tau = H* (theta_dd_ref + K_d (theta_dot_ref - theta_dot) + K_p (theta_ref - theta)) + c*,
+      H* = M_m - M_bm^T M_b^-1 M_bm,   c* = c_m - M_bm^T M_b^-1 c_b.
+
+  Optional viscous joint friction -D theta_dot acts in the plant (default D = 0, so momentum is
+  exactly conserved).
+
+Integration: classical RK4 in Runge-Kutta-Munthe-Kaas form on the configuration manifold. Stage
+configurations are ``pin.integrate(q, Theta)``; each stage velocity is pulled back to the step's
+tangent space with dexp^-1 = Jlog6(exp6(Theta)) on the SE(3) base block, so the scheme is fourth
+order and the quaternion stays unit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+import pinocchio as pin
+
+from rns_ros.core.errors import ConfigError
+from rns_ros.core.fastmath import solve_small
+from rns_ros.core.model import FreeFloatingModel
+from rns_ros.core.validation import as_vector, positive
+
+#: theta_dot = f(t [s], q (7 + n,)) [rad/s], shape (n,): a continuous-time joint-velocity law.
+JointVelocityField = Callable[[float, np.ndarray], np.ndarray]
+
+#: Default servo bandwidth: natural frequency [rad/s] and damping ratio [-] of the joint error
+#: dynamics e_dd + K_d e_d + K_p e = 0 (K_p = omega_n^2, K_d = 2 zeta omega_n).
+DEFAULT_SERVO_NATURAL_FREQUENCY = 50.0
+DEFAULT_SERVO_DAMPING_RATIO = 1.0
+
+
+class SimulationMode(StrEnum):
+    """How joints move: follow velocity commands exactly, or through torques and dynamics."""
+
+    KINEMATIC = "kinematic"
+    DYNAMIC = "dynamic"
+
+    @classmethod
+    def parse(cls, value: str) -> SimulationMode:
+        try:
+            return cls(value)
+        except ValueError:
+            raise ConfigError(
+                f"mode must be one of {[m.value for m in cls]}, got {value!r}"
+            ) from None
+
+
+@dataclass(frozen=True)
+class ServoGains:
+    """Joint servo gains (dynamic mode), each shape (n,).
+
+    Attributes:
+        stiffness: K_p [1/s^2] (acceleration per rad of error; computed-torque form).
+        damping: K_d [1/s].
+        friction: viscous joint friction D [N m s/rad] acting in the plant, >= 0.
+    """
+
+    stiffness: np.ndarray
+    damping: np.ndarray
+    friction: np.ndarray
+
+    @classmethod
+    def critically_damped(
+        cls,
+        n: int,
+        natural_frequency: float = DEFAULT_SERVO_NATURAL_FREQUENCY,
+        damping_ratio: float = DEFAULT_SERVO_DAMPING_RATIO,
+        friction: float = 0.0,
+    ) -> ServoGains:
+        """Same gains on every joint: K_p = omega_n^2, K_d = 2 zeta omega_n."""
+        omega = positive(natural_frequency, "natural_frequency", "[rad/s]")
+        zeta = positive(damping_ratio, "damping_ratio")
+        if not (np.isfinite(friction) and friction >= 0.0):
+            raise ConfigError(f"friction must be finite and >= 0 N m s/rad, got {friction!r}")
+        return cls(
+            stiffness=np.full(n, omega**2),
+            damping=np.full(n, 2.0 * zeta * omega),
+            friction=np.full(n, float(friction)),
+        )
+
+
+@dataclass(frozen=True)
+class JointReference:
+    """What the joints should do, shape (n,) each, in theta order.
+
+    Attributes:
+        positions: theta_ref [rad] (used by the dynamic-mode servo).
+        velocities: theta_dot_ref [rad/s] (the kinematic mode follows these exactly).
+        accelerations: theta_dd_ref [rad/s^2] feedforward (dynamic mode), usually zero.
+    """
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    accelerations: np.ndarray
+
+
+@dataclass(frozen=True)
+class SimulationState:
+    """Snapshot after a step (copies; safe to keep).
+
+    Attributes:
+        time: simulated time [s].
+        q: Pinocchio configuration (7 + n,): base position [m], quaternion xyzw, theta [rad].
+        v: Pinocchio velocity (6 + n,): base twist in the *base* frame [m/s, rad/s], theta_dot.
+        effort: joint torques applied during the last step [N m], shape (n,) (zero in kinematic).
+    """
+
+    time: float
+    q: np.ndarray
+    v: np.ndarray
+    effort: np.ndarray
+
+
+class FreeFloatingSimulator:
+    """Fixed-step free-floating simulator (see the module docstring for the physics).
+
+    Args:
+        robot: the model (its ``pin.Data`` is used as scratch space).
+        mode: :class:`SimulationMode` or its string value.
+        dt: step [s], in (0, 0.1].
+        initial_q: initial configuration (7 + n,); default the model's neutral configuration.
+        initial_momentum: conserved centroidal momentum h_G = [p [kg m/s]; l_G [kg m^2/s]] about
+            the system CoM, world axes, shape (6,); default zero.
+        gains: servo gains for the dynamic mode; default critically damped at 50 rad/s.
+    """
+
+    def __init__(
+        self,
+        robot: FreeFloatingModel,
+        *,
+        mode: SimulationMode | str = SimulationMode.KINEMATIC,
+        dt: float = 1e-3,
+        initial_q=None,
+        initial_momentum=None,
+        gains: ServoGains | None = None,
+    ) -> None:
+        self.robot = robot
+        self.mode = SimulationMode.parse(mode) if isinstance(mode, str) else mode
+        self.dt = positive(dt, "dt", "[s]")
+        if self.dt > 0.1:
+            raise ConfigError(f"dt must be in (0, 0.1] s, got {dt!r}")
+        n = robot.n
+        q0 = robot.neutral() if initial_q is None else as_vector(initial_q, robot.model.nq, "q")
+        self._initial_q = pin.normalize(robot.model, q0.copy())
+        self._initial_momentum = (
+            np.zeros(6) if initial_momentum is None else as_vector(initial_momentum, 6, "momentum")
+        )
+        self.gains = gains or ServoGains.critically_damped(n)
+        for name in ("stiffness", "damping", "friction"):
+            as_vector(getattr(self.gains, name), n, f"gains.{name}")
+        self._model, self._data = robot.model, robot.data
+        self._tau_full = np.zeros(robot.model.nv)
+        self._check_friction_stiffness()
+        self.reset()
+
+    def _check_friction_stiffness(self) -> None:
+        """Reject viscous friction so stiff that an explicit step cannot resolve it.
+
+        A joint with effective inertia H*_ii and friction D_i decays at rate D_i / H*_ii; RK4
+        resolves that only while D_i dt / H*_ii stays small (<= 0.5 here).
+        """
+        if not self.gains.friction.any():
+            return
+        inertia = pin.crba(self._model, self._data, self._initial_q)
+        m_b, m_bm = inertia[:6, :6], inertia[:6, 6:]
+        h_star = inertia[6:, 6:] - m_bm.T @ np.linalg.solve(m_b, m_bm)
+        limits = 0.5 * np.diag(h_star) / self.dt
+        too_stiff = np.flatnonzero(self.gains.friction > limits)
+        if too_stiff.size:
+            joint = too_stiff[0]
+            raise ConfigError(
+                f"friction {self.gains.friction[joint]} N m s/rad on "
+                f"{self.robot.joint_names[joint]} is too stiff for dt = {self.dt} s; "
+                f"use <= {limits[joint]:.3g} N m s/rad or a smaller dt"
+            )
+
+    # --- state ---------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Back to the initial configuration with the initial momentum and a still arm."""
+        n = self.robot.n
+        self.time = 0.0
+        self.q = self._initial_q.copy()
+        self.momentum = self._initial_momentum.copy()
+        self.effort = np.zeros(n)
+        self.reference = JointReference(
+            positions=self.q[7:].copy(), velocities=np.zeros(n), accelerations=np.zeros(n)
+        )
+        self._v = self._kinematic_velocity(self.q, np.zeros(n))
+
+    @property
+    def v(self) -> np.ndarray:
+        """Pinocchio velocity (6 + n,): base twist in the base frame [m/s, rad/s], theta_dot."""
+        if self._v is None:
+            self._v = self._kinematic_velocity(self.q, self.reference.velocities)
+        return self._v
+
+    def set_reference(self, positions=None, velocities=None, accelerations=None) -> None:
+        """Set the joint reference held until the next call; omitted parts keep sensible values.
+
+        Omitted positions follow the previous reference advanced by nothing (hold); omitted
+        velocities/accelerations are zero. All arrays shape (n,), finite.
+        """
+        n = self.robot.n
+        self.reference = JointReference(
+            positions=self.reference.positions.copy()
+            if positions is None
+            else as_vector(positions, n, "reference positions"),
+            velocities=np.zeros(n)
+            if velocities is None
+            else as_vector(velocities, n, "reference velocities"),
+            accelerations=np.zeros(n)
+            if accelerations is None
+            else as_vector(accelerations, n, "reference accelerations"),
+        )
+        if self.mode is SimulationMode.KINEMATIC:
+            self._v = None  # the joints take the new rates at once
+
+    def snapshot(self) -> SimulationState:
+        """Copies of time, q, v and effort."""
+        return SimulationState(self.time, self.q.copy(), self.v.copy(), self.effort.copy())
+
+    def centroidal_momentum(self) -> np.ndarray:
+        """h_G = A_G(q) v: [p; l_G] about the system CoM, world axes, shape (6,), measured now."""
+        return pin.computeCentroidalMomentum(self._model, self._data, self.q, self.v).vector.copy()
+
+    # --- stepping ------------------------------------------------------------------------------
+    def step(self, joint_velocity: JointVelocityField | None = None) -> None:
+        """Advance by dt.
+
+        Args:
+            joint_velocity: kinematic mode only: a continuous-time law theta_dot = f(t, q)
+                evaluated at every RK4 stage instead of the held reference velocity (for closed
+                loops without sampling, e.g. the reactionless field P_RNS(q) theta_dot_a).
+                None: the current reference is held over the step (zero-order hold).
+        """
+        if joint_velocity is not None:
+            if self.mode is not SimulationMode.KINEMATIC:
+                raise ConfigError("a joint-velocity law needs mode 'kinematic'")
+            self._step_kinematic_field(joint_velocity)
+        else:
+            if self.mode is SimulationMode.KINEMATIC:
+                self._step_kinematic()
+            else:
+                self._step_dynamic()
+            # The reference position advances with its velocity, so a velocity-only command held
+            # over many steps still gives the servo a consistent position target.
+            ref = self.reference
+            self.reference = JointReference(
+                ref.positions + self.dt * ref.velocities, ref.velocities, ref.accelerations
+            )
+        self.time += self.dt
+
+    def _base_velocity(self, q: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
+        """Base twist (base frame) that keeps h_G: solve A_b v_b = h_G - A_m theta_dot, (6,)."""
+        centroidal_map = pin.computeCentroidalMap(self._model, self._data, q)
+        return solve_small(centroidal_map[:, :6], self.momentum - centroidal_map[:, 6:] @ theta_dot)
+
+    def _kinematic_velocity(self, q: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
+        return np.concatenate((self._base_velocity(q, theta_dot), theta_dot))
+
+    def _step_kinematic(self) -> None:
+        # Joint rates are held over the step, so only the base block varies between stages.
+        model, q, dt = self._model, self.q, self.dt
+        theta_dot = self.reference.velocities
+        increment = np.empty(model.nv)
+
+        def stage(fraction: float, base_rate: np.ndarray) -> np.ndarray:
+            increment[:6] = fraction * dt * base_rate
+            increment[6:] = fraction * dt * theta_dot
+            base = self._base_velocity(pin.integrate(model, q, increment), theta_dot)
+            return pin.Jlog6(pin.exp6(increment[:6])) @ base  # dexp^-1 pull-back
+
+        k1 = self._base_velocity(q, theta_dot)
+        k2 = stage(0.5, k1)
+        k3 = stage(0.5, k2)
+        k4 = stage(1.0, k3)
+        increment[:6] = dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        increment[6:] = dt * theta_dot
+        self.q = pin.integrate(model, q, increment)
+        self._v = None  # recomputed on demand (publishing is slower than stepping)
+        self.effort = np.zeros(self.robot.n)
+
+    def _step_kinematic_field(self, joint_velocity: JointVelocityField) -> None:
+        model, q, dt, t = self._model, self.q, self.dt, self.time
+
+        def stage(fraction: float, rate: np.ndarray) -> np.ndarray:
+            increment = fraction * dt * rate
+            q_stage = pin.integrate(model, q, increment)
+            theta_dot = as_vector(
+                joint_velocity(t + fraction * dt, q_stage), self.robot.n, "f(t, q)"
+            )
+            base = self._base_velocity(q_stage, theta_dot)
+            return np.concatenate((pin.Jlog6(pin.exp6(increment[:6])) @ base, theta_dot))
+
+        k1 = stage(0.0, np.zeros(model.nv))
+        k2 = stage(0.5, k1)
+        k3 = stage(0.5, k2)
+        k4 = stage(1.0, k3)
+        self.q = pin.integrate(model, q, dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4))
+        self.reference = JointReference(self.q[7:].copy(), k4[6:].copy(), np.zeros(self.robot.n))
+        self._v = None
+        self.effort = np.zeros(self.robot.n)
+
+    def _servo_torque(self) -> np.ndarray:
+        """Computed-torque servo on the free-floating joint-space dynamics (see module doc)."""
+        model, data, q, v = self._model, self._data, self.q, self.v
+        ref, gains = self.reference, self.gains
+        inertia = pin.crba(model, data, q)
+        bias = pin.nonLinearEffects(model, data, q, v)
+        m_b, m_bm = inertia[:6, :6], inertia[:6, 6:]
+        eliminate = np.linalg.solve(m_b, np.column_stack((m_bm, bias[:6])))
+        h_star = inertia[6:, 6:] - m_bm.T @ eliminate[:, :-1]
+        c_star = bias[6:] - m_bm.T @ eliminate[:, -1]
+        theta, theta_dot = q[7:], v[6:]
+        acceleration = (
+            ref.accelerations
+            + gains.damping * (ref.velocities - theta_dot)
+            + gains.stiffness * (ref.positions - theta)
+        )
+        return h_star @ acceleration + c_star
+
+    def _acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        self._tau_full[6:] = tau - self.gains.friction * v[6:]
+        return pin.aba(self._model, self._data, q, v, self._tau_full)
+
+    def _step_dynamic(self) -> None:
+        model, q, v, dt = self._model, self.q, self.v, self.dt
+        tau = self._servo_torque()
+        k1q, k1v = v, self._acceleration(q, v, tau)
+        v2 = v + 0.5 * dt * k1v
+        q2 = 0.5 * dt * k1q
+        k2q, k2v = _pull_back(q2, v2), self._acceleration(pin.integrate(model, q, q2), v2, tau)
+        v3 = v + 0.5 * dt * k2v
+        q3 = 0.5 * dt * k2q
+        k3q, k3v = _pull_back(q3, v3), self._acceleration(pin.integrate(model, q, q3), v3, tau)
+        v4 = v + dt * k3v
+        q4 = dt * k3q
+        k4q, k4v = _pull_back(q4, v4), self._acceleration(pin.integrate(model, q, q4), v4, tau)
+        self.q = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
+        self._v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
+        self.effort = tau
+
+
+def _pull_back(increment: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+    """dexp^-1: the tangent-space rate at q of the curve q (+) Theta whose body velocity is v.
+
+    Only the free-flyer block is curved: Theta_dot_b = Jlog6(exp6(Theta_b)) v_b; joints are flat.
+    """
+    pulled = velocity.copy()
+    pulled[:6] = pin.Jlog6(pin.exp6(increment[:6])) @ velocity[:6]
+    return pulled

@@ -10,6 +10,7 @@ PACKAGE_NAME = "rns_ros"
 # pip, into the virtualenv's bin/. Add simulator / controller nodes here.
 CONSOLE_SCRIPTS = [
     "rns_demo = rns_ros.demo:main",
+    "rns_simulator = rns_ros.nodes.simulator:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

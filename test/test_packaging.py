@@ -399,16 +399,18 @@ def test_installed_package_is_imported_from_install_space(colcon_install):
     assert Path(result.stdout.strip().splitlines()[-1]).is_relative_to(colcon_install)
 
 
-def test_installed_rns_demo_help_runs(colcon_install):
-    script = colcon_install / "lib" / PKG / "rns_demo"
-    result = _run(
-        [str(script), "--help"],
-        timeout=RUN_TIMEOUT_S,
-        what="rns_demo --help",
-        cwd=colcon_install,
-        env=_installed_env(colcon_install),
-    )
-    assert result.returncode == 0, f"{script} --help failed:\n{result.stdout}"
+def test_every_installed_console_script_answers_help(colcon_install, console_scripts):
+    for name in console_scripts:
+        script = colcon_install / "lib" / PKG / name
+        result = _run(
+            [str(script), "--help"],
+            timeout=RUN_TIMEOUT_S,
+            what=f"{name} --help",
+            cwd=colcon_install,
+            env=_installed_env(colcon_install),
+        )
+        assert result.returncode == 0, f"{script} --help failed:\n{result.stdout}"
+        assert "usage:" in result.stdout
 
 
 def test_installed_rns_demo_runs_from_the_install_space(colcon_install):

@@ -55,6 +55,7 @@ class FreeFloatingModel:
         data: one ``pin.Data`` reused by :class:`rns_ros.core.state.FreeFloatingState`.
         joint_names: arm joint names in theta order, length n.
         n: number of arm joints.
+        base_link: name of the URDF root link (the satellite base frame {B}).
         camera_frame_id, wrist_frame_id: Pinocchio frame ids (wrist may be None).
         subchains: :class:`Subchains` or None when the spec names none.
         velocity_limits: [rad/s] (or [m/s]) per joint from the URDF, shape (n,).
@@ -78,6 +79,11 @@ class FreeFloatingModel:
         self.velocity_limits = np.array(model.velocityLimit[6:], dtype=float)
         self.lower_limits = np.array(model.lowerPositionLimit[7:], dtype=float)
         self.upper_limits = np.array(model.upperPositionLimit[7:], dtype=float)
+        self.base_link = next(
+            frame.name
+            for frame in model.frames
+            if frame.parentJoint == 1 and frame.type == pin.FrameType.BODY
+        )
         self.total_mass = float(sum(inertia.mass for inertia in model.inertias))
         if not self.total_mass > 0.0:
             raise ModelError(f"{name}: total mass must be > 0 kg, got {self.total_mass}")

@@ -171,3 +171,7 @@ def test_model_config_rejects_bad_types(tmp_path):
     path.write_text("- just a list\n")
     with pytest.raises(ConfigError, match="expected a mapping"):
         load_model_config(path)
+
+
+def test_base_link_is_the_urdf_root(robot):
+    assert robot.base_link == "base_link"

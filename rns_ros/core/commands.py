@@ -1,0 +1,113 @@
+"""Joint commands addressed by joint name, checked once at the edge (ROS-free).
+
+A command names its joints; rns_ros matches them to the model's joint order and rejects anything
+ambiguous: unknown or missing names, duplicated names, wrong lengths, NaN/Inf, or speeds beyond
+the joint velocity limits. Every rejection is an :class:`InputError` whose message says what was
+wrong and what would be valid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from rns_ros.core.errors import InputError
+
+#: Commanded speeds may exceed the URDF velocity limit by this fraction before rejection [-]
+#: (controllers that scale exactly to the limit land a rounding error above it).
+VELOCITY_LIMIT_TOLERANCE = 0.01
+
+
+class NamedJointCommand(NamedTuple):
+    """A joint command reordered into the model's theta order; None where the sender gave none.
+
+    Attributes:
+        positions: [rad], shape (n,) or None.
+        velocities: [rad/s], shape (n,) or None.
+        accelerations: [rad/s^2], shape (n,) or None.
+    """
+
+    positions: np.ndarray | None
+    velocities: np.ndarray | None
+    accelerations: np.ndarray | None
+
+
+def joint_order(names: Sequence[str], model_joints: Sequence[str]) -> np.ndarray:
+    """Index array p with command[p[i]] belonging to model joint i; names must be a permutation.
+
+    Raises:
+        InputError: unknown, missing or duplicated joint names (all listed).
+    """
+    names = list(names)
+    unknown = sorted(set(names) - set(model_joints))
+    missing = [joint for joint in model_joints if joint not in names]
+    duplicated = sorted({joint for joint in names if names.count(joint) > 1})
+    problems = []
+    if unknown:
+        problems.append(f"unknown joints {unknown}")
+    if missing:
+        problems.append(f"missing joints {missing}")
+    if duplicated:
+        problems.append(f"duplicated joints {duplicated}")
+    if problems:
+        raise InputError("; ".join(problems) + f" (model joints: {list(model_joints)})")
+    return np.array([names.index(joint) for joint in model_joints])
+
+
+def _field(values: Sequence[float], order: np.ndarray, label: str) -> np.ndarray | None:
+    if len(values) == 0:
+        return None
+    if len(values) != order.size:
+        raise InputError(f"{label} has {len(values)} values for {order.size} joints")
+    array = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{label} must be finite, got {array.tolist()}")
+    return array[order]
+
+
+def match_named_command(
+    names: Sequence[str],
+    model_joints: Sequence[str],
+    *,
+    positions: Sequence[float] = (),
+    velocities: Sequence[float] = (),
+    accelerations: Sequence[float] = (),
+    velocity_limits: np.ndarray | None = None,
+) -> NamedJointCommand:
+    """Validate a named joint command and reorder it into the model's joint order.
+
+    Args:
+        names: joint names of the command.
+        model_joints: the model's joint names (theta order).
+        positions, velocities, accelerations: per-name values, each empty or len(names).
+        velocity_limits: |theta_dot| limits [rad/s] in model order, shape (n,); None = no check.
+
+    Raises:
+        InputError: see the module docstring; also when every field is empty.
+    """
+    order = joint_order(names, model_joints)
+    command = NamedJointCommand(
+        positions=_field(positions, order, "positions"),
+        velocities=_field(velocities, order, "velocities"),
+        accelerations=_field(accelerations, order, "accelerations"),
+    )
+    if command.positions is None and command.velocities is None:
+        raise InputError("the command has neither positions nor velocities")
+    if command.velocities is not None and velocity_limits is not None:
+        check_velocity_limits(command.velocities, velocity_limits, model_joints)
+    return command
+
+
+def check_velocity_limits(
+    velocities: np.ndarray, velocity_limits: np.ndarray, model_joints: Sequence[str]
+) -> None:
+    """Raise :class:`InputError` naming the first joint whose |speed| exceeds its limit."""
+    too_fast = np.flatnonzero(np.abs(velocities) > velocity_limits * (1 + VELOCITY_LIMIT_TOLERANCE))
+    if too_fast.size:
+        joint = too_fast[0]
+        raise InputError(
+            f"velocity {velocities[joint]:.4g} rad/s on {model_joints[joint]} exceeds its limit "
+            f"{velocity_limits[joint]:.4g} rad/s"
+        )

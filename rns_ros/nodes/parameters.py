@@ -1,0 +1,132 @@
+"""Declaring node parameters from one table: description, unit, range, choices, read-only.
+
+Every node lists its parameters as :class:`ParameterSpec` rows; :func:`declare_parameters`
+declares them with full descriptors (so ``ros2 param describe`` explains each one), reads them
+back and checks what rclpy's descriptors cannot (choices, array lengths), raising
+:class:`~rns_ros.core.errors.ConfigError` that names the parameter, the bad value and the valid
+range. The same table is mirrored in ``config/<node>.yaml`` and a test keeps them in sync.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.node import Node
+
+from rns_ros.core.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One node parameter.
+
+    Attributes:
+        name: parameter name.
+        default: default value; its type is the parameter's type (a non-empty list of floats is a
+            double array, of strings a string array).
+        description: what it does, for ``ros2 param describe``.
+        unit: physical unit, e.g. "[s]"; shown in the description.
+        low, high: inclusive numeric range (scalars, and every element of a double array).
+        choices: allowed strings, for string parameters.
+        length: required array length; None = any (0 may mean "use the default").
+        read_only: True when the value is only read at start-up.
+    """
+
+    name: str
+    default: Any
+    description: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[str, ...] = ()
+    length: tuple[int, ...] | None = None
+    read_only: bool = True
+
+    def descriptor(self) -> ParameterDescriptor:
+        text = f"{self.description} {self.unit}".strip()
+        constraints = []
+        if self.choices:
+            constraints.append(f"one of {list(self.choices)}")
+        if self.length is not None:
+            constraints.append(f"length in {list(self.length)}")
+        if self.low is not None and isinstance(self.default, list):
+            constraints.append(f"elements in [{self.low}, {self.high}]")
+        descriptor = ParameterDescriptor(
+            name=self.name,
+            description=text,
+            additional_constraints="; ".join(constraints),
+            read_only=self.read_only,
+        )
+        if self.low is not None and not isinstance(self.default, list):
+            if isinstance(self.default, bool | str):
+                raise TypeError(f"{self.name}: ranges are for numbers")
+            if isinstance(self.default, int):
+                descriptor.integer_range = [
+                    IntegerRange(from_value=int(self.low), to_value=int(self.high), step=0)
+                ]
+            else:
+                descriptor.floating_point_range = [
+                    FloatingPointRange(
+                        from_value=float(self.low), to_value=float(self.high), step=0.0
+                    )
+                ]
+        return descriptor
+
+    def check(self, value: Any) -> Any:
+        """Raise ConfigError when ``value`` breaks what the descriptor could not express."""
+        if self.choices and value not in self.choices:
+            raise ConfigError(
+                f"parameter '{self.name}' must be one of {list(self.choices)}, got {value!r}"
+            )
+        if isinstance(self.default, list):
+            value = list(value)
+            if self.length is not None and len(value) not in self.length:
+                raise ConfigError(
+                    f"parameter '{self.name}' must have length in {list(self.length)}, "
+                    f"got {len(value)}: {value}"
+                )
+            if self.low is not None:
+                bad = [x for x in value if not (self.low <= x <= self.high)]
+                if bad:
+                    raise ConfigError(
+                        f"parameter '{self.name}' elements must be in [{self.low}, {self.high}] "
+                        f"{self.unit}, got {bad}".rstrip()
+                    )
+        return value
+
+
+def declare_parameters(node: Node, specs: Sequence[ParameterSpec]) -> dict[str, Any]:
+    """Declare every spec on ``node`` and return {name: checked value}.
+
+    Raises:
+        ConfigError: a value is out of range, of the wrong type, or not among the choices.
+    """
+    values = {}
+    for spec in specs:
+        try:
+            parameter = node.declare_parameter(spec.name, spec.default, spec.descriptor())
+        except InvalidParameterValueException as exc:
+            raise ConfigError(
+                f"parameter '{spec.name}' out of range: {_range_text(spec)} ({exc})"
+            ) from None
+        except InvalidParameterTypeException as exc:
+            raise ConfigError(
+                f"parameter '{spec.name}' has the wrong type; expected "
+                f"{type(spec.default).__name__} like {spec.default!r} ({exc})"
+            ) from None
+        values[spec.name] = spec.check(parameter.value)
+    return values
+
+
+def _range_text(spec: ParameterSpec) -> str:
+    if spec.low is None:
+        return "see its description"
+    return f"valid range [{spec.low}, {spec.high}] {spec.unit}".rstrip()
+
+
+def specs_by_name(specs: Sequence[ParameterSpec]) -> dict[str, ParameterSpec]:
+    return {spec.name: spec for spec in specs}

@@ -1,0 +1,69 @@
+"""The Jazzy ``main()`` idiom shared by all rns_ros nodes, and ``--help`` from parameters."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Sequence
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.utilities import remove_ros_args
+
+from rns_ros.core.errors import RnsError
+from rns_ros.nodes.parameters import ParameterSpec
+
+
+def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]) -> str:
+    """Text for ``<executable> --help``: what the node does and every parameter."""
+    lines = [
+        f"usage: {executable} [--ros-args -p NAME:=VALUE ... --params-file FILE -r FROM:=TO]",
+        "",
+        summary,
+        "",
+        "parameters (defaults mirror config/*.yaml):",
+    ]
+    for spec in specs:
+        limits = ""
+        if spec.choices:
+            limits = f" one of {list(spec.choices)}"
+        elif spec.low is not None:
+            limits = f" in [{spec.low}, {spec.high}]"
+        lines.append(f"  {spec.name} = {spec.default!r}{limits} {spec.unit}".rstrip())
+        lines.append(f"      {spec.description}")
+    return "\n".join(lines)
+
+
+def run_node(
+    factory: Callable[[], Node],
+    *,
+    executable: str,
+    summary: str,
+    specs: Sequence[ParameterSpec],
+    args: Sequence[str] | None = None,
+) -> int:
+    """Create the node, spin it until Ctrl-C or shutdown, tear down cleanly; return an exit code.
+
+    Bad parameters (:class:`RnsError`) are reported in one line and give exit code 2.
+    """
+    argv = list(sys.argv if args is None else args)
+    if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
+        print(parameter_help(executable, summary, specs))
+        return 0
+    rclpy.init(args=argv)
+    node = None
+    try:
+        node = factory()
+        executor = MultiThreadedExecutor(num_threads=2)
+        executor.add_node(node)
+        executor.spin()
+    except RnsError as exc:
+        print(f"{executable}: {exc}", file=sys.stderr)
+        return 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

@@ -1,0 +1,404 @@
+"""rns_simulator: the free-floating satellite + arm, integrated at a fixed step, as a ROS 2 node.
+
+Physics is :class:`rns_ros.core.simulation.FreeFloatingSimulator`; this node only converts
+messages. It steps from its own monotonic-clock thread (absolute deadlines, so no drift), not from
+an executor timer.
+
+Publishes (all remappable):
+    joint_states  sensor_msgs/JointState      names, positions [rad], velocities [rad/s],
+                                              efforts [N m] (dynamic mode only)
+    base_odom     nav_msgs/Odometry           base pose in ``world_frame``; twist in the base
+                                              frame (child_frame_id = base link)
+    momentum      geometry_msgs/WrenchStamped force = linear momentum p [kg m/s], torque =
+                                              angular momentum about the system CoM [kg m^2/s],
+                                              both in ``world_frame`` axes
+    /clock        rosgraph_msgs/Clock         every step, when ``publish_clock`` is true
+Subscribes:
+    joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
+                      first point: positions/velocities/accelerations matched by joint name
+    joint_velocities  std_msgs/Float64MultiArray (``command_interface: velocity``), one velocity
+                      per joint in the model's joint order (ros2_control forward controller shape)
+Service:
+    ~/reset       std_srvs/Trigger            back to the initial state
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+from builtin_interfaces.msg import Time as TimeMsg
+from geometry_msgs.msg import WrenchStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from rns_ros.core import load_model
+from rns_ros.core.commands import check_velocity_limits, match_named_command
+from rns_ros.core.errors import ConfigError, InputError
+from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationState
+from rns_ros.nodes.parameters import ParameterSpec, declare_parameters, specs_by_name
+from rns_ros.nodes.runner import run_node
+from rns_ros.resources import default_model_config
+
+NODE_NAME = "rns_simulator"
+SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4)."
+SATELLITE_OBSERVATION_RAD = [math.radians(a) for a in (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)]
+
+PARAMETERS = (
+    ParameterSpec(
+        "model_config",
+        "",
+        "Model YAML (URDF, camera/wrist frames, subchains); empty: the default 7-DoF arm",
+    ),
+    ParameterSpec(
+        "mode",
+        "kinematic",
+        "kinematic: joints follow commanded velocities exactly; dynamic: ABA + joint servo",
+        choices=("kinematic", "dynamic"),
+    ),
+    ParameterSpec("step_size", 0.001, "Fixed RK4 integration step", "[s]", 1e-5, 0.1),
+    ParameterSpec(
+        "publish_rate", 100.0, "State publishing rate in simulated time", "[Hz]", 1.0, 1000.0
+    ),
+    ParameterSpec(
+        "real_time_factor",
+        1.0,
+        "Simulated seconds per wall-clock second; 0 runs as fast as possible",
+        "[-]",
+        0.0,
+        1000.0,
+        read_only=False,
+    ),
+    ParameterSpec(
+        "initial_joint_positions",
+        SATELLITE_OBSERVATION_RAD,
+        "Initial joint angles in model joint order (default: thesis satellite observation)",
+        "[rad]",
+        -2 * math.pi,
+        2 * math.pi,
+    ),
+    ParameterSpec(
+        "initial_base_position",
+        [0.0, 0.0, 0.0],
+        "Initial base CoM position in world",
+        "[m]",
+        -1e6,
+        1e6,
+        length=(3,),
+    ),
+    ParameterSpec(
+        "initial_base_orientation",
+        [0.0, 0.0, 0.0, 1.0],
+        "Initial base attitude quaternion x y z w (normalized on use)",
+        "[-]",
+        -1.0,
+        1.0,
+        length=(4,),
+    ),
+    ParameterSpec(
+        "initial_momentum",
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        "Conserved momentum [p; l] about the system CoM, world axes",
+        "[kg m/s, kg m^2/s]",
+        -1e6,
+        1e6,
+        length=(6,),
+    ),
+    ParameterSpec(
+        "command_interface",
+        "trajectory",
+        "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
+        "joint_velocities (model joint order)",
+        choices=("trajectory", "velocity"),
+    ),
+    ParameterSpec(
+        "command_timeout",
+        0.5,
+        "A command older than this (by receipt time) is dropped and the joints stop",
+        "[s]",
+        0.01,
+        60.0,
+        read_only=False,
+    ),
+    ParameterSpec("publish_clock", False, "Publish /clock (sim time) and stamp messages with it"),
+    ParameterSpec("world_frame", "world", "Frame id of the inertial frame"),
+    ParameterSpec(
+        "servo_natural_frequency",
+        50.0,
+        "Dynamic-mode joint servo bandwidth omega_n",
+        "[rad/s]",
+        1.0,
+        1000.0,
+    ),
+    ParameterSpec(
+        "servo_damping_ratio", 1.0, "Dynamic-mode joint servo damping ratio", "[-]", 0.1, 10.0
+    ),
+    ParameterSpec(
+        "joint_friction",
+        0.0,
+        "Viscous joint friction in the dynamic plant",
+        "[N m s/rad]",
+        0.0,
+        1e4,
+    ),
+)
+SPECS = specs_by_name(PARAMETERS)
+
+
+def stamp_from_seconds(seconds: float) -> TimeMsg:
+    """builtin_interfaces/Time for a simulated time [s]."""
+    whole = math.floor(seconds)
+    return TimeMsg(sec=int(whole), nanosec=min(round((seconds - whole) * 1e9), 999_999_999))
+
+
+class SimulatorNode(Node):
+    """ROS 2 wrapper of :class:`FreeFloatingSimulator` (see the module docstring)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, PARAMETERS)
+        self.robot = load_model(params["model_config"] or default_model_config())
+        n = self.robot.n
+        if len(params["initial_joint_positions"]) != n:
+            raise ConfigError(
+                f"parameter 'initial_joint_positions' needs {n} values for joints "
+                f"{list(self.robot.joint_names)}, got {len(params['initial_joint_positions'])}"
+            )
+        gains = ServoGains.critically_damped(
+            n,
+            params["servo_natural_frequency"],
+            params["servo_damping_ratio"],
+            params["joint_friction"],
+        )
+        initial_q = self.robot.configuration(
+            params["initial_joint_positions"],
+            params["initial_base_position"],
+            params["initial_base_orientation"],
+        )
+        self.simulator = FreeFloatingSimulator(
+            self.robot,
+            mode=params["mode"],
+            dt=params["step_size"],
+            initial_q=initial_q,
+            initial_momentum=params["initial_momentum"],
+            gains=gains,
+        )
+        self._publish_every = max(1, round(1.0 / (params["publish_rate"] * params["step_size"])))
+        self._real_time_factor = params["real_time_factor"]
+        self._command_timeout = params["command_timeout"]
+        self._publish_clock = params["publish_clock"]
+        self._world_frame = params["world_frame"]
+        self._dynamic = params["mode"] == "dynamic"
+
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._reset_requested = False
+        self._last_command = None  # monotonic receipt time of the active command
+        self._stale_logged = False
+        self._reanchor = True
+
+        # State streams: reliable, shallow; consumers want the latest state.
+        state_qos = QoSProfile(depth=10)
+        self._joint_pub = self.create_publisher(JointState, "joint_states", state_qos)
+        self._odom_pub = self.create_publisher(Odometry, "base_odom", state_qos)
+        self._momentum_pub = self.create_publisher(WrenchStamped, "momentum", state_qos)
+        self._clock_pub = (
+            self.create_publisher(Clock, "/clock", QoSProfile(depth=1))
+            if self._publish_clock
+            else None
+        )
+        # Commands: best effort, depth 1 - the newest command is the only one that matters, and
+        # a best-effort subscription accepts reliable and best-effort publishers alike.
+        command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        if params["command_interface"] == "trajectory":
+            self.create_subscription(
+                JointTrajectory, "joint_references", self._on_trajectory, command_qos
+            )
+        else:
+            self.create_subscription(
+                Float64MultiArray, "joint_velocities", self._on_velocities, command_qos
+            )
+        self.create_service(Trigger, "~/reset", self._on_reset)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+        self._thread = threading.Thread(target=self._run, name="rns_simulator_loop", daemon=True)
+        self._thread.start()
+        self.get_logger().info(
+            f"{params['mode']} simulation of {self.robot.name} ({n} joints), dt "
+            f"{params['step_size']} s, publishing at {params['publish_rate']} Hz, real-time "
+            f"factor {self._real_time_factor or 'max'}"
+        )
+
+    # --- commands (executor thread) -----------------------------------------------------------
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        if not msg.points:
+            self._reject("JointTrajectory has no points")
+            return
+        point = msg.points[0]
+        try:
+            command = match_named_command(
+                msg.joint_names,
+                self.robot.joint_names,
+                positions=point.positions,
+                velocities=point.velocities,
+                accelerations=point.accelerations,
+                velocity_limits=self.robot.velocity_limits,
+            )
+            if not self._dynamic and command.velocities is None:
+                raise InputError("kinematic mode needs velocities in the trajectory point")
+        except InputError as exc:
+            self._reject(str(exc))
+            return
+        self._accept(command.positions, command.velocities, command.accelerations)
+
+    def _on_velocities(self, msg: Float64MultiArray) -> None:
+        try:
+            velocities = np.asarray(msg.data, dtype=float)
+            if velocities.shape != (self.robot.n,):
+                raise InputError(
+                    f"expected {self.robot.n} velocities in joint order "
+                    f"{list(self.robot.joint_names)}, got {velocities.size}"
+                )
+            if not np.all(np.isfinite(velocities)):
+                raise InputError(f"velocities must be finite, got {velocities.tolist()}")
+            check_velocity_limits(velocities, self.robot.velocity_limits, self.robot.joint_names)
+        except InputError as exc:
+            self._reject(str(exc))
+            return
+        self._accept(None, velocities, None)
+
+    def _accept(self, positions, velocities, accelerations) -> None:
+        with self._lock:
+            self.simulator.set_reference(positions, velocities, accelerations)
+            self._last_command = time.monotonic()
+            self._stale_logged = False
+
+    def _reject(self, reason: str) -> None:
+        self.get_logger().error(f"rejected joint command: {reason}", throttle_duration_sec=1.0)
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        with self._lock:
+            self._reset_requested = True
+        response.success = True
+        response.message = "simulation reset to its initial state"
+        return response
+
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        for parameter in parameters:
+            if parameter.name == "real_time_factor":
+                self._real_time_factor = float(parameter.value)
+                self._reanchor = True
+            elif parameter.name == "command_timeout":
+                self._command_timeout = float(parameter.value)
+        return SetParametersResult(successful=True)
+
+    # --- simulation loop (own thread) ---------------------------------------------------------
+    def _run(self) -> None:
+        steps = 0
+        wall_anchor = sim_anchor = 0.0
+        while not self._stop.is_set():
+            if self._reanchor:
+                wall_anchor, sim_anchor, self._reanchor = (
+                    time.monotonic(),
+                    self.simulator.time,
+                    False,
+                )
+            with self._lock:
+                if self._reset_requested:
+                    self.simulator.reset()
+                    self._last_command, self._reset_requested, self._reanchor = None, False, True
+                    steps = 0
+                self._expire_stale_command()
+                self.simulator.step()
+                steps += 1
+                publish = steps % self._publish_every == 0
+                snapshot = self.simulator.snapshot() if publish else None
+                momentum = self.simulator.centroidal_momentum() if publish else None
+                sim_time = self.simulator.time
+            if self._clock_pub is not None:
+                self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
+            if snapshot is not None:
+                self._publish_state(snapshot, momentum)
+            if self._real_time_factor > 0.0:
+                delay = (
+                    wall_anchor
+                    + (sim_time - sim_anchor) / self._real_time_factor
+                    - time.monotonic()
+                )
+                if delay > 0.0:
+                    self._stop.wait(delay)
+                elif delay < -0.5:
+                    self._reanchor = True  # far behind (overloaded machine): do not sprint
+
+    def _expire_stale_command(self) -> None:
+        if self._last_command is None:
+            return
+        if time.monotonic() - self._last_command > self._command_timeout:
+            self.simulator.set_reference(velocities=np.zeros(self.robot.n))
+            self._last_command = None
+            if not self._stale_logged:
+                self.get_logger().warn(
+                    f"no joint command for {self._command_timeout} s: stopping the joints"
+                )
+                self._stale_logged = True
+
+    def _stamp(self, state: SimulationState) -> TimeMsg:
+        if self._publish_clock:
+            return stamp_from_seconds(state.time)
+        return self.get_clock().now().to_msg()
+
+    def _publish_state(self, state: SimulationState, momentum: np.ndarray) -> None:
+        stamp = self._stamp(state)
+        joints = JointState()
+        joints.header.stamp = stamp
+        joints.name = list(self.robot.joint_names)
+        joints.position = state.q[7:].tolist()
+        joints.velocity = state.v[6:].tolist()
+        if self._dynamic:
+            joints.effort = state.effort.tolist()
+        self._joint_pub.publish(joints)
+
+        odom = Odometry()
+        odom.header.stamp = stamp
+        odom.header.frame_id = self._world_frame
+        odom.child_frame_id = self.robot.base_link
+        position, orientation = odom.pose.pose.position, odom.pose.pose.orientation
+        position.x, position.y, position.z = state.q[:3].tolist()
+        orientation.x, orientation.y, orientation.z, orientation.w = state.q[3:7].tolist()
+        linear, angular = odom.twist.twist.linear, odom.twist.twist.angular
+        linear.x, linear.y, linear.z = state.v[:3].tolist()
+        angular.x, angular.y, angular.z = state.v[3:6].tolist()
+        self._odom_pub.publish(odom)
+
+        wrench = WrenchStamped()
+        wrench.header.stamp = stamp
+        wrench.header.frame_id = self._world_frame
+        force, torque = wrench.wrench.force, wrench.wrench.torque
+        force.x, force.y, force.z = momentum[:3].tolist()
+        torque.x, torque.y, torque.z = momentum[3:].tolist()
+        self._momentum_pub.publish(wrench)
+
+    def destroy_node(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)
+        super().destroy_node()
+
+
+def main(args=None) -> int:
+    return run_node(
+        SimulatorNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
+    )
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,200 @@
+"""Reactionless camera-orientation control, thesis section 4.2-4.3 (continuous-time law).
+
+theta_dot_ref = J-bar^inv omega_ref - k_g P J_vw^T dp_w                      eq. (4.5)
+    J-bar = J_omega_e P_RNS (restricted Jacobian), P = P_RNS (E - J-bar^+ J-bar),
+    J-bar^inv: pseudoinverse (4.9), DLS with numerical filtering (4.10-4.12) or the
+    Singularity-Consistent inverse (4.13-4.14; its null term is scaled by det(J-bar J-bar^T), 4.15).
+Conventional baseline, eq. (4.7)-(4.8): theta_dot_W = J_W_omega_e^-1 omega_ref, theta_dot_P = 0.
+
+Sign of the wrist term: (4.5) prints +k_g P J_vw^T dp_w, but V = |dp_w|^2 / 2 (4.6) decreases only
+along -J_vw^T dp_w, so the descent sign is used (a test shows the drift shrinking). dp_w is the
+wrist position relative to the base origin (world axes) minus its initial value: under reactionless
+motion the base does not turn, and J_vw theta_dot is exactly the rate of that relative position.
+
+Joint-speed limits scale the whole theta_dot uniformly, which keeps it in the reaction null space
+and keeps its direction (per-joint clipping would not).
+
+This module is the continuous-time law; holding its output over a control period (the ROS
+controller) needs the hold-interval correction of the controller issue.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+
+from rns_ros.core.errors import ConfigError, ModelError
+from rns_ros.core.inverses import (
+    THESIS_EPSILON,
+    THESIS_LAMBDA2_MAX,
+    THESIS_SC_GAIN,
+    damped_least_squares_inverse,
+    pseudoinverse,
+    singularity_consistent_inverse,
+)
+from rns_ros.core.model import FreeFloatingModel
+from rns_ros.core.state import Determinants, FreeFloatingState
+from rns_ros.core.validation import as_vector, positive
+
+#: Thesis wrist-stabilization gain k_g of eq. (4.5) [1/(m s)] (section 4.2.2 prints "kg/m s").
+THESIS_WRIST_GAIN = 100.0
+
+
+class Method(StrEnum):
+    """How omega_ref is mapped to joint velocities."""
+
+    DLS = "dls"
+    SC = "sc"
+    PINV = "pinv"
+    CONVENTIONAL = "conventional"
+
+    @classmethod
+    def parse(cls, value: str) -> Method:
+        try:
+            return cls(value)
+        except ValueError:
+            raise ConfigError(
+                f"method must be one of {[m.value for m in cls]}, got {value!r}"
+            ) from None
+
+
+@dataclass(frozen=True)
+class ControlGains:
+    """Gains of eq. (4.5)-(4.15), thesis values by default.
+
+    Attributes:
+        epsilon: DLS singular region on sigma_min [-].
+        lambda2_max: DLS maximum damping lambda_max^2 [-].
+        sc_gain: b of the SC inverse [-].
+        wrist_gain: k_g [1/(m s)], >= 0 (0 disables wrist stabilization).
+    """
+
+    epsilon: float = THESIS_EPSILON
+    lambda2_max: float = THESIS_LAMBDA2_MAX
+    sc_gain: float = THESIS_SC_GAIN
+    wrist_gain: float = THESIS_WRIST_GAIN
+
+    def __post_init__(self) -> None:
+        positive(self.epsilon, "epsilon")
+        positive(self.lambda2_max, "lambda2_max")
+        positive(self.sc_gain, "sc_gain")
+        if not (np.isfinite(self.wrist_gain) and self.wrist_gain >= 0.0):
+            raise ConfigError(
+                f"wrist_gain must be finite and >= 0 1/(m s), got {self.wrist_gain!r}"
+            )
+
+
+@dataclass(frozen=True)
+class ControlOutput:
+    """One evaluation of the control law.
+
+    Attributes:
+        joint_velocity: theta_dot_ref after speed scaling [rad/s], shape (n,).
+        sigma_min: smallest singular value of J-bar (of J_W_omega_e for the baseline) [-].
+        determinants: the three determinants of section 4.3.1.
+        damping: DLS lambda^2 applied [-] (0 for other methods).
+        speed_scale: overall speed factor applied: SC's b prod(sigma) times the joint-limit
+            scale [-] (1 means the command is met at full speed).
+        limit_scale: the joint-limit part of ``speed_scale`` alone, in (0, 1].
+        angular_residual: omega_ref - J_omega_e theta_dot, the part of the command not achieved
+            [rad/s], shape (3,).
+        coupling_momentum: predicted base disturbance M~_omega_m theta_dot [kg m^2/s], shape (3,).
+    """
+
+    joint_velocity: np.ndarray
+    sigma_min: float
+    determinants: Determinants
+    damping: float
+    speed_scale: float
+    limit_scale: float
+    angular_residual: np.ndarray
+    coupling_momentum: np.ndarray
+
+
+def wrist_offset(state: FreeFloatingState) -> np.ndarray:
+    """Wrist position relative to the base origin, world axes [m], shape (3,)."""
+    if state.wrist is None:
+        raise ModelError("the model has no wrist frame; wrist stabilization needs one")
+    return state.wrist.position - state.base_position
+
+
+def uniform_speed_scale(theta_dot: np.ndarray, velocity_limits: np.ndarray) -> float:
+    """Largest s in (0, 1] with |s theta_dot_i| <= limit_i for every joint."""
+    ratios = np.abs(theta_dot) / velocity_limits
+    worst = float(ratios.max(initial=0.0))
+    return 1.0 if worst <= 1.0 else 1.0 / worst
+
+
+def reactionless_camera_control(
+    robot: FreeFloatingModel,
+    state: FreeFloatingState,
+    omega_ref,
+    *,
+    method: Method | str = Method.DLS,
+    gains: ControlGains | None = None,
+    wrist_reference: np.ndarray | None = None,
+) -> ControlOutput:
+    """Evaluate eq. (4.5)/(4.15) (or the baseline 4.7-4.8) at ``state``.
+
+    Args:
+        omega_ref: commanded camera angular velocity, world axes [rad/s], shape (3,).
+        method: :class:`Method` or its value.
+        gains: :class:`ControlGains` (thesis values by default).
+        wrist_reference: initial wrist offset p_w^init (see :func:`wrist_offset`) [m], shape (3,);
+            None disables the wrist term.
+    """
+    omega_ref = as_vector(omega_ref, 3, "omega_ref")
+    method = Method.parse(method) if isinstance(method, str) else method
+    gains = gains or ControlGains()
+    j_omega = state.camera.jacobian[3:]
+    damping, sc_scale = 0.0, 1.0
+    if method is Method.CONVENTIONAL:
+        theta_dot, sigma_min = _conventional(robot, j_omega, omega_ref)
+    else:
+        restricted = state.restricted_jacobian
+        if method is Method.DLS:
+            inverse = damped_least_squares_inverse(restricted, gains.epsilon, gains.lambda2_max)
+            matrix, sigma, damping = inverse.matrix, inverse.singular_values, inverse.damping
+        elif method is Method.SC:
+            inverse = singularity_consistent_inverse(restricted, gains.sc_gain)
+            matrix, sigma, sc_scale = inverse.matrix, inverse.singular_values, inverse.speed_scale
+        else:
+            matrix = pseudoinverse(restricted)
+            sigma = np.linalg.svd(restricted, compute_uv=False)
+        sigma_min = float(sigma[-1])
+        theta_dot = matrix @ omega_ref
+        if wrist_reference is not None and gains.wrist_gain > 0.0:
+            drift = wrist_offset(state) - as_vector(wrist_reference, 3, "wrist_reference")
+            null = state.reaction_null_space_projector @ (
+                np.eye(state.n) - pseudoinverse(restricted) @ restricted
+            )
+            term = -gains.wrist_gain * null @ (state.wrist.jacobian[:3].T @ drift)
+            if method is Method.SC:
+                term *= float(np.prod(sigma**2))  # det(J-bar J-bar^T), eq. (4.15)
+            theta_dot = theta_dot + term
+    limit_scale = uniform_speed_scale(theta_dot, robot.velocity_limits)
+    theta_dot = limit_scale * theta_dot
+    return ControlOutput(
+        joint_velocity=theta_dot,
+        sigma_min=sigma_min,
+        determinants=state.determinants,
+        damping=damping,
+        speed_scale=sc_scale * limit_scale,
+        limit_scale=limit_scale,
+        angular_residual=omega_ref - j_omega @ theta_dot,
+        coupling_momentum=state.coupling_angular_momentum_matrix @ theta_dot,
+    )
+
+
+def _conventional(robot: FreeFloatingModel, j_omega: np.ndarray, omega_ref: np.ndarray):
+    """Eq. (4.7)-(4.8): wrist joints invert J_W_omega_e, positioning joints held."""
+    if robot.subchains is None:
+        raise ModelError("the conventional baseline needs positioning/wrist subchains")
+    wrist = robot.subchains.wrist
+    j_wrist = j_omega[:, wrist]
+    sigma = np.linalg.svd(j_wrist, compute_uv=False)
+    theta_dot = np.zeros(robot.n)
+    theta_dot[wrist] = pseudoinverse(j_wrist) @ omega_ref
+    return theta_dot, float(sigma[-1])

@@ -36,7 +36,7 @@ from rns_ros.core.inverses import (
 )
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import Determinants, FreeFloatingState
-from rns_ros.core.validation import as_vector, positive
+from rns_ros.core.validation import as_vector, parse_choice, positive
 
 #: Thesis wrist-stabilization gain k_g of eq. (4.5) [1/(m s)] (section 4.2.2 prints "kg/m s").
 THESIS_WRIST_GAIN = 100.0
@@ -52,12 +52,7 @@ class Method(StrEnum):
 
     @classmethod
     def parse(cls, value: str) -> Method:
-        try:
-            return cls(value)
-        except ValueError:
-            raise ConfigError(
-                f"method must be one of {[m.value for m in cls]}, got {value!r}"
-            ) from None
+        return parse_choice(cls, value, "method")
 
 
 @dataclass(frozen=True)

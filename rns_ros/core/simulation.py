@@ -35,7 +35,7 @@ import pinocchio as pin
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.fastmath import solve_small
 from rns_ros.core.model import FreeFloatingModel
-from rns_ros.core.validation import as_vector, positive
+from rns_ros.core.validation import as_vector, parse_choice, positive
 
 #: theta_dot = f(t [s], q (7 + n,)) [rad/s], shape (n,): a continuous-time joint-velocity law.
 JointVelocityField = Callable[[float, np.ndarray], np.ndarray]
@@ -54,12 +54,7 @@ class SimulationMode(StrEnum):
 
     @classmethod
     def parse(cls, value: str) -> SimulationMode:
-        try:
-            return cls(value)
-        except ValueError:
-            raise ConfigError(
-                f"mode must be one of {[m.value for m in cls]}, got {value!r}"
-            ) from None
+        return parse_choice(cls, value, "mode")
 
 
 @dataclass(frozen=True)

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
+from typing import TypeVar
+
 import numpy as np
 
 from rns_ros.core.errors import ConfigError, InputError
+
+StrEnumT = TypeVar("StrEnumT", bound=StrEnum)
 
 
 def as_vector(value, size: int, name: str) -> np.ndarray:
@@ -38,3 +43,12 @@ def positive(value: float, name: str, unit: str = "") -> float:
             f"{name} must be a finite number > 0 {unit}".rstrip() + f", got {value!r}"
         )
     return number
+
+
+def parse_choice(choices: type[StrEnumT], value, name: str) -> StrEnumT:
+    """Member of the string enum ``choices`` named by ``value``, else ConfigError listing them."""
+    try:
+        return choices(value)
+    except ValueError:
+        valid = [member.value for member in choices]
+        raise ConfigError(f"{name} must be one of {valid}, got {value!r}") from None

@@ -162,8 +162,9 @@ def reactionless_camera_control(
         theta_dot = matrix @ omega_ref
         if wrist_reference is not None and gains.wrist_gain > 0.0:
             drift = wrist_offset(state) - as_vector(wrist_reference, 3, "wrist_reference")
+            restricted_pinv = matrix if method is Method.PINV else pseudoinverse(restricted)
             null = state.reaction_null_space_projector @ (
-                np.eye(state.n) - pseudoinverse(restricted) @ restricted
+                np.eye(state.n) - restricted_pinv @ restricted
             )
             term = -gains.wrist_gain * null @ (state.wrist.jacobian[:3].T @ drift)
             if method is Method.SC:

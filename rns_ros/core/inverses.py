@@ -58,6 +58,22 @@ def _wide_svd(jacobian) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.linalg.svd(jacobian, full_matrices=False)
 
 
+def kernel_basis(matrix, rank_tolerance: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """Orthonormal basis of ker(A) from the SVD, with a relative rank decision.
+
+    Args:
+        matrix: A, shape (m, n).
+        rank_tolerance: singular values <= rank_tolerance * sigma_max count as zero [-].
+
+    Returns:
+        (basis (n, n - rank), singular values (min(m, n),) descending, rank).
+    """
+    matrix = as_matrix(matrix, "matrix")
+    _, sigma, vt = np.linalg.svd(matrix, full_matrices=True)
+    rank = int(np.sum(sigma > rank_tolerance * max(sigma[0], np.finfo(float).tiny)))
+    return vt[rank:].T, sigma, rank
+
+
 def pseudoinverse(jacobian, rcond: float = 1e-12) -> np.ndarray:
     """Moore-Penrose pseudoinverse J^+ = sum_i (1/sigma_i) v_i u_i^T, eq. (4.9).
 

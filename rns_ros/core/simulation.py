@@ -174,8 +174,7 @@ class FreeFloatingSimulator:
         if not self.gains.friction.any():
             return
         inertia = pin.crba(self._model, self._data, self._initial_q)
-        m_b, m_bm = inertia[:6, :6], inertia[:6, 6:]
-        h_star = inertia[6:, 6:] - m_bm.T @ np.linalg.solve(m_b, m_bm)
+        h_star, _ = base_eliminated_dynamics(inertia, np.zeros(self._model.nv))
         limits = 0.5 * np.diag(h_star) / self.dt
         too_stiff = np.flatnonzero(self.gains.friction > limits)
         if too_stiff.size:
@@ -317,12 +316,9 @@ class FreeFloatingSimulator:
         """Computed-torque servo on the free-floating joint-space dynamics (see module doc)."""
         model, data, q, v = self._model, self._data, self.q, self.v
         ref, gains = self.reference, self.gains
-        inertia = pin.crba(model, data, q)
-        bias = pin.nonLinearEffects(model, data, q, v)
-        m_b, m_bm = inertia[:6, :6], inertia[:6, 6:]
-        eliminate = np.linalg.solve(m_b, np.column_stack((m_bm, bias[:6])))
-        h_star = inertia[6:, 6:] - m_bm.T @ eliminate[:, :-1]
-        c_star = bias[6:] - m_bm.T @ eliminate[:, -1]
+        h_star, c_star = base_eliminated_dynamics(
+            pin.crba(model, data, q), pin.nonLinearEffects(model, data, q, v)
+        )
         theta, theta_dot = q[7:], v[6:]
         acceleration = (
             ref.accelerations
@@ -351,6 +347,23 @@ class FreeFloatingSimulator:
         self.q = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
         self._v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
         self.effort = tau
+
+
+def base_eliminated_dynamics(
+    inertia: np.ndarray, bias: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint-space dynamics with the unactuated base eliminated (eq. 2.18-2.19).
+
+    Args:
+        inertia: M (6 + n, 6 + n); bias: nonlinear effects (6 + n,) (any base-twist convention:
+            the result does not depend on it).
+
+    Returns:
+        (H* = M_m - M_bm^T M_b^-1 M_bm (n, n), c* = c_m - M_bm^T M_b^-1 c_b (n,)).
+    """
+    m_b, m_bm = inertia[:6, :6], inertia[:6, 6:]
+    eliminate = np.linalg.solve(m_b, np.column_stack((m_bm, bias[:6])))
+    return inertia[6:, 6:] - m_bm.T @ eliminate[:, :-1], bias[6:] - m_bm.T @ eliminate[:, -1]
 
 
 def _pull_back(increment: np.ndarray, velocity: np.ndarray) -> np.ndarray:

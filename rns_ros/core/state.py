@@ -15,6 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.conventions import thesis_inertia_blocks
+from rns_ros.core.inverses import kernel_basis
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import as_vector
 
@@ -139,10 +140,7 @@ class FreeFloatingState:
         tilde_m_wm = m_wm - m_vw.T @ np.linalg.solve(m_v, m_vm)
 
         # P_RNS from the SVD of M~_omega_m: projector onto its kernel (eq. 2.34, 3.3).
-        _, sigma, vt = np.linalg.svd(tilde_m_wm, full_matrices=True)
-        cutoff = rank_tolerance * max(sigma[0], np.finfo(float).tiny)
-        rank = int(np.sum(sigma > cutoff))
-        kernel = vt[rank:].T
+        kernel, sigma, rank = kernel_basis(tilde_m_wm, rank_tolerance)
         projector = kernel @ kernel.T
 
         camera = _frame_kinematics(robot, robot.camera_frame_id, base_position)

@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rns_ros.core.errors import ModelError
-from rns_ros.core.inverses import pseudoinverse
+from rns_ros.core.inverses import kernel_basis, pseudoinverse
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.core.validation import as_vector
@@ -77,9 +77,7 @@ def subchain_decomposition(
     coupling = state.coupling_angular_momentum_matrix
     coupling_p, coupling_w = coupling[:, positioning], coupling[:, wrist]
     wrist_map = -pseudoinverse(coupling_p) @ coupling_w
-    _, sigma, vt = np.linalg.svd(coupling_p, full_matrices=True)
-    rank = int(np.sum(sigma > rank_tolerance * max(sigma[0], np.finfo(float).tiny)))
-    kernel = vt[rank:].T
+    kernel, sigma, rank = kernel_basis(coupling_p, rank_tolerance)
     if kernel.shape[1] == 0:
         raise ModelError(
             f"{robot.name}: the positioning subchain has no reactionless motion of its own "

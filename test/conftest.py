@@ -11,3 +11,12 @@ from rns_ros.resources import default_model_config
 @pytest.fixture(scope="session")
 def robot() -> FreeFloatingModel:
     return load_model(default_model_config())
+
+
+@pytest.fixture(scope="session")
+def scenario():
+    """Load a shipped scenario by name: ``scenario("satellite_observation")``."""
+    from rns_ros.core.scenario import load_scenario
+    from rns_ros.resources import config_dir
+
+    return lambda name: load_scenario(config_dir() / "scenarios" / f"{name}.yaml")

@@ -13,23 +13,38 @@ from rns_ros.core.model import FreeFloatingModel, ModelSpec
 _KEYS = {"urdf", "camera_frame", "wrist_frame", "positioning_joints", "wrist_joints"}
 
 
-def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
-    """Read a model YAML file; returns (absolute URDF path, :class:`ModelSpec`).
+def read_yaml_mapping(path: str | Path, keys: set[str], what: str) -> tuple[Path, dict]:
+    """Read a YAML file holding one mapping whose keys are all in ``keys``.
 
-    A relative ``urdf`` path is taken relative to the YAML file's folder.
+    Returns (path, mapping). A missing file, invalid YAML, a non-mapping or an unknown key raise
+    :class:`ConfigError` naming the file (and the key).
     """
     path = Path(path)
     if not path.is_file():
-        raise ConfigError(f"model config not found: {path}")
+        raise ConfigError(f"{what} not found: {path}")
     try:
         content = yaml.safe_load(path.read_text())
     except yaml.YAMLError as exc:
         raise ConfigError(f"{path}: not valid YAML: {exc}") from exc
     if not isinstance(content, dict):
-        raise ConfigError(f"{path}: expected a mapping with keys {sorted(_KEYS)}")
-    unknown = sorted(set(content) - _KEYS)
+        raise ConfigError(f"{path}: expected a mapping with keys {sorted(keys)}")
+    check_keys(content, keys, str(path))
+    return path, content
+
+
+def check_keys(mapping: dict, keys: set[str], where: str) -> None:
+    """Raise :class:`ConfigError` naming any key of ``mapping`` not in ``keys``."""
+    unknown = sorted(str(key) for key in set(mapping) - keys)
     if unknown:
-        raise ConfigError(f"{path}: unknown key(s) {unknown}; valid keys: {sorted(_KEYS)}")
+        raise ConfigError(f"{where}: unknown key(s) {unknown}; valid keys: {sorted(keys)}")
+
+
+def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
+    """Read a model YAML file; returns (absolute URDF path, :class:`ModelSpec`).
+
+    A relative ``urdf`` path is taken relative to the YAML file's folder.
+    """
+    path, content = read_yaml_mapping(path, _KEYS, "model config")
     if not isinstance(content.get("urdf"), str):
         raise ConfigError(f"{path}: 'urdf' must be a file path string, got {content.get('urdf')!r}")
     for key in ("camera_frame", "wrist_frame"):

@@ -92,7 +92,9 @@ class ControlOutput:
         damping: DLS lambda^2 applied [-] (0 for other methods).
         speed_scale: overall speed factor applied: SC's b prod(sigma) times the joint-limit
             scale [-] (1 means the command is met at full speed).
-        limit_scale: the joint-limit part of ``speed_scale`` alone, in (0, 1].
+        limit_scale: the joint-limit part of ``speed_scale`` alone, in [0, 1] (0 when a joint
+            sits at a position limit and the command pushes into it).
+        position_limited: True when a joint position limit reduced ``limit_scale``.
         angular_residual: omega_ref - J_omega_e theta_dot, the part of the command not achieved
             [rad/s], shape (3,).
         coupling_momentum: predicted base disturbance M~_omega_m theta_dot [kg m^2/s], shape (3,).
@@ -104,6 +106,7 @@ class ControlOutput:
     damping: float
     speed_scale: float
     limit_scale: float
+    position_limited: bool
     angular_residual: np.ndarray
     coupling_momentum: np.ndarray
 
@@ -122,6 +125,29 @@ def uniform_speed_scale(theta_dot: np.ndarray, velocity_limits: np.ndarray) -> f
     return 1.0 if worst <= 1.0 else 1.0 / worst
 
 
+def position_limit_scale(
+    theta: np.ndarray,
+    theta_dot: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    horizon: float,
+) -> float:
+    """Largest s in [0, 1] such that theta + s theta_dot horizon stays within [lower, upper].
+
+    Joints moving away from their limit never restrict s; a joint at (or past) its limit and
+    moving into it gives s = 0, i.e. the whole motion halts (uniformly, so it stays reactionless).
+
+    Args:
+        theta, theta_dot, lower, upper: [rad], [rad/s], [rad], [rad], shape (n,).
+        horizon: look-ahead time [s], > 0 (one control period).
+    """
+    step = theta_dot * horizon
+    room = np.where(step > 0.0, upper - theta, np.where(step < 0.0, theta - lower, np.inf))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = np.where(step != 0.0, np.maximum(room, 0.0) / np.abs(step), np.inf)
+    return float(min(1.0, ratios.min(initial=np.inf)))
+
+
 def reactionless_camera_control(
     robot: FreeFloatingModel,
     state: FreeFloatingState,
@@ -130,6 +156,7 @@ def reactionless_camera_control(
     method: Method | str = Method.DLS,
     gains: ControlGains | None = None,
     wrist_reference: np.ndarray | None = None,
+    limit_horizon: float | None = None,
 ) -> ControlOutput:
     """Evaluate eq. (4.5)/(4.15) (or the baseline 4.7-4.8) at ``state``.
 
@@ -139,6 +166,8 @@ def reactionless_camera_control(
         gains: :class:`ControlGains` (thesis values by default).
         wrist_reference: initial wrist offset p_w^init (see :func:`wrist_offset`) [m], shape (3,);
             None disables the wrist term.
+        limit_horizon: look-ahead [s] for joint position limits (one control period); None
+            ignores position limits. Velocity limits always apply.
     """
     omega_ref = as_vector(omega_ref, 3, "omega_ref")
     method = Method.parse(method) if isinstance(method, str) else method
@@ -172,6 +201,15 @@ def reactionless_camera_control(
             theta_dot = theta_dot + term
     limit_scale = uniform_speed_scale(theta_dot, robot.velocity_limits)
     theta_dot = limit_scale * theta_dot
+    position_limited = False
+    if limit_horizon is not None:
+        position_scale = position_limit_scale(
+            state.theta, theta_dot, robot.lower_limits, robot.upper_limits, limit_horizon
+        )
+        if position_scale < 1.0:
+            position_limited = True
+            limit_scale *= position_scale
+            theta_dot = position_scale * theta_dot
     return ControlOutput(
         joint_velocity=theta_dot,
         sigma_min=sigma_min,
@@ -179,6 +217,7 @@ def reactionless_camera_control(
         damping=damping,
         speed_scale=sc_scale * limit_scale,
         limit_scale=limit_scale,
+        position_limited=position_limited,
         angular_residual=omega_ref - j_omega @ theta_dot,
         coupling_momentum=state.coupling_angular_momentum_matrix @ theta_dot,
     )

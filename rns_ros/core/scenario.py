@@ -1,0 +1,173 @@
+"""Inspection scenarios (``config/scenarios/*.yaml``): a camera rotation commanded over time.
+
+A scenario is the thesis' test case of section 4.2.2 / 4.3: initial joint angles, then the camera
+angular velocity omega(t) = angle * s_dot(t) * axis about a fixed axis expressed in ``frame``
+axes. Keys (all validated; unknown keys are rejected by name):
+
+    name: text                          (default: file stem)
+    description: text
+    initial_joint_positions_deg: [n numbers]   [deg]
+    frame: world | base | camera        (default world)
+    axis: [x, y, z]                     (normalised; must be non-zero)
+    angle_deg: total rotation           [deg], may be negative
+    duration: command duration          [s], > 0
+    time_scaling: quintic | constant    (default quintic; constant: omega = angle / duration)
+    controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain}  (overrides, optional)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from rns_ros.core.config import check_keys, read_yaml_mapping
+from rns_ros.core.control import ControlGains, Method
+from rns_ros.core.controller import TwistFrame
+from rns_ros.core.errors import ConfigError, InputError
+from rns_ros.core.timing import quintic
+from rns_ros.core.validation import as_vector, parse_choice
+
+_KEYS = {
+    "name",
+    "description",
+    "initial_joint_positions_deg",
+    "frame",
+    "axis",
+    "angle_deg",
+    "duration",
+    "time_scaling",
+    "controller",
+}
+_REQUIRED = ("initial_joint_positions_deg", "axis", "angle_deg", "duration")
+#: Controller settings a scenario may override, with their types.
+CONTROLLER_OVERRIDES = {
+    "method": str,
+    "wrist_gain": float,
+    "epsilon": float,
+    "lambda2_max": float,
+    "sc_gain": float,
+}
+
+
+class TimeScaling(StrEnum):
+    """Shape of the rotation angle over time."""
+
+    QUINTIC = "quintic"
+    CONSTANT = "constant"
+
+    @classmethod
+    def parse(cls, value: str) -> TimeScaling:
+        return parse_choice(cls, value, "time_scaling")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One inspection scenario.
+
+    Attributes:
+        name: identifier.
+        initial_theta: initial joint angles [rad], shape (n,).
+        frame: axes of ``axis``.
+        axis: unit rotation axis, shape (3,).
+        angle: total rotation [rad].
+        duration: command duration [s].
+        time_scaling: :class:`TimeScaling`.
+        controller: overrides of controller settings (keys of CONTROLLER_OVERRIDES).
+        description: free text.
+    """
+
+    name: str
+    initial_theta: np.ndarray
+    frame: TwistFrame
+    axis: np.ndarray
+    angle: float
+    duration: float
+    time_scaling: TimeScaling = TimeScaling.QUINTIC
+    controller: dict = field(default_factory=dict)
+    description: str = ""
+
+    def progress(self, t: float) -> tuple[float, float]:
+        """(s [-], s_dot [1/s]) of the time scaling at time t [s]; s = 1 after the end."""
+        if self.time_scaling is TimeScaling.QUINTIC:
+            return quintic(t, self.duration)
+        inside = 0.0 <= t < self.duration
+        return min(max(t / self.duration, 0.0), 1.0), (1.0 / self.duration if inside else 0.0)
+
+    def angular_velocity(self, t: float) -> np.ndarray:
+        """Commanded camera angular velocity at t, ``frame`` axes [rad/s], shape (3,)."""
+        return self.angle * self.progress(t)[1] * self.axis
+
+    def target_rotation(self, camera_0: np.ndarray, base_0: np.ndarray, t: float) -> np.ndarray:
+        """Camera orientation the command asks for at t, given the initial camera and base
+        rotations (world <- frame, (3, 3)); the base is assumed not to turn."""
+        turn = pin.exp3(self.angle * self.progress(t)[0] * self.axis)
+        if self.frame is TwistFrame.WORLD:
+            return turn @ camera_0
+        if self.frame is TwistFrame.CAMERA:
+            return camera_0 @ turn
+        return base_0 @ turn @ base_0.T @ camera_0
+
+    def gains(self, base: ControlGains | None = None) -> ControlGains:
+        """``base`` gains (thesis values by default) with this scenario's overrides applied."""
+        base = base or ControlGains()
+        values = {key: self.controller[key] for key in self.controller if key != "method"}
+        return ControlGains(**{**base.__dict__, **values})
+
+    def method(self, default: Method | str = Method.DLS) -> Method:
+        """The scenario's method override, else ``default``."""
+        return Method.parse(str(self.controller.get("method", default)))
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario YAML file (see the module docstring for keys)."""
+    path, content = read_yaml_mapping(path, _KEYS, "scenario file")
+    where = str(path)
+    missing = [key for key in _REQUIRED if key not in content]
+    if missing:
+        raise ConfigError(f"{where}: missing key(s) {missing}")
+    try:
+        theta = np.deg2rad(
+            as_vector(
+                content["initial_joint_positions_deg"],
+                len(content["initial_joint_positions_deg"]),
+                "initial_joint_positions_deg",
+            )
+        )
+        axis = as_vector(content["axis"], 3, "axis")
+        angle = np.deg2rad(float(content["angle_deg"]))
+        duration = float(content["duration"])
+    except (InputError, TypeError, ValueError) as exc:
+        raise ConfigError(f"{where}: {exc}") from exc
+    if np.linalg.norm(axis) < 1e-9:
+        raise ConfigError(f"{where}: 'axis' must be non-zero, got {axis.tolist()}")
+    if not (np.isfinite(angle) and np.isfinite(duration) and duration > 0.0):
+        raise ConfigError(
+            f"{where}: 'duration' must be > 0 s and 'angle_deg' finite, got "
+            f"{content['duration']!r}, {content['angle_deg']!r}"
+        )
+    controller = content.get("controller") or {}
+    if not isinstance(controller, dict):
+        raise ConfigError(f"{where}: 'controller' must be a mapping, got {controller!r}")
+    check_keys(controller, set(CONTROLLER_OVERRIDES), f"{where}: controller")
+    try:
+        controller = {key: CONTROLLER_OVERRIDES[key](value) for key, value in controller.items()}
+        scenario = Scenario(
+            name=str(content.get("name", path.stem)),
+            initial_theta=theta,
+            frame=TwistFrame.parse(content.get("frame", "world")),
+            axis=axis / np.linalg.norm(axis),
+            angle=float(angle),
+            duration=duration,
+            time_scaling=TimeScaling.parse(content.get("time_scaling", "quintic")),
+            controller=controller,
+            description=str(content.get("description", "")),
+        )
+        scenario.gains()
+        scenario.method()
+    except (ConfigError, TypeError, ValueError) as exc:
+        raise ConfigError(f"{where}: {exc}") from exc
+    return scenario

@@ -1,0 +1,110 @@
+"""Sampled controller: hold-interval correction, position limits, twist frames, theta_ref."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from rns_testing import SATELLITE_OBSERVATION_DEG, vectors
+
+from rns_ros.core import ConfigError, FreeFloatingState
+from rns_ros.core.closed_loop import run_scenario
+from rns_ros.core.control import position_limit_scale, reactionless_camera_control
+from rns_ros.core.controller import (
+    ControllerSettings,
+    ReactionlessController,
+    TwistFrame,
+    angular_velocity_in_world,
+)
+
+THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
+
+
+def test_position_limit_scale_matches_the_distance_left():
+    lower, upper = np.array([-1.0, -1.0]), np.array([1.0, 1.0])
+    theta = np.array([0.9, 0.0])
+    # joint 0 has 0.1 rad left and would move 0.4 rad: s = 0.25
+    assert position_limit_scale(theta, np.array([4.0, 1.0]), lower, upper, 0.1) == pytest.approx(
+        0.25
+    )
+    # moving away from the limit is never restricted
+    assert position_limit_scale(theta, np.array([-4.0, 1.0]), lower, upper, 0.1) == 1.0
+    # at the limit and pushing into it: halt
+    at_limit = np.array([1.0, 0.0])
+    assert position_limit_scale(at_limit, np.array([0.1, 0.0]), lower, upper, 0.1) == 0.0
+
+
+def test_position_limit_halts_the_whole_motion_reactionlessly(robot):
+    theta = THETA_0.copy()
+    state = FreeFloatingState.compute(robot, robot.configuration(theta))
+    omega = np.array([0.1, 0.0, 0.0])
+    free = reactionless_camera_control(robot, state, omega, limit_horizon=0.01)
+    assert not free.position_limited
+    # put the fastest-moving joint exactly at the limit it is heading for
+    joint = int(np.argmax(np.abs(free.joint_velocity)))
+    limit = robot.upper_limits if free.joint_velocity[joint] > 0 else robot.lower_limits
+    theta[joint] = limit[joint]
+    state = FreeFloatingState.compute(robot, robot.configuration(theta))
+    out = reactionless_camera_control(robot, state, omega, limit_horizon=0.01)
+    assert out.position_limited
+    assert out.limit_scale == 0.0
+    assert np.all(out.joint_velocity == 0.0)
+    # the opposite command moves away from the limit and is not held back
+    back = reactionless_camera_control(robot, state, -omega, limit_horizon=0.01)
+    assert not back.position_limited
+
+
+@settings(max_examples=30, deadline=None)
+@given(vectors(3, 0.2))
+def test_twist_frames_rotate_into_world(robot, omega):
+    state = FreeFloatingState.compute(
+        robot, robot.configuration(THETA_0, [0, 0, 0], [0.1, 0.2, 0.3, 0.9])
+    )
+    world = angular_velocity_in_world(state, omega, TwistFrame.WORLD)
+    assert np.array_equal(world, omega)
+    base = angular_velocity_in_world(state, omega, TwistFrame.BASE)
+    assert np.allclose(state.base_rotation.T @ base, omega, atol=1e-14)
+    camera = angular_velocity_in_world(state, omega, TwistFrame.CAMERA)
+    # a camera-frame command is achieved in camera axes: R_c^T J_omega theta_dot = omega
+    out = reactionless_camera_control(robot, state, camera)
+    if out.limit_scale == 1.0:
+        achieved = state.camera.rotation.T @ (state.camera.jacobian[3:] @ out.joint_velocity)
+        assert np.allclose(achieved, omega, atol=1e-12)
+
+
+def test_reference_positions_integrate_the_held_velocity(robot):
+    state = FreeFloatingState.compute(robot, robot.configuration(THETA_0))
+    controller = ReactionlessController(robot, ControllerSettings(period=0.02))
+    controller.reset(state)
+    first = controller.step(state, [0.1, 0.0, 0.0])
+    assert np.array_equal(first.reference_positions, state.theta)
+    second = controller.step(state, [0.1, 0.0, 0.0])
+    assert np.allclose(second.reference_positions, state.theta + 0.02 * first.joint_velocity)
+    # the midpoint output is reactionless where it was evaluated, not at the sample
+    out = second.output
+    assert np.abs(out.coupling_momentum).max() < 1e-9
+    assert not np.allclose(second.evaluated_theta, state.theta)
+
+
+def test_bad_settings_are_rejected():
+    with pytest.raises(ConfigError, match="hold_iterations"):
+        ControllerSettings(hold_iterations=0)
+    with pytest.raises(ConfigError, match="hold_correction must be one of"):
+        ControllerSettings(hold_correction="euler")
+    with pytest.raises(ConfigError, match="period"):
+        ControllerSettings(period=-0.01)
+
+
+def test_midpoint_hold_is_second_order_where_naive_is_first(robot, scenario):
+    """Halving the period halves the naive hold error and quarters the midpoint one."""
+    short = dataclasses.replace(scenario("satellite_observation"), duration=4.0, angle=np.pi / 4)
+
+    def deviation(hold, rate):
+        return run_scenario(robot, short, hold_correction=hold, rate=rate).max_base_deviation_deg
+
+    naive = deviation("naive", 50.0) / deviation("naive", 100.0)
+    midpoint = deviation("midpoint", 50.0) / deviation("midpoint", 100.0)
+    assert 1.6 < naive < 2.5
+    assert midpoint > 3.2

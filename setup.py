@@ -11,6 +11,7 @@ PACKAGE_NAME = "rns_ros"
 CONSOLE_SCRIPTS = [
     "rns_demo = rns_ros.demo:main",
     "rns_simulator = rns_ros.nodes.simulator:main",
+    "rns_controller = rns_ros.nodes.controller:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

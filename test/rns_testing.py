@@ -26,3 +26,14 @@ def vectors(size: int, bound: float):
 def configurations(robot_n: int = 7):
     """Random free-floating configurations: (base position, base quaternion, theta)."""
     return st.tuples(vectors(3, 5.0), unit_quaternions(), vectors(robot_n, np.pi))
+
+
+class Recorder:
+    """Keeps every message of a topic, keyed by header stamp when it has one."""
+
+    def __init__(self, node, msg_type, topic):
+        self.messages = []
+        node.create_subscription(msg_type, topic, self.messages.append, 50)
+
+    def by_stamp(self):
+        return {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in self.messages}

@@ -14,6 +14,7 @@ from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rns_testing import Recorder
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
@@ -32,17 +33,6 @@ MOMENTUM = [0.2, -0.1, 0.05, 1.0, -0.5, 0.3]
 def _simulator(ros, **overrides) -> SimulatorNode:
     parameters = [Parameter(name, value=value) for name, value in overrides.items()]
     return ros.add(SimulatorNode(context=ros.context, parameter_overrides=parameters))
-
-
-class Recorder:
-    """Keeps every message of a topic, keyed by header stamp when it has one."""
-
-    def __init__(self, node, msg_type, topic):
-        self.messages = []
-        node.create_subscription(msg_type, topic, self.messages.append, 50)
-
-    def by_stamp(self):
-        return {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in self.messages}
 
 
 def _trajectory(velocities, names=JOINTS, positions=()):

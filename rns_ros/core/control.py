@@ -26,17 +26,22 @@ from enum import StrEnum
 import numpy as np
 
 from rns_ros.core.errors import ConfigError, ModelError
+from rns_ros.core.fastmath import gram_determinant, svd_small
 from rns_ros.core.inverses import (
     THESIS_EPSILON,
     THESIS_LAMBDA2_MAX,
     THESIS_SC_GAIN,
-    damped_least_squares_inverse,
-    pseudoinverse,
-    singularity_consistent_inverse,
+    WideSvd,
+    dls_from_svd,
+    pseudoinverse_from_svd,
+    sc_from_svd,
 )
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import Determinants, FreeFloatingState
 from rns_ros.core.validation import as_vector, parse_choice, positive
+
+#: Singular values of J-bar below this fraction of sigma_max count as lost for P [-].
+_RANK_RCOND = 1e-12
 
 #: Thesis wrist-stabilization gain k_g of eq. (4.5) [1/(m s)] (section 4.2.2 prints "kg/m s").
 THESIS_WRIST_GAIN = 100.0
@@ -142,10 +147,13 @@ def position_limit_scale(
         horizon: look-ahead time [s], > 0 (one control period).
     """
     step = theta_dot * horizon
-    room = np.where(step > 0.0, upper - theta, np.where(step < 0.0, theta - lower, np.inf))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = np.where(step != 0.0, np.maximum(room, 0.0) / np.abs(step), np.inf)
-    return float(min(1.0, ratios.min(initial=np.inf)))
+    room = np.maximum(np.where(step > 0.0, upper - theta, theta - lower), 0.0)
+    moving = np.abs(step)
+    # s = room / |step| for moving joints; scale only where the step would use up the room
+    binding = moving > room
+    if not binding.any():
+        return 1.0
+    return float((room[binding] / moving[binding]).min())
 
 
 def reactionless_camera_control(
@@ -173,31 +181,34 @@ def reactionless_camera_control(
     method = Method.parse(method) if isinstance(method, str) else method
     gains = gains or ControlGains()
     j_omega = state.camera.jacobian[3:]
+    restricted = state.restricted_jacobian
+    svd = WideSvd(*svd_small(restricted))  # the one SVD of J-bar: inverse, projector, det
     damping, sc_scale = 0.0, 1.0
     if method is Method.CONVENTIONAL:
         theta_dot, sigma_min = _conventional(robot, j_omega, omega_ref)
     else:
-        restricted = state.restricted_jacobian
         if method is Method.DLS:
-            inverse = damped_least_squares_inverse(restricted, gains.epsilon, gains.lambda2_max)
-            matrix, sigma, damping = inverse.matrix, inverse.singular_values, inverse.damping
+            inverse = dls_from_svd(svd, gains.epsilon, gains.lambda2_max)
+            matrix, damping = inverse.matrix, inverse.damping
         elif method is Method.SC:
-            inverse = singularity_consistent_inverse(restricted, gains.sc_gain)
-            matrix, sigma, sc_scale = inverse.matrix, inverse.singular_values, inverse.speed_scale
+            inverse = sc_from_svd(svd, gains.sc_gain)
+            matrix, sc_scale = inverse.matrix, inverse.speed_scale
         else:
-            matrix = pseudoinverse(restricted)
-            sigma = np.linalg.svd(restricted, compute_uv=False)
-        sigma_min = float(sigma[-1])
+            matrix = pseudoinverse_from_svd(svd)
+        sigma_min = float(svd.sigma[-1])
         theta_dot = matrix @ omega_ref
         if wrist_reference is not None and gains.wrist_gain > 0.0:
             drift = wrist_offset(state) - as_vector(wrist_reference, 3, "wrist_reference")
-            restricted_pinv = matrix if method is Method.PINV else pseudoinverse(restricted)
-            null = state.reaction_null_space_projector @ (
-                np.eye(state.n) - restricted_pinv @ restricted
+            # P = P_RNS (E - J-bar^+ J-bar) = P_RNS - V_r V_r^T: the right singular vectors of
+            # J-bar with sigma > 0 already lie in range(P_RNS)
+            kept = svd.vt[svd.sigma > _RANK_RCOND * max(svd.sigma[0], np.finfo(float).tiny)]
+            gradient = state.wrist.jacobian[:3].T @ drift
+            null_gradient = state.reaction_null_space_projector @ gradient - kept.T @ (
+                kept @ gradient
             )
-            term = -gains.wrist_gain * null @ (state.wrist.jacobian[:3].T @ drift)
+            term = -gains.wrist_gain * null_gradient
             if method is Method.SC:
-                term *= float(np.prod(sigma**2))  # det(J-bar J-bar^T), eq. (4.15)
+                term *= float(np.prod(svd.sigma**2))  # det(J-bar J-bar^T), eq. (4.15)
             theta_dot = theta_dot + term
     limit_scale = uniform_speed_scale(theta_dot, robot.velocity_limits)
     theta_dot = limit_scale * theta_dot
@@ -213,7 +224,11 @@ def reactionless_camera_control(
     return ControlOutput(
         joint_velocity=theta_dot,
         sigma_min=sigma_min,
-        determinants=state.determinants,
+        determinants=Determinants(
+            kinematic=gram_determinant(j_omega),
+            coupling=float(np.prod(state.coupling_singular_values**2)),
+            algorithmic=float(np.prod(svd.sigma**2)),
+        ),
         damping=damping,
         speed_scale=sc_scale * limit_scale,
         limit_scale=limit_scale,
@@ -229,7 +244,7 @@ def _conventional(robot: FreeFloatingModel, j_omega: np.ndarray, omega_ref: np.n
         raise ModelError("the conventional baseline needs positioning/wrist subchains")
     wrist = robot.subchains.wrist
     j_wrist = j_omega[:, wrist]
-    sigma = np.linalg.svd(j_wrist, compute_uv=False)
+    svd = WideSvd(*svd_small(j_wrist))
     theta_dot = np.zeros(robot.n)
-    theta_dot[wrist] = pseudoinverse(j_wrist) @ omega_ref
-    return theta_dot, float(sigma[-1])
+    theta_dot[wrist] = pseudoinverse_from_svd(svd) @ omega_ref
+    return theta_dot, float(svd.sigma[-1])

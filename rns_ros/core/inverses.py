@@ -16,6 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rns_ros.core.errors import InputError
+from rns_ros.core.fastmath import svd_small
 from rns_ros.core.validation import as_matrix, positive
 
 #: Thesis values, section 4.3.2: singular region epsilon [-], maximum damping lambda_max^2 [-],
@@ -53,23 +55,47 @@ class SingularityConsistentInverse(NamedTuple):
     speed_scale: float
 
 
-def _wide_svd(jacobian) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+class WideSvd(NamedTuple):
+    """Thin SVD J = U diag(sigma) V^T of a wide J (m, n), m <= n.
+
+    Attributes:
+        u: left singular vectors, shape (m, m).
+        sigma: singular values, descending, shape (m,).
+        vt: right singular vectors V^T, shape (m, n).
+    """
+
+    u: np.ndarray
+    sigma: np.ndarray
+    vt: np.ndarray
+
+
+def wide_svd(jacobian) -> WideSvd:
+    """Thin SVD of a finite wide matrix (m, n), m <= n (one LAPACK call)."""
     jacobian = as_matrix(jacobian, "jacobian")
-    return np.linalg.svd(jacobian, full_matrices=False)
+    if jacobian.shape[0] > jacobian.shape[1]:
+        raise InputError(f"expected a wide matrix (m <= n), got shape {jacobian.shape}")
+    return WideSvd(*svd_small(jacobian))
 
 
-def kernel_basis(matrix, rank_tolerance: float) -> tuple[np.ndarray, np.ndarray, int]:
+def kernel_basis(
+    matrix, rank_tolerance: float, *, checked: bool = False
+) -> tuple[np.ndarray, np.ndarray, int]:
     """Orthonormal basis of ker(A) from the SVD, with a relative rank decision.
 
     Args:
         matrix: A, shape (m, n).
         rank_tolerance: singular values <= rank_tolerance * sigma_max count as zero [-].
+        checked: the caller guarantees a finite 2-D float array (skips the edge check).
 
     Returns:
         (basis (n, n - rank), singular values (min(m, n),) descending, rank).
     """
-    matrix = as_matrix(matrix, "matrix")
-    _, sigma, vt = np.linalg.svd(matrix, full_matrices=True)
+    if not checked:
+        matrix = as_matrix(matrix, "matrix")
+    if matrix.shape[0] <= matrix.shape[1]:
+        _, sigma, vt = svd_small(matrix, full=True)
+    else:
+        _, sigma, vt = np.linalg.svd(matrix, full_matrices=True)
     rank = int(np.sum(sigma > rank_tolerance * max(sigma[0], np.finfo(float).tiny)))
     return vt[rank:].T, sigma, rank
 
@@ -84,7 +110,15 @@ def pseudoinverse(jacobian, rcond: float = 1e-12) -> np.ndarray:
     Returns:
         J^+, shape (n, m).
     """
-    u, sigma, vt = _wide_svd(jacobian)
+    jacobian = as_matrix(jacobian, "jacobian")
+    if jacobian.shape[0] > jacobian.shape[1]:
+        return np.linalg.pinv(jacobian, rcond=rcond)
+    return pseudoinverse_from_svd(wide_svd(jacobian), rcond)
+
+
+def pseudoinverse_from_svd(svd: WideSvd, rcond: float = 1e-12) -> np.ndarray:
+    """J^+ of eq. (4.9) from a precomputed :class:`WideSvd`, shape (n, m)."""
+    u, sigma, vt = svd
     keep = sigma > rcond * max(sigma[0], np.finfo(float).tiny)
     inverse_sigma = np.where(keep, 1.0 / np.where(keep, sigma, 1.0), 0.0)
     return (vt.T * inverse_sigma) @ u.T
@@ -121,10 +155,17 @@ def damped_least_squares_inverse(
     """
     epsilon = positive(epsilon, "epsilon")
     lambda2_max = positive(lambda2_max, "lambda2_max")
-    u, sigma, vt = _wide_svd(jacobian)
-    damping = np.array([dls_damping(s, epsilon, lambda2_max) for s in sigma])
+    return dls_from_svd(wide_svd(jacobian), epsilon, lambda2_max)
+
+
+def dls_from_svd(svd: WideSvd, epsilon: float, lambda2_max: float) -> DampedInverse:
+    """:func:`damped_least_squares_inverse` from a precomputed SVD (no argument checks)."""
+    u, sigma, vt = svd
+    # eq. (4.12) for every sigma at once (same values as dls_damping)
+    damping = np.where(sigma > epsilon, 0.0, (1.0 - (sigma / epsilon) ** 2) ** 2 * lambda2_max)
     denominator = sigma**2 + damping
-    gains = np.divide(sigma, denominator, out=np.zeros_like(sigma), where=denominator > 0.0)
+    # denominator is 0 only when sigma = 0 and lambda2_max = 0 (excluded by the checks)
+    gains = sigma / np.where(denominator > 0.0, denominator, 1.0)
     return DampedInverse(
         matrix=(vt.T * gains) @ u.T, singular_values=sigma, damping=float(damping[-1])
     )
@@ -144,8 +185,16 @@ def singularity_consistent_inverse(
         gain: b of eq. (4.13) [-] (thesis 1.7).
     """
     gain = positive(gain, "gain")
-    u, sigma, vt = _wide_svd(jacobian)
-    mu = np.array([np.prod(np.delete(sigma, i)) for i in range(sigma.size)])
+    return sc_from_svd(wide_svd(jacobian), gain)
+
+
+def sc_from_svd(svd: WideSvd, gain: float) -> SingularityConsistentInverse:
+    """:func:`singularity_consistent_inverse` from a precomputed SVD (no argument checks)."""
+    u, sigma, vt = svd
+    # mu_i = prod_{j != i} sigma_j as prefix * suffix products (exact even when a sigma is 0)
+    before = np.cumprod(np.concatenate(([1.0], sigma[:-1])))
+    after = np.cumprod(np.concatenate(([1.0], sigma[:0:-1])))[::-1]
+    mu = before * after
     return SingularityConsistentInverse(
         matrix=gain * (vt.T * mu) @ u.T,
         singular_values=sigma,

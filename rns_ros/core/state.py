@@ -25,7 +25,14 @@ DEFAULT_RANK_TOLERANCE = 1e-9
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
+    """A read-only copy (for arrays that may alias Pinocchio's data or the caller's)."""
     array = np.array(array, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+def _sealed(array: np.ndarray) -> np.ndarray:
+    """``array`` itself, made read-only (for arrays computed here and owned by nobody else)."""
     array.setflags(write=False)
     return array
 
@@ -45,14 +52,21 @@ class FrameKinematics:
         rotation: world <- frame rotation, shape (3, 3).
         jacobian: fixed-base Jacobian J_m = [J_v; J_omega] w.r.t. theta_dot, world axes,
             linear part of the frame origin, shape (6, n) [m/rad; -].
-        base_jacobian: J_b mapping the thesis base twist V_b (world) to the frame twist,
-            [[E, -[r_{b->e}^x]], [0, E]], shape (6, 6).
+        base_position: base origin r_b in world [m], shape (3,).
     """
 
     position: np.ndarray
     rotation: np.ndarray
     jacobian: np.ndarray
-    base_jacobian: np.ndarray
+    base_position: np.ndarray
+
+    @property
+    def base_jacobian(self) -> np.ndarray:
+        """J_b mapping the thesis base twist V_b (world) to the frame twist,
+        [[E, -[r_{b->e}^x]], [0, E]], shape (6, 6)."""
+        base_jacobian = np.eye(6)
+        base_jacobian[:3, 3:] = -skew(self.position - self.base_position)
+        return base_jacobian
 
 
 @dataclass(frozen=True)
@@ -133,35 +147,39 @@ class FreeFloatingState:
         base_position = data.oMi[1].translation.copy()
         m_b, m_bm, m_m = thesis_inertia_blocks(data.M, rotation)
 
-        # Eliminate base linear velocity (zero linear momentum), eq. (3.2).
-        m_v, m_vw, m_w = m_b[:3, :3], m_b[:3, 3:], m_b[3:, 3:]
+        # Eliminate base linear velocity (zero linear momentum), eq. (3.2). M_v = (total mass) E
+        # for any free-floating system, so M_v^-1 is a division.
+        m_vw, m_w = m_b[:3, 3:], m_b[3:, 3:]
         m_vm, m_wm = m_bm[:3], m_bm[3:]
-        tilde_m_w = m_w - m_vw.T @ np.linalg.solve(m_v, m_vw)
-        tilde_m_wm = m_wm - m_vw.T @ np.linalg.solve(m_v, m_vm)
+        mass = robot.total_mass
+        tilde_m_w = m_w - (m_vw.T @ m_vw) / mass
+        tilde_m_wm = m_wm - (m_vw.T @ m_vm) / mass
 
         # P_RNS from the SVD of M~_omega_m: projector onto its kernel (eq. 2.34, 3.3).
-        kernel, sigma, rank = kernel_basis(tilde_m_wm, rank_tolerance)
+        kernel, sigma, rank = kernel_basis(tilde_m_wm, rank_tolerance, checked=True)
         projector = kernel @ kernel.T
 
+        base_position = _sealed(base_position)
         camera = _frame_kinematics(robot, robot.camera_frame_id, base_position)
         wrist = (
             None
             if robot.wrist_frame_id is None
             else _frame_kinematics(robot, robot.wrist_frame_id, base_position)
         )
+        q = _frozen(q)
         return cls(
-            q=_frozen(q),
-            theta=_frozen(q[7:]),
-            base_position=_frozen(base_position),
-            base_rotation=_frozen(rotation),
-            inertia_base=_frozen(m_b),
-            coupling_inertia=_frozen(m_bm),
+            q=q,
+            theta=q[7:],
+            base_position=base_position,
+            base_rotation=_sealed(rotation),
+            inertia_base=_sealed(m_b),
+            coupling_inertia=_sealed(m_bm),
             manipulator_inertia=_frozen(m_m),
-            coupling_angular_momentum_matrix=_frozen(tilde_m_wm),
-            base_rotational_inertia=_frozen(tilde_m_w),
+            coupling_angular_momentum_matrix=_sealed(tilde_m_wm),
+            base_rotational_inertia=_sealed(tilde_m_w),
             center_of_mass=_frozen(com),
-            coupling_singular_values=_frozen(sigma),
-            reaction_null_space_projector=_frozen(projector),
+            coupling_singular_values=_sealed(sigma),
+            reaction_null_space_projector=_sealed(projector),
             reaction_null_space_rank=robot.n - rank,
             camera=camera,
             wrist=wrist,
@@ -203,12 +221,11 @@ def _gram_determinant(matrix: np.ndarray) -> float:
 def _frame_kinematics(robot: FreeFloatingModel, frame_id: int, base_position) -> FrameKinematics:
     model, data = robot.model, robot.data
     placement = data.oMf[frame_id]
+    position = placement.translation.copy()
     jacobian = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
-    base_jacobian = np.eye(6)
-    base_jacobian[:3, 3:] = -skew(placement.translation - base_position)
     return FrameKinematics(
-        position=_frozen(placement.translation),
+        position=_sealed(position),
         rotation=_frozen(placement.rotation),
         jacobian=_frozen(jacobian[:, 6:]),
-        base_jacobian=_frozen(base_jacobian),
+        base_position=base_position,
     )

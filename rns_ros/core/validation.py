@@ -20,7 +20,7 @@ def as_vector(value, size: int, name: str) -> np.ndarray:
         raise InputError(f"{name} must be numeric, got {value!r}") from exc
     if array.shape != (size,):
         raise InputError(f"{name} must have shape ({size},), got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise InputError(f"{name} must be finite, got {array.tolist()}")
     return array
 
@@ -30,7 +30,7 @@ def as_matrix(value, name: str) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     if array.ndim != 2 or 0 in array.shape:
         raise InputError(f"{name} must be a non-empty 2-D matrix, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise InputError(f"{name} must be finite")
     return array
 

@@ -43,7 +43,7 @@ def svd_small(matrix: np.ndarray, full: bool = False):
 
 def gram_determinant(matrix: np.ndarray) -> float:
     """det(A A^T) of a (3, n) matrix by the closed-form 3 x 3 determinant (no LAPACK call)."""
-    (a, b, c), (_, e, f), (_, _, i) = ((matrix @ matrix.T)).tolist()
+    (a, b, c), (_, e, f), (_, _, i) = (matrix @ matrix.T).tolist()
     # symmetric Gram matrix [[a b c] [b e f] [c f i]]
     return a * (e * i - f * f) - b * (b * i - f * c) + c * (b * f - e * c)
 

@@ -13,7 +13,6 @@ import pytest
 from rns_testing import SATELLITE_OBSERVATION_DEG
 
 from rns_ros.core import ConfigError, FreeFloatingState, InputError
-from rns_ros.core.fastmath import solve_small
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import reactionless_joint_velocity
 from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationMode
@@ -217,10 +216,3 @@ def test_bad_settings_and_references_are_rejected(robot):
     dynamic = FreeFloatingSimulator(robot, mode=SimulationMode.DYNAMIC)
     with pytest.raises(ConfigError, match="needs mode 'kinematic'"):
         dynamic.step(_generic)
-
-
-def test_fast_small_solve_matches_numpy():
-    rng = np.random.default_rng(1)
-    matrix = rng.standard_normal((6, 6)) + 6 * np.eye(6)
-    rhs = rng.standard_normal(6)
-    assert np.allclose(solve_small(matrix, rhs), np.linalg.solve(matrix, rhs), atol=1e-14)

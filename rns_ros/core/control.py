@@ -21,7 +21,6 @@ controller) needs the hold-interval correction of the controller issue.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import StrEnum
 
 import numpy as np
 
@@ -38,7 +37,7 @@ from rns_ros.core.inverses import (
 )
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import Determinants, FreeFloatingState
-from rns_ros.core.validation import as_vector, parse_choice, positive
+from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Singular values of J-bar below this fraction of sigma_max count as lost for P [-].
 _RANK_RCOND = 1e-12
@@ -47,17 +46,15 @@ _RANK_RCOND = 1e-12
 THESIS_WRIST_GAIN = 100.0
 
 
-class Method(StrEnum):
+class Method(Choice):
     """How omega_ref is mapped to joint velocities."""
+
+    __label__ = "method"
 
     DLS = "dls"
     SC = "sc"
     PINV = "pinv"
     CONVENTIONAL = "conventional"
-
-    @classmethod
-    def parse(cls, value: str) -> Method:
-        return parse_choice(cls, value, "method")
 
 
 @dataclass(frozen=True)
@@ -178,7 +175,7 @@ def reactionless_camera_control(
             ignores position limits. Velocity limits always apply.
     """
     omega_ref = as_vector(omega_ref, 3, "omega_ref")
-    method = Method.parse(method) if isinstance(method, str) else method
+    method = Method.parse(method)
     gains = gains or ControlGains()
     j_omega = state.camera.jacobian[3:]
     restricted = state.restricted_jacobian

@@ -19,7 +19,6 @@ position servo tracks, and keeps the wrist reference p_w^init of eq. (4.6).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import StrEnum
 
 import numpy as np
 
@@ -33,7 +32,7 @@ from rns_ros.core.control import (
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import FreeFloatingState
-from rns_ros.core.validation import as_vector, parse_choice, positive
+from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Default control rate [Hz] of the ROS controller.
 DEFAULT_RATE = 100.0
@@ -41,27 +40,23 @@ DEFAULT_RATE = 100.0
 MAX_HOLD_ITERATIONS = 5
 
 
-class HoldCorrection(StrEnum):
+class HoldCorrection(Choice):
     """Where the law is evaluated for an output held over one control period."""
+
+    __label__ = "hold_correction"
 
     NAIVE = "naive"
     MIDPOINT = "midpoint"
 
-    @classmethod
-    def parse(cls, value: str) -> HoldCorrection:
-        return parse_choice(cls, value, "hold_correction")
 
-
-class TwistFrame(StrEnum):
+class TwistFrame(Choice):
     """Axes a commanded angular velocity is expressed in."""
+
+    __label__ = "twist frame"
 
     WORLD = "world"
     BASE = "base"
     CAMERA = "camera"
-
-    @classmethod
-    def parse(cls, value: str) -> TwistFrame:
-        return parse_choice(cls, value, "twist frame")
 
 
 def angular_velocity_in_world(state: FreeFloatingState, omega, frame: TwistFrame) -> np.ndarray:
@@ -99,14 +94,12 @@ class ControllerSettings:
         object.__setattr__(
             self,
             "method",
-            Method.parse(self.method) if isinstance(self.method, str) else self.method,
+            Method.parse(self.method),
         )
         object.__setattr__(
             self,
             "hold_correction",
-            HoldCorrection.parse(self.hold_correction)
-            if isinstance(self.hold_correction, str)
-            else self.hold_correction,
+            HoldCorrection.parse(self.hold_correction),
         )
         positive(self.period, "period", "s")
         if not 1 <= int(self.hold_iterations) <= MAX_HOLD_ITERATIONS:

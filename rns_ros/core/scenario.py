@@ -18,7 +18,6 @@ axes. Keys (all validated; unknown keys are rejected by name):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import StrEnum
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +28,7 @@ from rns_ros.core.control import ControlGains, Method
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.timing import quintic
-from rns_ros.core.validation import as_vector, parse_choice
+from rns_ros.core.validation import Choice, as_vector
 
 _KEYS = {
     "name",
@@ -53,15 +52,13 @@ CONTROLLER_OVERRIDES = {
 }
 
 
-class TimeScaling(StrEnum):
+class TimeScaling(Choice):
     """Shape of the rotation angle over time."""
+
+    __label__ = "time_scaling"
 
     QUINTIC = "quintic"
     CONSTANT = "constant"
-
-    @classmethod
-    def parse(cls, value: str) -> TimeScaling:
-        return parse_choice(cls, value, "time_scaling")
 
 
 @dataclass(frozen=True)

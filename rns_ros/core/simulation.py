@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from enum import StrEnum
 
 import numpy as np
 import pinocchio as pin
@@ -35,7 +34,7 @@ import pinocchio as pin
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.fastmath import solve_small
 from rns_ros.core.model import FreeFloatingModel
-from rns_ros.core.validation import as_vector, parse_choice, positive
+from rns_ros.core.validation import Choice, as_vector, positive
 
 #: theta_dot = f(t [s], q (7 + n,)) [rad/s], shape (n,): a continuous-time joint-velocity law.
 JointVelocityField = Callable[[float, np.ndarray], np.ndarray]
@@ -46,15 +45,13 @@ DEFAULT_SERVO_NATURAL_FREQUENCY = 50.0
 DEFAULT_SERVO_DAMPING_RATIO = 1.0
 
 
-class SimulationMode(StrEnum):
+class SimulationMode(Choice):
     """How joints move: follow velocity commands exactly, or through torques and dynamics."""
+
+    __label__ = "mode"
 
     KINEMATIC = "kinematic"
     DYNAMIC = "dynamic"
-
-    @classmethod
-    def parse(cls, value: str) -> SimulationMode:
-        return parse_choice(cls, value, "mode")
 
 
 @dataclass(frozen=True)
@@ -147,7 +144,7 @@ class FreeFloatingSimulator:
         gains: ServoGains | None = None,
     ) -> None:
         self.robot = robot
-        self.mode = SimulationMode.parse(mode) if isinstance(mode, str) else mode
+        self.mode = SimulationMode.parse(mode)
         self.dt = positive(dt, "dt", "[s]")
         if self.dt > 0.1:
             raise ConfigError(f"dt must be in (0, 0.1] s, got {dt!r}")

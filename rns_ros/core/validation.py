@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import TypeVar
+from typing import Self, TypeVar
 
 import numpy as np
 
@@ -52,3 +52,14 @@ def parse_choice(choices: type[StrEnumT], value, name: str) -> StrEnumT:
     except ValueError:
         valid = [member.value for member in choices]
         raise ConfigError(f"{name} must be one of {valid}, got {value!r}") from None
+
+
+class Choice(StrEnum):
+    """A string enum read from configuration: ``parse`` accepts a member or its value and raises
+    :class:`ConfigError` listing the valid values. Subclasses name the setting in ``__label__``."""
+
+    @classmethod
+    def parse(cls, value) -> Self:
+        if isinstance(value, cls):
+            return value
+        return parse_choice(cls, value, getattr(cls, "__label__", cls.__name__))

@@ -49,7 +49,13 @@ from rns_ros.core.controller import (
 )
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.teleop import CommandGate, ControllerState, GateOutput, validate_twist
-from rns_ros.nodes.parameters import ParameterSpec, declare_parameters, specs_by_name
+from rns_ros.nodes.parameters import (
+    MODEL_CONFIG,
+    WORLD_FRAME,
+    ParameterSpec,
+    declare_parameters,
+    specs_by_name,
+)
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 
@@ -59,11 +65,7 @@ SUMMARY = "Reactionless camera-pointing controller: twist in, joint references o
 RESYNC_TOLERANCE = 0.2
 
 PARAMETERS = (
-    ParameterSpec(
-        "model_config",
-        "",
-        "Model YAML (URDF, camera/wrist frames, subchains); empty: the default 7-DoF arm",
-    ),
+    MODEL_CONFIG,
     ParameterSpec(
         "method",
         "dls",
@@ -161,7 +163,7 @@ PARAMETERS = (
         "joint_velocities (model joint order)",
         choices=("trajectory", "velocity"),
     ),
-    ParameterSpec("world_frame", "world", "Frame id of the inertial frame"),
+    WORLD_FRAME,
 )
 SPECS = specs_by_name(PARAMETERS)
 

@@ -99,6 +99,15 @@ class ParameterSpec:
         return value
 
 
+#: Parameters every rns_ros node that loads the robot declares the same way.
+MODEL_CONFIG = ParameterSpec(
+    "model_config",
+    "",
+    "Model YAML (URDF, camera/wrist frames, subchains); empty: the default 7-DoF arm",
+)
+WORLD_FRAME = ParameterSpec("world_frame", "world", "Frame id of the inertial frame")
+
+
 def declare_parameters(node: Node, specs: Sequence[ParameterSpec]) -> dict[str, Any]:
     """Declare every spec on ``node`` and return {name: checked value}.
 

@@ -45,7 +45,13 @@ from rns_ros.core import load_model
 from rns_ros.core.commands import check_velocity_limits, match_named_command
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationState
-from rns_ros.nodes.parameters import ParameterSpec, declare_parameters, specs_by_name
+from rns_ros.nodes.parameters import (
+    MODEL_CONFIG,
+    WORLD_FRAME,
+    ParameterSpec,
+    declare_parameters,
+    specs_by_name,
+)
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 
@@ -54,11 +60,7 @@ SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed
 SATELLITE_OBSERVATION_RAD = [math.radians(a) for a in (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)]
 
 PARAMETERS = (
-    ParameterSpec(
-        "model_config",
-        "",
-        "Model YAML (URDF, camera/wrist frames, subchains); empty: the default 7-DoF arm",
-    ),
+    MODEL_CONFIG,
     ParameterSpec(
         "mode",
         "kinematic",
@@ -130,7 +132,7 @@ PARAMETERS = (
         read_only=False,
     ),
     ParameterSpec("publish_clock", False, "Publish /clock (sim time) and stamp messages with it"),
-    ParameterSpec("world_frame", "world", "Frame id of the inertial frame"),
+    WORLD_FRAME,
     ParameterSpec(
         "servo_natural_frequency",
         50.0,

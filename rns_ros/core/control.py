@@ -30,6 +30,7 @@ from rns_ros.core.inverses import (
     THESIS_EPSILON,
     THESIS_LAMBDA2_MAX,
     THESIS_SC_GAIN,
+    TINY,
     WideSvd,
     dls_from_svd,
     pseudoinverse_from_svd,
@@ -198,7 +199,7 @@ def reactionless_camera_control(
             drift = wrist_offset(state) - as_vector(wrist_reference, 3, "wrist_reference")
             # P = P_RNS (E - J-bar^+ J-bar) = P_RNS - V_r V_r^T: the right singular vectors of
             # J-bar with sigma > 0 already lie in range(P_RNS)
-            kept = svd.vt[svd.sigma > _RANK_RCOND * max(svd.sigma[0], np.finfo(float).tiny)]
+            kept = svd.vt[svd.sigma > _RANK_RCOND * max(svd.sigma[0], TINY)]
             gradient = state.wrist.jacobian[:3].T @ drift
             null_gradient = state.reaction_null_space_projector @ gradient - kept.T @ (
                 kept @ gradient

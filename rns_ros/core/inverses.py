@@ -25,6 +25,8 @@ from rns_ros.core.validation import as_matrix, positive
 THESIS_EPSILON = 0.2
 THESIS_LAMBDA2_MAX = 2.0
 THESIS_SC_GAIN = 1.7
+#: Smallest positive normal float: floor for relative thresholds when sigma_max is 0.
+TINY = float(np.finfo(float).tiny)
 
 
 class DampedInverse(NamedTuple):
@@ -96,7 +98,7 @@ def kernel_basis(
         _, sigma, vt = svd_small(matrix, full=True)
     else:
         _, sigma, vt = np.linalg.svd(matrix, full_matrices=True)
-    rank = int(np.sum(sigma > rank_tolerance * max(sigma[0], np.finfo(float).tiny)))
+    rank = int((sigma > rank_tolerance * max(sigma[0], TINY)).sum())
     return vt[rank:].T, sigma, rank
 
 
@@ -119,7 +121,7 @@ def pseudoinverse(jacobian, rcond: float = 1e-12) -> np.ndarray:
 def pseudoinverse_from_svd(svd: WideSvd, rcond: float = 1e-12) -> np.ndarray:
     """J^+ of eq. (4.9) from a precomputed :class:`WideSvd`, shape (n, m)."""
     u, sigma, vt = svd
-    keep = sigma > rcond * max(sigma[0], np.finfo(float).tiny)
+    keep = sigma > rcond * max(sigma[0], TINY)
     inverse_sigma = np.where(keep, 1.0 / np.where(keep, sigma, 1.0), 0.0)
     return (vt.T * inverse_sigma) @ u.T
 

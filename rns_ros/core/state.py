@@ -9,7 +9,8 @@ all arrays are read-only. All vectors are in world axes (the thesis convention, 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
@@ -93,9 +94,6 @@ class FreeFloatingState:
         theta: joint angles [rad], shape (n,).
         base_position: r_b [m], shape (3,).
         base_rotation: R (world <- base), shape (3, 3).
-        inertia_base: M_b of eq. (2.8), shape (6, 6) [kg, kg m, kg m^2].
-        coupling_inertia: M_bm (= M_bl) of eq. (2.12), shape (6, n).
-        manipulator_inertia: M_m (= M_l) of eq. (2.15), shape (n, n).
         coupling_angular_momentum_matrix: M~_omega_m of eq. (3.2), shape (3, n) [kg m^2].
         base_rotational_inertia: M~_omega of eq. (3.2), shape (3, 3) [kg m^2].
         center_of_mass: system CoM r_C [m], shape (3,).
@@ -104,15 +102,16 @@ class FreeFloatingState:
         reaction_null_space_rank: rank of P_RNS (n - rank M~_omega_m).
         camera: :class:`FrameKinematics` of the end-effector frame.
         wrist: :class:`FrameKinematics` of the wrist frame, or None.
+
+    The inertia blocks M_b, M_bm, M_m (properties ``inertia_base``, ``coupling_inertia``,
+    ``manipulator_inertia``) are computed on first use (one CRBA) and cached: the control law only
+    needs M~_omega_m and M~_omega, which come from the centroidal momentum matrix.
     """
 
     q: np.ndarray
     theta: np.ndarray
     base_position: np.ndarray
     base_rotation: np.ndarray
-    inertia_base: np.ndarray
-    coupling_inertia: np.ndarray
-    manipulator_inertia: np.ndarray
     coupling_angular_momentum_matrix: np.ndarray
     base_rotational_inertia: np.ndarray
     center_of_mass: np.ndarray
@@ -121,6 +120,7 @@ class FreeFloatingState:
     reaction_null_space_rank: int
     camera: FrameKinematics
     wrist: FrameKinematics | None
+    robot: FreeFloatingModel = field(repr=False, compare=False)
 
     @classmethod
     def compute(
@@ -130,7 +130,13 @@ class FreeFloatingState:
         *,
         rank_tolerance: float = DEFAULT_RANK_TOLERANCE,
     ) -> FreeFloatingState:
-        """Run Pinocchio once (CRBA, joint Jacobians, frame placements, CoM) and derive the rest.
+        """Run Pinocchio once (centroidal map, joint Jacobians, frames) and derive the rest.
+
+        M~_omega_m and M~_omega of eq. (3.2) are the angular rows of Pinocchio's centroidal
+        momentum matrix A_G: with zero linear momentum the angular momentum is the same about
+        every point, a base translation adds none about the CoM, and A_G's base columns act on
+        the base twist in base axes (hence the R^T). A test checks them against eq. (3.2) built
+        from M_b and M_bm.
 
         Args:
             robot: the model.
@@ -139,21 +145,14 @@ class FreeFloatingState:
         """
         model, data = robot.model, robot.data
         q = as_vector(q, model.nq, "q")
-        pin.crba(model, data, q)
+        centroidal = pin.computeCentroidalMap(model, data, q)  # also the CoM, data.com[0]
+        com = data.com[0].copy()
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        com = pin.centerOfMass(model, data, q, False)
         rotation = data.oMi[1].rotation.copy()
         base_position = data.oMi[1].translation.copy()
-        m_b, m_bm, m_m = thesis_inertia_blocks(data.M, rotation)
-
-        # Eliminate base linear velocity (zero linear momentum), eq. (3.2). M_v = (total mass) E
-        # for any free-floating system, so M_v^-1 is a division.
-        m_vw, m_w = m_b[:3, 3:], m_b[3:, 3:]
-        m_vm, m_wm = m_bm[:3], m_bm[3:]
-        mass = robot.total_mass
-        tilde_m_w = m_w - (m_vw.T @ m_vw) / mass
-        tilde_m_wm = m_wm - (m_vw.T @ m_vm) / mass
+        tilde_m_wm = centroidal[3:, 6:]
+        tilde_m_w = centroidal[3:, 3:6] @ rotation.T
 
         # P_RNS from the SVD of M~_omega_m: projector onto its kernel (eq. 2.34, 3.3).
         kernel, sigma, rank = kernel_basis(tilde_m_wm, rank_tolerance, checked=True)
@@ -172,18 +171,39 @@ class FreeFloatingState:
             theta=q[7:],
             base_position=base_position,
             base_rotation=_sealed(rotation),
-            inertia_base=_sealed(m_b),
-            coupling_inertia=_sealed(m_bm),
-            manipulator_inertia=_frozen(m_m),
             coupling_angular_momentum_matrix=_sealed(tilde_m_wm),
             base_rotational_inertia=_sealed(tilde_m_w),
-            center_of_mass=_frozen(com),
+            center_of_mass=_sealed(com),
             coupling_singular_values=_sealed(sigma),
             reaction_null_space_projector=_sealed(projector),
             reaction_null_space_rank=robot.n - rank,
             camera=camera,
             wrist=wrist,
+            robot=robot,
         )
+
+    # --- inertia blocks of eq. (2.7), on first use -----------------------------------------------
+    @cached_property
+    def _inertia_blocks(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        model, data = self.robot.model, self.robot.data
+        pin.crba(model, data, self.q)
+        blocks = thesis_inertia_blocks(data.M, self.base_rotation)
+        return tuple(_frozen(block) for block in blocks)
+
+    @property
+    def inertia_base(self) -> np.ndarray:
+        """M_b of eq. (2.8), shape (6, 6) [kg, kg m, kg m^2]."""
+        return self._inertia_blocks[0]
+
+    @property
+    def coupling_inertia(self) -> np.ndarray:
+        """M_bm (= M_bl) of eq. (2.12), shape (6, n)."""
+        return self._inertia_blocks[1]
+
+    @property
+    def manipulator_inertia(self) -> np.ndarray:
+        """M_m (= M_l) of eq. (2.15), shape (n, n)."""
+        return self._inertia_blocks[2]
 
     # --- derived quantities (cheap, from stored arrays) ----------------------------------------
     @property

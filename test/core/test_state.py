@@ -82,10 +82,16 @@ def test_linear_inertia_block_is_total_mass(robot):
 
 @SETTINGS
 @given(configurations())
-def test_coupling_matrix_is_centroidal_momentum_matrix_joint_block(robot, config):
+def test_coupling_matrices_are_eq_3_2_from_the_inertia_blocks(robot, config):
+    """The state takes M~_omega_m, M~_omega from the centroidal map; eq. (3.2) from CRBA agrees."""
     state = _state(robot, config)
-    centroidal_map = pin.computeCentroidalMap(robot.model, robot.data, state.q)
-    assert np.allclose(state.coupling_angular_momentum_matrix, centroidal_map[3:, 6:], atol=1e-9)
+    m_b, m_bm = state.inertia_base, state.coupling_inertia
+    m_v, m_vw, m_w = m_b[:3, :3], m_b[:3, 3:], m_b[3:, 3:]
+    tilde_m_w = m_w - m_vw.T @ np.linalg.solve(m_v, m_vw)
+    tilde_m_wm = m_bm[3:] - m_vw.T @ np.linalg.solve(m_v, m_bm[:3])
+    scale = np.abs(tilde_m_w).max()
+    assert np.allclose(state.base_rotational_inertia, tilde_m_w, atol=1e-12 * scale)
+    assert np.allclose(state.coupling_angular_momentum_matrix, tilde_m_wm, atol=1e-12 * scale)
 
 
 @SETTINGS

@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import math
+import os
+import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -18,6 +22,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rns_testing import Recorder
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.core import ConfigError
@@ -262,3 +267,59 @@ def _camera_rotation(controller) -> np.ndarray:
 def _odom_rotation(msg: Odometry) -> np.ndarray:
     o = msg.pose.pose.orientation
     return pin.Quaternion(o.w, o.x, o.y, o.z).toRotationMatrix()
+
+
+def test_velocity_output_interface_drives_the_simulator(ros):
+    """ros2_control shape: Float64MultiArray of joint velocities in model order."""
+    _node(ros, SimulatorNode, command_interface="velocity")
+    _node(ros, ControllerNode, output_interface="velocity")
+    probe = ros.probe()
+    velocities = Recorder(probe, Float64MultiArray, "joint_velocities")
+    joints = Recorder(probe, JointState, "joint_states")
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.0, 0.0, 0.1), True
+    assert ros.spin_until(
+        lambda: velocities.messages and np.abs(velocities.messages[-1].data).max() > 0.01
+    )
+    ros.spin_for(0.3)
+    assert len(velocities.messages[-1].data) == 7
+    moved = np.ptp([m.position for m in joints.messages], axis=0).max()
+    assert moved > 1e-3
+
+
+def test_ctrl_c_publishes_zero_velocity(ros):
+    """The installed-style executable, interrupted like a terminal user would."""
+    probe = ros.probe()
+    references = Recorder(probe, JointTrajectory, "joint_references")
+    state_pub = probe.create_publisher(JointState, "joint_states", 10)
+    names = [f"joint_{i}" for i in range(1, 8)]
+    probe.create_timer(0.05, lambda: state_pub.publish(JointState(name=names, position=[0.4] * 7)))
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.1, 0.0, 0.0), True
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rns_ros.nodes.controller"],
+        env=os.environ.copy(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+    )
+    try:
+        assert ros.spin_until(
+            lambda: (
+                references.messages
+                and np.abs(references.messages[-1].points[0].velocities).max() > 0.01
+            ),
+            timeout=20.0,
+        )
+        operator.active = False
+        process.send_signal(signal.SIGINT)
+        count = len(references.messages)
+        assert ros.spin_until(lambda: process.poll() is not None, timeout=10.0)
+        ros.spin_for(0.3)
+        assert process.returncode == 0
+        after = references.messages[count:]
+        assert after, "no message after Ctrl-C"
+        assert np.all(np.array(after[-1].points[0].velocities) == 0.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+        process.wait(timeout=5)

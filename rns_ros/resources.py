@@ -31,3 +31,22 @@ def config_dir() -> Path:
 def default_model_config() -> Path:
     """Path of the default model file ``config/model.yaml`` (7-DoF arm, ETS-VII-class base)."""
     return config_dir() / "model.yaml"
+
+
+def scenario_path(name_or_path: str | Path) -> Path:
+    """A scenario file: an existing path as given, else ``config/scenarios/<name>.yaml``.
+
+    Raises:
+        ConfigError: neither exists; the message lists the shipped scenarios.
+    """
+    from rns_ros.core.errors import ConfigError
+
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    shipped = config_dir() / "scenarios"
+    candidate = shipped / f"{name_or_path}.yaml"
+    if candidate.is_file():
+        return candidate
+    names = sorted(p.stem for p in shipped.glob("*.yaml"))
+    raise ConfigError(f"scenario {str(name_or_path)!r} is neither a file nor one of {names}")

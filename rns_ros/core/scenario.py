@@ -11,7 +11,10 @@ axes. Keys (all validated; unknown keys are rejected by name):
     axis: [x, y, z]                     (normalised; must be non-zero)
     angle_deg: total rotation           [deg], may be negative
     duration: command duration          [s], > 0
-    time_scaling: quintic | constant    (default quintic; constant: omega = angle / duration)
+    time_scaling: quintic | constant | piecewise   (default quintic; constant: angle / duration)
+    segments: [[duration_s, fraction], ...]   piecewise only: constant rate in each segment,
+                                        durations summing to ``duration``, fractions of the
+                                        angle summing to 1 (a fraction may be 0: a pause)
     controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain}  (overrides, optional)
 """
 
@@ -39,6 +42,7 @@ _KEYS = {
     "angle_deg",
     "duration",
     "time_scaling",
+    "segments",
     "controller",
 }
 _REQUIRED = ("initial_joint_positions_deg", "axis", "angle_deg", "duration")
@@ -59,6 +63,7 @@ class TimeScaling(Choice):
 
     QUINTIC = "quintic"
     CONSTANT = "constant"
+    PIECEWISE = "piecewise"
 
 
 @dataclass(frozen=True)
@@ -75,6 +80,7 @@ class Scenario:
         time_scaling: :class:`TimeScaling`.
         controller: overrides of controller settings (keys of CONTROLLER_OVERRIDES).
         description: free text.
+        segments: piecewise scaling only: (duration [s], fraction [-]) pairs.
     """
 
     name: str
@@ -86,11 +92,14 @@ class Scenario:
     time_scaling: TimeScaling = TimeScaling.QUINTIC
     controller: dict = field(default_factory=dict)
     description: str = ""
+    segments: tuple[tuple[float, float], ...] = ()
 
     def progress(self, t: float) -> tuple[float, float]:
         """(s [-], s_dot [1/s]) of the time scaling at time t [s]; s = 1 after the end."""
         if self.time_scaling is TimeScaling.QUINTIC:
             return quintic(t, self.duration)
+        if self.time_scaling is TimeScaling.PIECEWISE:
+            return _piecewise(self.segments, t)
         inside = 0.0 <= t < self.duration
         return min(max(t / self.duration, 0.0), 1.0), (1.0 / self.duration if inside else 0.0)
 
@@ -117,6 +126,39 @@ class Scenario:
     def method(self, default: Method | str = Method.DLS) -> Method:
         """The scenario's method override, else ``default``."""
         return Method.parse(str(self.controller.get("method", default)))
+
+
+def _piecewise(segments, t: float) -> tuple[float, float]:
+    done = 0.0
+    for duration, fraction in segments:
+        if t < duration:
+            rate = fraction / duration
+            return done + rate * max(t, 0.0), (rate if t >= 0.0 else 0.0)
+        t -= duration
+        done += fraction
+    return 1.0, 0.0
+
+
+def _segments(value, duration: float, where: str) -> tuple[tuple[float, float], ...]:
+    try:
+        segments = tuple((float(d), float(f)) for d, f in value)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"{where}: 'segments' must be a list of [duration_s, fraction] pairs, got {value!r}"
+        ) from None
+    if not segments or any(not (d > 0.0 and np.isfinite(d)) for d, _ in segments):
+        raise ConfigError(f"{where}: 'segments' durations must be > 0 s, got {value!r}")
+    if any(not np.isfinite(f) for _, f in segments):
+        raise ConfigError(f"{where}: 'segments' fractions must be finite, got {value!r}")
+    total_time = sum(d for d, _ in segments)
+    total_fraction = sum(f for _, f in segments)
+    if abs(total_time - duration) > 1e-9 * max(duration, 1.0):
+        raise ConfigError(
+            f"{where}: 'segments' durations sum to {total_time} s, 'duration' is {duration} s"
+        )
+    if abs(total_fraction - 1.0) > 1e-9:
+        raise ConfigError(f"{where}: 'segments' fractions sum to {total_fraction}, must be 1")
+    return segments
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -146,6 +188,12 @@ def load_scenario(path: str | Path) -> Scenario:
             f"{where}: 'duration' must be > 0 s and 'angle_deg' finite, got "
             f"{content['duration']!r}, {content['angle_deg']!r}"
         )
+    scaling = TimeScaling.parse(content.get("time_scaling", "quintic"))
+    if (scaling is TimeScaling.PIECEWISE) != ("segments" in content):
+        raise ConfigError(f"{where}: 'segments' is required with, and only with, piecewise scaling")
+    segments = (
+        _segments(content["segments"], duration, where) if scaling is TimeScaling.PIECEWISE else ()
+    )
     controller = content.get("controller") or {}
     if not isinstance(controller, dict):
         raise ConfigError(f"{where}: 'controller' must be a mapping, got {controller!r}")
@@ -159,9 +207,10 @@ def load_scenario(path: str | Path) -> Scenario:
             axis=axis / np.linalg.norm(axis),
             angle=float(angle),
             duration=duration,
-            time_scaling=TimeScaling.parse(content.get("time_scaling", "quintic")),
+            time_scaling=scaling,
             controller=controller,
             description=str(content.get("description", "")),
+            segments=segments,
         )
         scenario.gains()
         scenario.method()

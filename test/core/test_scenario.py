@@ -1,0 +1,93 @@
+"""Scenario files: validation names the bad key; the profiles integrate to the commanded angle."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+
+from rns_ros.core import ConfigError
+from rns_ros.core.scenario import TimeScaling, load_scenario
+from rns_ros.resources import config_dir, scenario_path
+
+BASE = {
+    "initial_joint_positions_deg": [0, 10, 0, 20, 0, 30, 0],
+    "axis": [0, 0, 2],
+    "angle_deg": 90.0,
+    "duration": 4.0,
+}
+
+
+def _write(tmp_path, **changes):
+    content = {**BASE, **changes}
+    content = {key: value for key, value in content.items() if value is not None}
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(content))
+    return path
+
+
+@pytest.mark.parametrize("path", sorted((config_dir() / "scenarios").glob("*.yaml")))
+def test_shipped_scenarios_load(path):
+    scenario = load_scenario(path)
+    assert scenario.name == path.stem
+    assert scenario.initial_theta.shape == (7,)
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"speed": 1.0}, r"unknown key\(s\) \['speed'\]"),
+        ({"axis": [0, 0, 0]}, "'axis' must be non-zero"),
+        ({"axis": [1, 0]}, "axis must have shape"),
+        ({"duration": 0.0}, "'duration' must be > 0"),
+        ({"duration": None}, r"missing key\(s\) \['duration'\]"),
+        ({"frame": "map"}, "twist frame must be one of"),
+        ({"time_scaling": "cubic"}, "time_scaling must be one of"),
+        ({"controller": {"gain": 1.0}}, r"controller: unknown key\(s\) \['gain'\]"),
+        ({"controller": {"method": "magic"}}, "method must be one of"),
+        ({"controller": {"wrist_gain": -1.0}}, "wrist_gain"),
+        ({"time_scaling": "piecewise"}, "'segments' is required"),
+        ({"time_scaling": "piecewise", "segments": [[1, 0.5], [2, 0.5]]}, "sum to 3.0 s"),
+        ({"time_scaling": "piecewise", "segments": [[2, 0.5], [2, 0.6]]}, "fractions sum"),
+        ({"time_scaling": "piecewise", "segments": [[4, "x"]]}, "pairs"),
+    ],
+)
+def test_bad_scenarios_name_the_key(tmp_path, changes, message):
+    with pytest.raises(ConfigError, match=message):
+        load_scenario(_write(tmp_path, **changes))
+
+
+@pytest.mark.parametrize(
+    ("scaling", "segments"),
+    [("quintic", None), ("constant", None), ("piecewise", [[1.0, 0.25], [1.5, 0.0], [1.5, 0.75]])],
+)
+def test_profiles_integrate_to_the_angle_about_the_unit_axis(tmp_path, scaling, segments):
+    scenario = load_scenario(_write(tmp_path, time_scaling=scaling, segments=segments))
+    assert scenario.time_scaling is TimeScaling(scaling)
+    assert np.allclose(scenario.axis, [0, 0, 1])
+    dt = 1e-4
+    times = np.arange(0.0, 5.0, dt) + dt / 2  # midpoint rule, past the end too
+    rates = np.array([scenario.angular_velocity(t) for t in times])
+    assert np.allclose(rates.sum(axis=0) * dt, [0, 0, np.pi / 2], atol=1e-6)
+    # s(t) is the integral of s_dot(t)
+    s_values = np.array([scenario.progress(t)[0] for t in times])
+    s_dots = np.array([scenario.progress(t)[1] for t in times])
+    assert np.allclose(np.cumsum(s_dots) * dt, s_values, atol=2e-3)
+
+
+def test_target_rotation_per_frame():
+    scenario = load_scenario(scenario_path("own_device_inspection"))
+    camera_0 = pin.exp3(np.array([0.3, -0.2, 0.1]))
+    base_0 = pin.exp3(np.array([0.0, 0.4, 0.0]))
+    turn = pin.exp3(scenario.angle * scenario.axis)
+    assert np.allclose(scenario.target_rotation(camera_0, base_0, 99.0), turn @ camera_0)
+    assert np.allclose(scenario.target_rotation(camera_0, base_0, 0.0), camera_0)
+
+
+def test_scenario_path_resolves_names_and_lists_the_shipped_ones(tmp_path):
+    assert scenario_path("satellite_observation").name == "satellite_observation.yaml"
+    path = _write(tmp_path)
+    assert scenario_path(path) == path
+    with pytest.raises(ConfigError, match="algorithmic_singularity"):
+        scenario_path("nowhere")

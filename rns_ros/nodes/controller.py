@@ -31,6 +31,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -373,6 +374,8 @@ class ControllerNode(Node):
         if self._theta is not None:
             try:
                 self._publish_output(self._theta, np.zeros(self.robot.n))
+                # reliable QoS: give subscribers a moment to acknowledge before the process ends
+                self._output.wait_for_all_acked(Duration(seconds=0.5))
             except Exception as exc:  # the context may already be shut down (Ctrl-C)
                 self.get_logger().warn(f"could not publish the final zero velocity: {exc}")
         super().destroy_node()

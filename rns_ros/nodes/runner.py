@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 from collections.abc import Callable, Sequence
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from rns_ros.core.errors import RnsError
@@ -50,8 +52,12 @@ def run_node(
     if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
         print(parameter_help(executable, summary, specs))
         return 0
-    rclpy.init(args=argv)
-    node = None
+    # rclpy's own SIGINT handler would shut the Context down before destroy_node() runs, and a
+    # node could no longer publish its final zero command; Ctrl-C and SIGTERM raise
+    # KeyboardInterrupt here instead, and the Context is shut down last, in `finally`.
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    signal.signal(signal.SIGTERM, _interrupt)
+    node = executor = None
     try:
         node = factory()
         executor = MultiThreadedExecutor(num_threads=2)
@@ -65,5 +71,11 @@ def run_node(
     finally:
         if node is not None:
             node.destroy_node()
+        if executor is not None:
+            executor.shutdown()
         rclpy.try_shutdown()
     return 0
+
+
+def _interrupt(_signum, _frame) -> None:
+    raise KeyboardInterrupt

@@ -1,10 +1,8 @@
-"""Node tests: private rclpy Context per test, DDS on loopback only, executor run to deadlines."""
+"""Node tests: the public launch-free harness, private Context, DDS on loopback only."""
 
 from __future__ import annotations
 
 import os
-import time
-from collections.abc import Callable
 
 import pytest
 
@@ -12,53 +10,11 @@ import pytest
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", "43")
 
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
-
-
-class RosHarness:
-    """A private Context with one executor; nodes added to it are destroyed at teardown."""
-
-    def __init__(self) -> None:
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=int(os.environ["ROS_DOMAIN_ID"]))
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.nodes = []
-
-    def add(self, node):
-        self.nodes.append(node)
-        self.executor.add_node(node)
-        return node
-
-    def probe(self, name: str = "probe"):
-        return self.add(rclpy.create_node(name, context=self.context))
-
-    def spin_until(self, condition: Callable[[], bool], timeout: float = 10.0) -> bool:
-        """Spin until ``condition()`` is true or ``timeout`` [s] passes; returns the condition."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if condition():
-                return True
-            self.executor.spin_once(timeout_sec=0.01)
-        return condition()
-
-    def spin_for(self, duration: float) -> None:
-        deadline = time.monotonic() + duration
-        while time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.01)
-
-    def close(self) -> None:
-        for node in reversed(self.nodes):
-            self.executor.remove_node(node)
-            node.destroy_node()
-        self.executor.shutdown()
-        rclpy.try_shutdown(context=self.context)
+from rns_ros.harness import Harness
 
 
 @pytest.fixture
 def ros():
-    harness = RosHarness()
-    try:
+    """A :class:`rns_ros.harness.Harness`; every node added is destroyed at teardown."""
+    with Harness() as harness:
         yield harness
-    finally:
-        harness.close()

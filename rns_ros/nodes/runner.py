@@ -62,7 +62,9 @@ def run_node(
         node = factory()
         executor = MultiThreadedExecutor(num_threads=2)
         executor.add_node(node)
-        executor.spin()
+        while rclpy.ok():
+            # bounded waits: without rclpy's handler only Python code sees Ctrl-C
+            executor.spin_once(timeout_sec=0.1)
     except RnsError as exc:
         print(f"{executable}: {exc}", file=sys.stderr)
         return 2

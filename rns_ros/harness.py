@@ -1,0 +1,286 @@
+"""Launch-free harness: run rns_ros nodes together without ``ros2 launch`` (not on PyPI).
+
+Two ways to compose a stack, both confined to this machine (DDS discovery range LOCALHOST) and to
+a domain of your choosing:
+
+* :class:`Harness` - nodes in this process, on one executor with a private rclpy Context. Add node
+  classes with parameter dicts, YAML parameter files and remappings, record topics as arrays, spin
+  for a duration or until a condition, and tear everything down (also when a test fails: use it
+  as a context manager)::
+
+      from rns_ros.harness import Harness
+      from rns_ros.nodes.simulator import SimulatorNode
+      from rns_ros.nodes.controller import ControllerNode
+      from sensor_msgs.msg import JointState
+
+      with Harness(domain_id=77) as stack:
+          stack.add(SimulatorNode, {"mode": "kinematic"})
+          stack.add(ControllerNode, params_file="config/controller.yaml")
+          joints = stack.record(JointState, "joint_states")
+          stack.spin_until(lambda: len(joints) > 10, timeout=5.0)
+          positions = joints.array(lambda m: m.position)   # (samples, 7)
+
+* :class:`ProcessStack` - the installed console scripts (``rns_simulator`` ...) as subprocesses
+  with ``--ros-args`` (``-p``, ``--params-file``, ``-r``), stopped with SIGINT like a terminal
+  user would, killed if they do not exit.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import rclpy
+import yaml
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+from rns_ros.core.errors import ConfigError
+
+#: DDS discovery never leaves the machine.
+DISCOVERY_RANGE = "LOCALHOST"
+#: Recording QoS: best effort matches reliable and best-effort publishers alike.
+RECORD_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def ros_environment(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """Environment for ROS processes: ``base`` (default os.environ) with the domain, localhost
+    discovery and the Fast DDS RMW (unless another is chosen)."""
+    env = dict(os.environ if base is None else base)
+    env["ROS_DOMAIN_ID"] = str(_domain(domain_id))
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
+    env.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    return env
+
+
+def _domain(domain_id: int | None) -> int:
+    if domain_id is None:
+        domain_id = int(os.environ.get("ROS_DOMAIN_ID", "0"))
+    if not 0 <= int(domain_id) <= 101:
+        raise ConfigError(f"domain_id must be in [0, 101], got {domain_id!r}")
+    return int(domain_id)
+
+
+class TopicLog:
+    """Every message of one topic with its receipt time (monotonic [s])."""
+
+    def __init__(self, topic: str) -> None:
+        self.topic = topic
+        self.messages: list[Any] = []
+        self.received: list[float] = []
+
+    def _append(self, msg) -> None:
+        self.messages.append(msg)
+        self.received.append(time.monotonic())
+
+    def __len__(self) -> int:
+        return len(self.messages)
+
+    def latest(self):
+        """The newest message, or None."""
+        return self.messages[-1] if self.messages else None
+
+    def array(self, field: Callable[[Any], Any]) -> np.ndarray:
+        """``field(msg)`` of every message stacked: shape (samples, ...) as float."""
+        return np.array([field(msg) for msg in self.messages], dtype=float)
+
+    def stamps(self) -> np.ndarray:
+        """Header stamps [s], shape (samples,) (messages with a header)."""
+        return self.array(lambda m: m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec)
+
+
+class Harness:
+    """Nodes in this process on one executor with a private Context (see the module docstring).
+
+    Args:
+        domain_id: ROS domain [0, 101]; default: ``ROS_DOMAIN_ID`` of the environment, else 0.
+
+    Sets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` in this process's environment before the
+    Context starts, so nothing it creates is discoverable from other machines.
+    """
+
+    def __init__(self, domain_id: int | None = None) -> None:
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
+        self.domain_id = _domain(domain_id)
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=self.domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.nodes: list[Node] = []
+        self._probe: Node | None = None
+
+    # --- composition ----------------------------------------------------------------------------
+    def add(
+        self,
+        node: Node | Callable[..., Node],
+        parameters: Mapping[str, Any] | None = None,
+        *,
+        params_file: str | Path | None = None,
+        remappings: Mapping[str, str] | None = None,
+        name: str | None = None,
+    ) -> Node:
+        """Add a node: an instance (made with ``context=harness.context``) or a node class /
+        factory accepting rclpy Node keyword arguments, built here with ``parameters`` (dict),
+        a ``params_file`` (ROS 2 YAML), ``remappings`` ({from: to}) and an optional ``name``."""
+        if not isinstance(node, Node):
+            cli_args = []
+            if params_file is not None:
+                if not Path(params_file).is_file():
+                    raise ConfigError(f"params_file not found: {params_file}")
+                cli_args += ["--params-file", str(params_file)]
+            for source, target in (remappings or {}).items():
+                cli_args += ["-r", f"{source}:={target}"]
+            if name is not None:
+                cli_args += ["-r", f"__node:={name}"]
+            overrides = [Parameter(key, value=value) for key, value in (parameters or {}).items()]
+            node = node(
+                context=self.context,
+                parameter_overrides=overrides,
+                cli_args=["--ros-args", *cli_args] if cli_args else None,
+            )
+        self.nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def detach(self, node: Node) -> None:
+        """Stop spinning ``node`` without destroying it (the caller owns it now)."""
+        self.executor.remove_node(node)
+        self.nodes.remove(node)
+
+    def probe(self, name: str = "rns_harness_probe") -> Node:
+        """A plain node of the harness for recording and publishing (created once per name)."""
+        if self._probe is None or self._probe.get_name() != name:
+            self._probe = self.add(rclpy.create_node(name, context=self.context))
+        return self._probe
+
+    def record(self, msg_type, topic: str, qos: QoSProfile = RECORD_QOS) -> TopicLog:
+        """Start recording ``topic`` now; returns the growing :class:`TopicLog`."""
+        log = TopicLog(topic)
+        self.probe().create_subscription(msg_type, topic, log._append, qos)
+        return log
+
+    # --- running --------------------------------------------------------------------------------
+    def spin_until(self, condition: Callable[[], bool], timeout: float = 10.0) -> bool:
+        """Spin until ``condition()`` holds or ``timeout`` [s] of wall time passes; returns it."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if condition():
+                return True
+            self.executor.spin_once(timeout_sec=0.01)
+        return bool(condition())
+
+    def spin_for(self, duration: float) -> None:
+        """Spin for ``duration`` [s] of wall time."""
+        deadline = time.monotonic() + duration
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def close(self) -> None:
+        """Destroy every node (newest first), stop the executor and the Context."""
+        while self.nodes:
+            node = self.nodes.pop()
+            self.executor.remove_node(node)
+            node.destroy_node()
+        self.executor.shutdown()
+        rclpy.try_shutdown(context=self.context)
+
+    def __enter__(self) -> Harness:
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        self.close()
+
+
+class ProcessStack:
+    """Installed rns_ros executables as subprocesses (see the module docstring).
+
+    Args:
+        domain_id: ROS domain of every process.
+        bin_dir: folder of the executables; default: next to this Python, else PATH.
+    """
+
+    def __init__(self, domain_id: int, bin_dir: str | Path | None = None) -> None:
+        self.env = ros_environment(domain_id)
+        self.bin_dir = Path(bin_dir) if bin_dir else Path(sys.executable).parent
+        self.processes: list[subprocess.Popen] = []
+        self._logs: dict[int, Any] = {}
+
+    def command(
+        self,
+        executable: str,
+        parameters: Mapping[str, Any] | None = None,
+        *,
+        params_file: str | Path | None = None,
+        remappings: Mapping[str, str] | None = None,
+        extra: Iterable[str] = (),
+    ) -> list[str]:
+        """The argument vector that starts ``executable`` with these ROS arguments."""
+        path = self.bin_dir / executable
+        program = str(path) if path.exists() else shutil.which(executable)
+        if program is None:
+            raise ConfigError(f"executable {executable!r} not found in {self.bin_dir} or on PATH")
+        ros_args = []
+        for key, value in (parameters or {}).items():
+            text = yaml.safe_dump(value, default_flow_style=True).strip().removesuffix("...")
+            ros_args += ["-p", f"{key}:={text.strip()}"]
+        if params_file is not None:
+            ros_args += ["--params-file", str(params_file)]
+        for source, target in (remappings or {}).items():
+            ros_args += ["-r", f"{source}:={target}"]
+        return [program, *extra, *(["--ros-args", *ros_args] if ros_args else [])]
+
+    def start(self, executable: str, parameters=None, **options) -> subprocess.Popen:
+        """Start one executable (arguments as :meth:`command`). Its output goes to a temporary
+        file (a pipe nobody reads would block a chatty process): see :meth:`output`."""
+        log = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - closed on exit
+        process = subprocess.Popen(
+            self.command(executable, parameters, **options),
+            env=self.env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+        self._logs[process.pid] = log
+        self.processes.append(process)
+        return process
+
+    def output(self, process: subprocess.Popen) -> str:
+        """Everything ``process`` printed so far."""
+        log = self._logs[process.pid]
+        log.flush()
+        log.seek(0)
+        return log.read()
+
+    def stop(self, timeout: float = 5.0) -> list[int]:
+        """SIGINT every process, wait up to ``timeout`` [s] each, kill the rest; exit codes."""
+        for process in self.processes:
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        codes = []
+        for process in self.processes:
+            try:
+                codes.append(process.wait(timeout=timeout))
+            except subprocess.TimeoutExpired:
+                process.kill()
+                codes.append(process.wait())
+        self.processes.clear()
+        return codes
+
+    def __enter__(self) -> ProcessStack:
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        self.stop()
+        for log in self._logs.values():
+            log.close()
+        self._logs.clear()

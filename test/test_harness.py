@@ -1,0 +1,113 @@
+"""The launch-free harness: full stacks start and stop cleanly, parameters files and remappings
+apply, installed executables run as subprocesses with --ros-args."""
+
+from __future__ import annotations
+
+import os
+import threading
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+
+from rns_ros.core import ConfigError
+from rns_ros.harness import Harness, ProcessStack, ros_environment
+from rns_ros.nodes.controller import ControllerNode
+from rns_ros.nodes.operator import OperatorNode
+from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.resources import config_dir
+
+DOMAIN = int(os.environ.setdefault("ROS_DOMAIN_ID", "43"))
+
+
+def _state(log) -> str | None:
+    msg = log.latest()
+    return None if msg is None else {kv.key: kv.value for kv in msg.status[0].values}["state"]
+
+
+def test_full_stack_starts_and_stops_repeatedly_without_leaks():
+    baseline = {thread.name for thread in threading.enumerate()}
+    for _ in range(3):
+        with Harness(DOMAIN) as stack:
+            stack.add(SimulatorNode)
+            stack.add(ControllerNode)
+            stack.add(OperatorNode, {"start_delay": 0.0})
+            status = stack.record(DiagnosticArray, "rns_controller/status")
+            assert stack.spin_until(lambda log=status: _state(log) == "OK", timeout=10.0)
+            context = stack.context
+        assert not context.ok()
+        assert stack.nodes == []
+        leaked = {thread.name for thread in threading.enumerate()} - baseline
+        assert not leaked, f"threads left behind: {leaked}"
+
+
+def test_teardown_happens_when_the_body_fails():
+    started = {}
+
+    def failing_test():
+        with Harness(DOMAIN) as stack:
+            started["stack"], started["simulator"] = stack, stack.add(SimulatorNode)
+            raise RuntimeError("a failing test")
+
+    with pytest.raises(RuntimeError, match="a failing test"):
+        failing_test()
+    assert not started["stack"].context.ok()
+    assert not started["simulator"]._thread.is_alive()
+
+
+def test_params_file_remapping_and_name(tmp_path):
+    with Harness(DOMAIN) as stack:
+        controller = stack.add(
+            ControllerNode,
+            {"method": "sc"},
+            params_file=config_dir() / "controller.yaml",
+            remappings={"cmd_twist": "teleop/cmd"},
+            name="arm_controller",
+        )
+        assert controller.get_name() == "arm_controller"
+        assert controller.get_parameter("method").value == "sc"  # dict wins over the file
+        assert controller.get_parameter("rate").value == 100.0
+        stack.add(SimulatorNode)
+        status = stack.record(DiagnosticArray, "arm_controller/status")
+        publisher = stack.probe().create_publisher(
+            TwistStamped,
+            "teleop/cmd",
+            QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT),
+        )
+        msg = TwistStamped()
+        msg.header.frame_id = "camera"
+        msg.twist.angular.z = 0.05
+
+        def commanded():
+            publisher.publish(msg)
+            return _state(status) == "OK"
+
+        assert stack.spin_until(commanded, timeout=10.0)
+        with pytest.raises(ConfigError, match="params_file not found"):
+            stack.add(ControllerNode, params_file=tmp_path / "missing.yaml")
+
+
+def test_installed_executables_run_as_subprocesses_with_ros_args():
+    with Harness(DOMAIN) as stack, ProcessStack(DOMAIN) as processes:
+        joints = stack.record(JointState, "robot/joint_states")
+        simulator = processes.start(
+            "rns_simulator",
+            {"publish_rate": 50.0, "initial_joint_positions": [0.1] * 7},
+            remappings={"joint_states": "robot/joint_states"},
+        )
+        assert stack.spin_until(lambda: len(joints) >= 10, timeout=20.0), processes.output(
+            simulator
+        )
+        assert list(joints.latest().position) == pytest.approx([0.1] * 7)
+        assert processes.stop() == [0]
+        assert "kinematic simulation" in processes.output(simulator)
+
+
+def test_environment_stays_on_localhost():
+    env = ros_environment(12, base={"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
+    assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert env["ROS_DOMAIN_ID"] == "12"
+    with pytest.raises(ConfigError, match="domain_id"):
+        Harness(domain_id=250)

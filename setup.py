@@ -12,6 +12,7 @@ CONSOLE_SCRIPTS = [
     "rns_demo = rns_ros.demo:main",
     "rns_simulator = rns_ros.nodes.simulator:main",
     "rns_controller = rns_ros.nodes.controller:main",
+    "rns_operator = rns_ros.nodes.operator:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -34,6 +34,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -64,6 +65,8 @@ NODE_NAME = "rns_controller"
 SUMMARY = "Reactionless camera-pointing controller: twist in, joint references out (DLS / SC)."
 #: Measured and integrated angles further apart than this [rad] restart the reference.
 RESYNC_TOLERANCE = 0.2
+#: joint_states older than this [s] are used as they are, not extrapolated.
+MAX_PREDICTION_AGE = 0.1
 
 PARAMETERS = (
     MODEL_CONFIG,
@@ -150,6 +153,12 @@ PARAMETERS = (
         1000.0,
         read_only=False,
     ),
+    ParameterSpec(
+        "predict_state",
+        True,
+        "Extrapolate the last joint_states by their age at their measured rates before "
+        "evaluating the law (the sample lags by up to one publish period)",
+    ),
     ParameterSpec("twist_stamped", True, "cmd_twist is TwistStamped (false: plain Twist)"),
     ParameterSpec(
         "default_twist_frame",
@@ -194,6 +203,9 @@ class ControllerNode(Node):
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
         self._stopped = True
+        self._predict = params["predict_state"]
+        self._theta_rate: np.ndarray | None = None
+        self._theta_stamp = None
 
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         if params["twist_stamped"]:
@@ -244,12 +256,18 @@ class ControllerNode(Node):
 
     def _on_joint_state(self, msg: JointState) -> None:
         try:
-            command = match_named_command(msg.name, self.robot.joint_names, positions=msg.position)
+            command = match_named_command(
+                msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
+            )
         except InputError as exc:
             self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
             return
         if command.positions is not None:
             self._theta = command.positions
+            self._theta_rate = command.velocities
+            self._theta_stamp = Time.from_msg(
+                msg.header.stamp, clock_type=self.get_clock().clock_type
+            )
 
     def _on_odom(self, msg: Odometry) -> None:
         pose = msg.pose.pose
@@ -266,7 +284,9 @@ class ControllerNode(Node):
             return  # nothing is published until the first joint state
         state = FreeFloatingState.compute(
             self.robot,
-            self.robot.configuration(self._theta, self._base_position, self._base_orientation),
+            self.robot.configuration(
+                self._predicted_theta(), self._base_position, self._base_orientation
+            ),
         )
         gate = self._gate.update(time.monotonic(), self._period)
         if self._stopped or gate.stopped:
@@ -280,6 +300,16 @@ class ControllerNode(Node):
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
         self._publish_output(step.reference_positions, velocities)
         self._publish_status(step, gate, self._state(step, gate))
+
+    def _predicted_theta(self) -> np.ndarray:
+        """The measured angles moved on by their age at the measured rates: joint_states lag by
+        up to one publish period, and the held command is meant for where the joints are now."""
+        if not self._predict or self._theta_rate is None or self._stopped:
+            return self._theta
+        age = (self.get_clock().now() - self._theta_stamp).nanoseconds * 1e-9
+        if not 0.0 < age < MAX_PREDICTION_AGE:
+            return self._theta  # clocks disagree or the state is stale: do not extrapolate
+        return self._theta + age * self._theta_rate
 
     def _state(self, step: ControllerStep, gate: GateOutput) -> ControllerState:
         if gate.state is not ControllerState.OK:

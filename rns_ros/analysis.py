@@ -1,0 +1,135 @@
+"""Figures of a recorded run: what the robot did, from the topics a run published (ROS-free).
+
+Input is plain arrays (the demo records them with :class:`rns_ros.harness.Harness`); output is a
+:class:`RunFigures` record. Camera and wrist poses are recomputed from the recorded joint angles
+and base poses with the model, so the figures do not trust the controller's own reports.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rns_ros.core.control import wrist_offset
+from rns_ros.core.controller import TwistFrame
+from rns_ros.core.errors import InputError
+from rns_ros.core.integration import attitude_deviation
+from rns_ros.core.model import FreeFloatingModel
+from rns_ros.core.scenario import Scenario
+from rns_ros.core.state import FreeFloatingState
+
+
+@dataclass(frozen=True)
+class RunFigures:
+    """Figures of one run (units in the names).
+
+    Attributes:
+        max_base_deviation_deg: largest base attitude change from the first sample [deg].
+        final_camera_error_deg: camera orientation at the end vs the scenario's target [deg].
+        rms_tracking_error: RMS of |omega_achieved - omega_commanded| at the robot samples within
+            the commanded span, world axes [rad/s] (includes the command-to-motion latency).
+        max_wrist_drift_m: largest |p_w - p_w(0)|, wrist relative to the base [m].
+        max_joint_speed: largest |theta_dot_i| measured [rad/s].
+        angular_momentum_drift: largest |l(t) - l(0)| about the CoM [kg m^2/s].
+        samples: robot states used.
+    """
+
+    max_base_deviation_deg: float
+    final_camera_error_deg: float
+    rms_tracking_error: float
+    max_wrist_drift_m: float
+    max_joint_speed: float
+    angular_momentum_drift: float
+    samples: int
+
+
+def run_figures(
+    robot: FreeFloatingModel,
+    scenario: Scenario,
+    *,
+    times: np.ndarray,
+    joint_positions: np.ndarray,
+    joint_velocities: np.ndarray,
+    base_positions: np.ndarray,
+    base_orientations: np.ndarray,
+    base_angular_velocities: np.ndarray,
+    angular_momentum: np.ndarray,
+    command_times: np.ndarray,
+    commands: np.ndarray,
+) -> RunFigures:
+    """Compute :class:`RunFigures` from recorded streams.
+
+    Args:
+        times: robot-state stamps [s], shape (k,), increasing.
+        joint_positions, joint_velocities: [rad], [rad/s], shape (k, n), model joint order.
+        base_positions: [m], shape (k, 3); base_orientations: quaternions x y z w, shape (k, 4).
+        base_angular_velocities: base angular velocity in base axes (Odometry twist) [rad/s],
+            shape (k, 3).
+        angular_momentum: angular momentum about the CoM, world axes [kg m^2/s], shape (m, 3).
+        command_times: stamps of the operator's twists [s], shape (c,).
+        commands: their angular velocities in ``scenario.frame`` axes [rad/s], shape (c, 3).
+    """
+    k = len(times)
+    if k < 2 or joint_positions.shape[0] != k or base_orientations.shape[0] != k:
+        raise InputError(f"need >= 2 aligned robot samples, got {k} stamps")
+    states = [
+        FreeFloatingState.compute(
+            robot, robot.configuration(theta, position, quaternion / np.linalg.norm(quaternion))
+        )
+        for theta, position, quaternion in zip(
+            joint_positions, base_positions, base_orientations, strict=True
+        )
+    ]
+    first, last = states[0], states[-1]
+    base = max(attitude_deviation(first.base_rotation, s.base_rotation) for s in states)
+    target = scenario.target_rotation(first.camera.rotation, first.base_rotation, scenario.duration)
+    wrist = (
+        max(float(np.linalg.norm(wrist_offset(s) - wrist_offset(first))) for s in states)
+        if first.wrist is not None
+        else 0.0
+    )
+    momentum = np.asarray(angular_momentum, dtype=float).reshape(-1, 3)
+    return RunFigures(
+        max_base_deviation_deg=float(np.rad2deg(base)),
+        final_camera_error_deg=float(np.rad2deg(attitude_deviation(target, last.camera.rotation))),
+        rms_tracking_error=_rms_tracking_error(
+            states,
+            times,
+            joint_velocities,
+            base_angular_velocities,
+            command_times,
+            commands,
+            scenario,
+        ),
+        max_wrist_drift_m=wrist,
+        max_joint_speed=float(np.abs(joint_velocities).max()),
+        angular_momentum_drift=float(np.linalg.norm(momentum - momentum[0], axis=1).max())
+        if len(momentum)
+        else 0.0,
+        samples=k,
+    )
+
+
+def _rms_tracking_error(
+    states, times, joint_velocities, base_rates, command_times, commands, scenario: Scenario
+) -> float:
+    """Achieved camera angular velocity at each sample, omega_c = R_b omega_b + J_omega theta_dot
+    (world axes; exact, unlike a finite difference over jittery wall-clock stamps), vs the command
+    in force at the sample's stamp, rotated into world axes."""
+    if len(command_times) == 0:
+        return 0.0
+    errors = []
+    for state, t, theta_dot, base_rate in zip(
+        states, times, joint_velocities, base_rates, strict=True
+    ):
+        if not command_times[0] <= t <= command_times[-1]:
+            continue
+        achieved = state.base_rotation @ base_rate + state.camera.jacobian[3:] @ theta_dot
+        command = commands[np.searchsorted(command_times, t, side="right") - 1]
+        if scenario.frame is TwistFrame.CAMERA:
+            command = state.camera.rotation @ command
+        elif scenario.frame is TwistFrame.BASE:
+            command = state.base_rotation @ command
+        errors.append(np.sum((achieved - command) ** 2))
+    return float(np.sqrt(np.mean(errors))) if errors else 0.0

@@ -1,100 +1,175 @@
-"""rns_demo: a short reactionless-motion scenario on the core, printed as a comparison table.
+"""rns_demo: the thesis satellite-observation scenario over real DDS, three ways, compared.
 
-Interim main job (issue 2): starting from the thesis satellite-observation configuration
-(section 4.2.2), the wrist joints sweep by a fixed angle with a quintic time scaling while the
-satellite floats freely (kinematic mode, zero momentum). Two joint-velocity laws are compared:
-
-* ``conventional``: positioning joints held, eq. (4.8) - the base turns;
-* ``reactionless``: predominant wrist motion, eq. (4.2) - the positioning joints compensate.
-
-Later issues replace this with the full DDS demo (simulator + controller + rerun).
+For each method (default: reactionless ``dls``, reactionless ``sc``, ``conventional``) a fresh
+launch-free stack runs in this process (:class:`rns_ros.harness.Harness`, its own domain,
+localhost only): ``rns_simulator`` starting from the scenario's joint angles, ``rns_controller``
+with that method, ``rns_operator`` playing the scenario file, and ``rns_rerun_logger`` recording
+one ``.rrd`` per run (or a live viewer with ``--viewer``). The recorded topics give a comparison
+table (:mod:`rns_ros.analysis`): max base attitude deviation, camera orientation error at the end,
+RMS angular-velocity tracking error, max wrist drift, max joint speed, angular momentum drift,
+wall time. ``--summary PATH`` writes it as JSON.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
 
-from rns_ros.core import FreeFloatingState, RnsError, load_model, subchain_decomposition
-from rns_ros.core.integration import attitude_deviation
-from rns_ros.core.momentum import coupling_angular_momentum
-from rns_ros.core.simulation import FreeFloatingSimulator
-from rns_ros.core.timing import quintic
-from rns_ros.resources import default_model_config
+from rns_ros.analysis import RunFigures, run_figures
+from rns_ros.core import RnsError, load_model
+from rns_ros.core.scenario import load_scenario
+from rns_ros.harness import Harness, TopicLog
+from rns_ros.nodes.controller import ControllerNode
+from rns_ros.nodes.operator import OperatorNode
+from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.resources import default_model_config, scenario_path
 
-SATELLITE_OBSERVATION_DEG = (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)
-WRIST_SWEEP_DEG = (60.0, -40.0, 90.0)
+METHODS = ("dls", "sc", "pinv", "conventional")
+DEFAULT_METHODS = ("dls", "sc", "conventional")
 ETS_VII_ALLOWED_DEVIATION_DEG = 0.05  # thesis chapter 4, footnote 1
+#: Settling time after the operator's zeros before the run ends [s].
+SETTLE = 0.3
 
 
 @dataclass(frozen=True)
-class RunSummary:
-    """Figures of one run (units in the field names)."""
+class DemoRow:
+    """One run of the comparison table."""
 
     method: str
-    max_base_attitude_deviation_deg: float
-    camera_rotation_deg: float
-    max_positioning_joint_speed_rad_s: float
-    max_coupling_angular_momentum_kgm2_s: float
+    figures: RunFigures
     wall_time_s: float
+    recording: str | None
 
 
-def run(method: str, duration: float, dt: float, config_path: Path) -> RunSummary:
-    """Integrate one wrist sweep with ``method`` in {'conventional', 'reactionless'}."""
-    robot = load_model(config_path)
-    sweep = np.deg2rad(WRIST_SWEEP_DEG)
-    positioning = robot.subchains.positioning
-
-    def joint_velocity(t: float, q: np.ndarray) -> np.ndarray:
-        state = FreeFloatingState.compute(robot, q)
-        wrist_velocity = sweep * quintic(t, duration)[1]
-        if method == "reactionless":
-            return subchain_decomposition(robot, state).predominant_wrist_motion(wrist_velocity)
-        theta_dot = np.zeros(robot.n)
-        theta_dot[robot.subchains.wrist] = wrist_velocity
-        return theta_dot
-
+def run_method(
+    method: str,
+    args: argparse.Namespace,
+    scenario_file: Path,
+) -> DemoRow:
+    """One full DDS run of the scenario with ``method``; returns its figures."""
+    scenario = load_scenario(scenario_file)
+    robot = load_model(default_model_config())
+    sim_time = args.real_time_factor != 1.0
+    timing = {"use_sim_time": True} if sim_time else {}
+    controller_parameters = {"method": method, "rate": args.rate, **timing}
+    controller_parameters.update(
+        {key: value for key, value in scenario.controller.items() if key != "method"}
+    )
     start = time.perf_counter()
-    simulator = FreeFloatingSimulator(
-        robot, dt=dt, initial_q=robot.configuration(np.deg2rad(SATELLITE_OBSERVATION_DEG))
-    )
-    initial = state = FreeFloatingState.compute(robot, simulator.q)
-    deviation = positioning_speed = coupling = 0.0
-    for _ in range(round(duration / dt)):
-        theta_dot = joint_velocity(simulator.time, simulator.q)
-        positioning_speed = max(positioning_speed, np.abs(theta_dot[positioning]).max())
-        coupling = max(coupling, np.linalg.norm(coupling_angular_momentum(state, theta_dot)))
-        simulator.step(joint_velocity)
-        state = FreeFloatingState.compute(robot, simulator.q)
-        deviation = max(deviation, attitude_deviation(initial.base_rotation, state.base_rotation))
-    camera_turn = attitude_deviation(initial.camera.rotation, state.camera.rotation)
-    return RunSummary(
-        method=method,
-        max_base_attitude_deviation_deg=float(np.rad2deg(deviation)),
-        camera_rotation_deg=float(np.rad2deg(camera_turn)),
-        max_positioning_joint_speed_rad_s=float(positioning_speed),
-        max_coupling_angular_momentum_kgm2_s=float(coupling),
-        wall_time_s=time.perf_counter() - start,
-    )
+    recording = None
+    with Harness(args.domain_id) as stack:
+        streams = {
+            "joints": stack.record(JointState, "joint_states"),
+            "odom": stack.record(Odometry, "base_odom"),
+            "momentum": stack.record(WrenchStamped, "momentum"),
+            "commands": stack.record(TwistStamped, "cmd_twist"),
+            "status": stack.record(DiagnosticArray, "rns_controller/status"),
+        }
+        stack.add(
+            SimulatorNode,
+            {
+                "initial_joint_positions": scenario.initial_theta.tolist(),
+                "mode": args.mode,
+                "real_time_factor": args.real_time_factor,
+                "publish_clock": sim_time,
+            },
+        )
+        stack.add(ControllerNode, controller_parameters)
+        if not args.no_record:
+            recording = _add_logger(stack, method, args, timing)
+        operator = stack.add(
+            OperatorNode, {"scenario": str(scenario_file), "start_delay": 0.5, **timing}
+        )
+        budget = 30.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
+        if not stack.spin_until(lambda: operator.finished, timeout=budget):
+            raise RnsError(f"{method}: the scenario did not finish within {budget:.0f} s")
+        stack.spin_for(SETTLE)
+        data = _arrays(streams)
+    figures = run_figures(robot, scenario, **data)
+    return DemoRow(method, figures, time.perf_counter() - start, recording)
 
 
-def format_table(rows: list[RunSummary]) -> str:
-    header = (
-        f"{'method':<14}{'max base dev [deg]':>20}{'camera turn [deg]':>19}"
-        f"{'max |dθ_P| [rad/s]':>20}{'max |M~θ̇| [kg m²/s]':>22}{'wall [s]':>10}"
+def _add_logger(stack: Harness, method: str, args, timing: dict) -> str | None:
+    from rns_ros.nodes.rerun_logger import RerunLoggerNode
+
+    args.output.mkdir(parents=True, exist_ok=True)
+    path = args.output / f"{method}.rrd"
+    sink = "spawn" if args.viewer else "save"
+    stack.add(
+        RerunLoggerNode,
+        {"sink": sink, "rrd_path": str(path), "recording_name": method, **timing},
+    )
+    return str(path) if sink == "save" else None
+
+
+def _arrays(streams: dict[str, TopicLog]) -> dict[str, np.ndarray]:
+    """Robot samples where joint_states and base_odom share a stamp (the simulator publishes
+    both per step), plus momentum and commands."""
+    joints, odom = streams["joints"], streams["odom"]
+    poses = {}
+    for msg in odom.messages:
+        stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+        p, o = msg.pose.pose.position, msg.pose.pose.orientation
+        w = msg.twist.twist.angular
+        poses[stamp] = ([p.x, p.y, p.z], [o.x, o.y, o.z, o.w], [w.x, w.y, w.z])
+    rows = [
+        (msg, poses[key])
+        for msg in joints.messages
+        if (key := (msg.header.stamp.sec, msg.header.stamp.nanosec)) in poses
+    ]
+    if len(rows) < 2:
+        raise RnsError("fewer than two robot states were recorded; is DDS working on loopback?")
+    commands = streams["commands"]
+    return {
+        "times": np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m, _ in rows]),
+        "joint_positions": np.array([m.position for m, _ in rows]),
+        "joint_velocities": np.array([m.velocity for m, _ in rows]),
+        "base_positions": np.array([pose[0] for _, pose in rows]),
+        "base_orientations": np.array([pose[1] for _, pose in rows]),
+        "base_angular_velocities": np.array([pose[2] for _, pose in rows]),
+        "angular_momentum": streams["momentum"].array(
+            lambda m: [m.wrench.torque.x, m.wrench.torque.y, m.wrench.torque.z]
+        ),
+        "command_times": commands.stamps() if len(commands) else np.zeros(0),
+        "commands": commands.array(
+            lambda m: [m.twist.angular.x, m.twist.angular.y, m.twist.angular.z]
+        ).reshape(-1, 3),
+    }
+
+
+def format_table(rows: list[DemoRow]) -> str:
+    columns = (
+        ("method", 14),
+        ("max base dev [deg]", 20),
+        ("camera err [deg]", 18),
+        ("RMS ω err [rad/s]", 19),
+        ("wrist drift [m]", 17),
+        ("max |θ̇| [rad/s]", 17),
+        ("Δl [kg m²/s]", 14),
+        ("wall [s]", 10),
+    )
+    header = "".join(
+        f"{title:<{width}}" if i == 0 else f"{title:>{width}}"
+        for i, (title, width) in enumerate(columns)
     )
     lines = [header, "-" * len(header)]
     for row in rows:
+        f = row.figures
         lines.append(
-            f"{row.method:<14}{row.max_base_attitude_deviation_deg:>20.3e}"
-            f"{row.camera_rotation_deg:>19.2f}{row.max_positioning_joint_speed_rad_s:>20.4f}"
-            f"{row.max_coupling_angular_momentum_kgm2_s:>22.3e}{row.wall_time_s:>10.2f}"
+            f"{row.method:<14}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
+            f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
+            f"{f.angular_momentum_drift:>14.2e}{row.wall_time_s:>10.1f}"
         )
     return "\n".join(lines)
 
@@ -102,40 +177,86 @@ def format_table(rows: list[RunSummary]) -> str:
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog="rns_demo",
-        description="Wrist sweep on a free-floating 7-DoF arm: conventional vs reactionless "
-        "(thesis eq. 4.2 / 4.8), kinematic free-floating simulation with RK4.",
+        description="Thesis satellite-observation scenario over DDS (simulator + controller + "
+        "scripted operator + rerun recording): reactionless DLS and SC vs the conventional "
+        "baseline, compared in one table.",
     )
-    parser.add_argument("--duration", type=float, default=20.0, help="sweep time [s] (0, 600]")
-    parser.add_argument("--dt", type=float, default=0.01, help="integration step [s] (0, 0.1]")
-    parser.add_argument("--model", type=Path, default=None, help="model YAML (default: 7-DoF arm)")
+    parser.add_argument(
+        "--scenario", default="satellite_observation", help="scenario name or YAML file"
+    )
+    parser.add_argument(
+        "--methods",
+        default=",".join(DEFAULT_METHODS),
+        help=f"comma-separated, from {list(METHODS)}",
+    )
+    parser.add_argument("--mode", choices=("kinematic", "dynamic"), default="kinematic")
+    parser.add_argument("--rate", type=float, default=100.0, help="controller rate [Hz]")
+    parser.add_argument(
+        "--real-time-factor",
+        type=float,
+        default=1.0,
+        help="simulated s per wall s; other than 1 runs on sim time (/clock); 0 = as fast as "
+        "possible",
+    )
+    parser.add_argument(
+        "--output", type=Path, default=Path("rns_demo_recordings"), help="folder for .rrd files"
+    )
+    parser.add_argument("--no-record", action="store_true", help="no rerun recording")
+    parser.add_argument("--viewer", action="store_true", help="live rerun viewer (needs display)")
     parser.add_argument("--summary", type=Path, default=None, help="also write the table as JSON")
+    parser.add_argument(
+        "--domain-id",
+        type=int,
+        default=int(os.environ.get("ROS_DOMAIN_ID", "42")),
+        help="ROS domain of the runs (default: ROS_DOMAIN_ID, else 42)",
+    )
     args = parser.parse_args(argv)
-    if not 0.0 < args.duration <= 600.0:
-        parser.error(f"--duration must be in (0, 600] s, got {args.duration}")
-    if not 0.0 < args.dt <= 0.1:
-        parser.error(f"--dt must be in (0, 0.1] s, got {args.dt}")
+    args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    unknown = [m for m in args.methods if m not in METHODS]
+    if unknown or not args.methods:
+        parser.error(f"--methods must be a comma-separated subset of {list(METHODS)}")
+    if not 1.0 <= args.rate <= 1000.0:
+        parser.error(f"--rate must be in [1, 1000] Hz, got {args.rate}")
+    if not 0.0 <= args.real_time_factor <= 1000.0:
+        parser.error(f"--real-time-factor must be in [0, 1000], got {args.real_time_factor}")
+    if not 0 <= args.domain_id <= 101:
+        parser.error(f"--domain-id must be in [0, 101], got {args.domain_id}")
     return args
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    config_path = args.model or default_model_config()
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     try:
-        rows = [
-            run(m, args.duration, args.dt, config_path) for m in ("conventional", "reactionless")
-        ]
+        scenario_file = scenario_path(args.scenario)
+        scenario = load_scenario(scenario_file)
+        print(f"scenario: {scenario_file} ({scenario.description})")
+        print(
+            f"model: {default_model_config()}; {args.mode} simulation, controller at "
+            f"{args.rate:g} Hz, real-time factor {args.real_time_factor:g}, "
+            f"ROS domain {args.domain_id} (localhost only)\n",
+            flush=True,
+        )
+        rows = []
+        for method in args.methods:
+            print(f"running {method} ...", flush=True)
+            rows.append(run_method(method, args, scenario_file))
     except RnsError as exc:
         print(f"rns_demo: {exc}", file=sys.stderr)
         return 2
-    print(f"model: {config_path}")
-    print(
-        f"Wrist sweep {WRIST_SWEEP_DEG} deg over {args.duration:g} s from "
-        f"{SATELLITE_OBSERVATION_DEG} deg, dt = {args.dt:g} s, zero momentum.\n"
-    )
+    print()
     print(format_table(rows))
     print(f"\nETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.")
+    recordings = [row.recording for row in rows if row.recording]
+    if recordings:
+        print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
     if args.summary:
-        args.summary.write_text(json.dumps([asdict(row) for row in rows], indent=2) + "\n")
+        summary = [
+            {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
+            | {"recording": row.recording}
+            for row in rows
+        ]
+        args.summary.write_text(json.dumps(summary, indent=2) + "\n")
         print(f"summary written to {args.summary}")
     return 0
 

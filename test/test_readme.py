@@ -18,7 +18,11 @@ def test_readme_has_python_examples():
 
 @pytest.mark.parametrize("block", PYTHON_BLOCKS)
 def test_readme_python_example_runs(block, capsys):
-    exec(compile(block, "README.md", "exec"), {})  # our own documentation, run as written
+    namespace = {}
+    exec(compile(block, "README.md", "exec"), namespace)  # our own documentation, run as written
+    for name, value in namespace.items():
+        if name.startswith("test_") and callable(value):
+            value()  # an example pytest test in the README must pass too
     capsys.readouterr()
 
 

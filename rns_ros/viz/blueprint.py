@@ -1,0 +1,47 @@
+"""The viewer layout: the 3D scene large on the left, the time series grouped on the right."""
+
+from __future__ import annotations
+
+import rerun.blueprint as rrb
+
+from rns_ros.viz import paths
+
+
+def default_blueprint() -> rrb.Blueprint:
+    """3D view (everything but plots and logs) | stacked plots, extra plots in tabs.
+
+    The 3D view's origin is the root so that ``/tf_static`` (the URDF's fixed joint origins,
+    logged outside ``world``) is in the view together with the scene.
+    """
+    scene = rrb.Spatial3DView(
+        name="Satellite and arm",
+        origin="/",
+        contents=["+ /**", f"- /{paths.PLOTS}/**", f"- /{paths.CONTROLLER_LOG}"],
+    )
+    plots = rrb.Vertical(
+        rrb.TimeSeriesView(name="Base attitude deviation [deg]", origin=paths.BASE_ATTITUDE),
+        rrb.TimeSeriesView(
+            name="Predicted coupling momentum M~θ̇ [kg m²/s]", origin=paths.COUPLING_MOMENTUM
+        ),
+        rrb.TimeSeriesView(
+            name="Camera angular velocity, world axes [rad/s]", origin=paths.ANGULAR_VELOCITY
+        ),
+        rrb.TimeSeriesView(name="Joint velocities [rad/s]", origin=paths.JOINT_VELOCITY),
+        rrb.TimeSeriesView(
+            name="Singularity measures [-]",
+            origin=paths.SINGULARITY,
+            # det_coupling is ~1e13 (kg m²)⁶: it would flatten the others, so it has its own tab.
+            contents=["+ $origin/**", f"- /{paths.DET_COUPLING}"],
+        ),
+        rrb.Tabs(
+            rrb.TimeSeriesView(name="Controller", origin=paths.CONTROLLER),
+            rrb.TextLogView(name="Controller log", origin=paths.CONTROLLER_LOG),
+            rrb.TimeSeriesView(name="System momentum", origin=paths.MOMENTUM),
+            rrb.TimeSeriesView(name="det(M~ M~ᵀ) [(kg m²)⁶]", origin=paths.DET_COUPLING),
+        ),
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(scene, plots, column_shares=[3, 2]),
+        rrb.TimePanel(timeline=paths.TIMELINE),
+        collapse_panels=False,
+    )

@@ -1,0 +1,195 @@
+"""Every rerun entity path rns_ros logs, in one place, with its archetype, unit and source topic.
+
+Paths carry no leading slash (rerun adds it; :func:`rns_ros.viz.readback.recording_summary` strips
+it again). All vectors are in world axes unless a name says otherwise. Angles in plots are
+degrees, rates rad/s.
+
+3D scene (``world`` is right-handed, z up; metres):
+
+=====================================  ================  =====================================
+path                                   archetype         content (source topic)
+=====================================  ================  =====================================
+``world/robot/<urdf name>/...``        URDF loader       link geometry from the URDF's
+                                                         ``<visual>`` elements, static; each
+                                                         entity sits in its link's frame
+``world/robot/base_pose``              Transform3D       base link pose in ``tf#/world``
+                                                         (``base_odom``)
+``world/robot/joints/<joint>``         Transform3D       parent link -> child link at the
+                                                         measured angle (``joint_states``)
+``world/camera/frame``                 TransformAxes3D   axes of the URDF camera frame, static
+``world/camera/pointing``              Arrows3D          camera optical axis +z, from Pinocchio
+                                                         forward kinematics [m] (``joint_states``)
+``world/camera/trail``                 LineStrips3D      recent camera positions [m]
+=====================================  ================  =====================================
+
+Time series (``Scalars``, one entity per series, one row per logged message):
+
+* ``plots/base_attitude/{roll,pitch,yaw,total}`` [deg]: R_0^T R of the base relative to the first
+  ``base_odom`` (roll-pitch-yaw with R = Rz(yaw) Ry(pitch) Rx(roll); total = rotation angle).
+* ``plots/coupling_momentum/{x,y,z,norm}`` [kg m^2/s]: the controller's predicted base disturbance
+  M~_omega_m theta_dot (``rns_controller/status`` key ``coupling_momentum``).
+* ``plots/angular_velocity/commanded/{x,y,z}`` [rad/s]: ``cmd_twist`` angular part in world axes.
+* ``plots/angular_velocity/achieved/{x,y,z}`` [rad/s]: camera angular velocity from
+  ``joint_states`` velocities and the ``base_odom`` twist.
+* ``plots/joint_velocity/<joint>`` [rad/s]: ``joint_states`` velocities.
+* ``plots/singularity/{sigma_min,det_kinematic,det_algorithmic}`` [-] and
+  ``plots/singularity/det_coupling`` [(kg m^2)^6]: section 4.3.1 measures (controller status).
+* ``plots/controller/state`` [-]: numeric state code (:data:`CONTROLLER_STATE_CODES`);
+  ``plots/controller/damping`` [-] (DLS lambda^2); ``plots/controller/speed_scale`` [-].
+* ``plots/momentum/{linear,angular}``: |p| [kg m/s] and |l| [kg m^2/s] (``momentum``).
+
+Text: ``log/controller`` (TextLog): one line whenever the controller state changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: The one timeline set from message header stamps (sim time when the simulator publishes /clock).
+#: Stamps before 2001-09-09 (< 1e9 s) are taken as simulated time and logged as a duration since
+#: zero; later ones as absolute timestamps.
+TIMELINE = "ros_time"
+
+# --- 3D scene -------------------------------------------------------------------------------------
+WORLD = "world"
+#: Implicit transform frame of the ``world`` entity: the parent of the base link's frame.
+WORLD_FRAME_ID = "tf#/world"
+#: Prefix under which the URDF loader logs the model: ``ROBOT/<urdf robot name>/...``.
+ROBOT = "world/robot"
+BASE_POSE = "world/robot/base_pose"
+JOINTS = "world/robot/joints"
+CAMERA = "world/camera"
+CAMERA_FRAME = "world/camera/frame"
+CAMERA_POINTING = "world/camera/pointing"
+CAMERA_TRAIL = "world/camera/trail"
+
+# --- time series ----------------------------------------------------------------------------------
+PLOTS = "plots"
+AXES = ("x", "y", "z")
+
+BASE_ATTITUDE = "plots/base_attitude"
+BASE_ATTITUDE_ROLL = "plots/base_attitude/roll"
+BASE_ATTITUDE_PITCH = "plots/base_attitude/pitch"
+BASE_ATTITUDE_YAW = "plots/base_attitude/yaw"
+BASE_ATTITUDE_TOTAL = "plots/base_attitude/total"
+
+COUPLING_MOMENTUM = "plots/coupling_momentum"
+COUPLING_MOMENTUM_NORM = "plots/coupling_momentum/norm"
+
+ANGULAR_VELOCITY = "plots/angular_velocity"
+COMMANDED_ANGULAR_VELOCITY = "plots/angular_velocity/commanded"
+ACHIEVED_ANGULAR_VELOCITY = "plots/angular_velocity/achieved"
+
+JOINT_VELOCITY = "plots/joint_velocity"
+
+SINGULARITY = "plots/singularity"
+SIGMA_MIN = "plots/singularity/sigma_min"
+DET_KINEMATIC = "plots/singularity/det_kinematic"
+DET_COUPLING = "plots/singularity/det_coupling"
+DET_ALGORITHMIC = "plots/singularity/det_algorithmic"
+
+CONTROLLER = "plots/controller"
+CONTROLLER_STATE = "plots/controller/state"
+CONTROLLER_DAMPING = "plots/controller/damping"
+CONTROLLER_SPEED_SCALE = "plots/controller/speed_scale"
+
+MOMENTUM = "plots/momentum"
+MOMENTUM_LINEAR = "plots/momentum/linear"
+MOMENTUM_ANGULAR = "plots/momentum/angular"
+
+CONTROLLER_LOG = "log/controller"
+
+
+def axis_paths(group: str) -> tuple[str, str, str]:
+    """``(group/x, group/y, group/z)`` for a vector series."""
+    return tuple(f"{group}/{axis}" for axis in AXES)
+
+
+COUPLING_MOMENTUM_AXES = axis_paths(COUPLING_MOMENTUM)
+COMMANDED_ANGULAR_VELOCITY_AXES = axis_paths(COMMANDED_ANGULAR_VELOCITY)
+ACHIEVED_ANGULAR_VELOCITY_AXES = axis_paths(ACHIEVED_ANGULAR_VELOCITY)
+BASE_ATTITUDE_SERIES = (
+    BASE_ATTITUDE_ROLL,
+    BASE_ATTITUDE_PITCH,
+    BASE_ATTITUDE_YAW,
+    BASE_ATTITUDE_TOTAL,
+)
+
+
+def joint_transform(joint: str) -> str:
+    """Entity of the Transform3D of URDF joint ``joint``."""
+    return f"{JOINTS}/{joint}"
+
+
+def joint_velocity(joint: str) -> str:
+    """Time series of the velocity of ``joint`` [rad/s]."""
+    return f"{JOINT_VELOCITY}/{joint}"
+
+
+#: Numeric code of each controller state on ``plots/controller/state`` (teleop.ControllerState).
+CONTROLLER_STATE_CODES = {
+    "OK": 0,
+    "DECELERATING": 1,
+    "SINGULAR_REGION": 2,
+    "JOINT_LIMIT": 3,
+    "STALE_COMMAND": 4,
+    "INVALID_COMMAND": 5,
+}
+
+
+@dataclass(frozen=True)
+class Series:
+    """Legend entry of one time series: label with unit, and RGB colour."""
+
+    label: str
+    color: tuple[int, int, int]
+
+
+_RGB = ((230, 60, 60), (60, 170, 60), (60, 110, 230))  # x, y, z
+_PALE_RGB = ((245, 160, 160), (150, 215, 150), (160, 185, 245))  # commanded x, y, z
+_GREY = (90, 90, 90)
+_JOINT_RGB = (
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+)
+
+
+def series_table(joint_names: tuple[str, ...] | list[str]) -> dict[str, Series]:
+    """Legend label and colour of every time series, for a robot with ``joint_names``."""
+    table = {
+        BASE_ATTITUDE_ROLL: Series("roll [deg]", _RGB[0]),
+        BASE_ATTITUDE_PITCH: Series("pitch [deg]", _RGB[1]),
+        BASE_ATTITUDE_YAW: Series("yaw [deg]", _RGB[2]),
+        BASE_ATTITUDE_TOTAL: Series("total angle [deg]", _GREY),
+        COUPLING_MOMENTUM_NORM: Series("|M~ θ̇| [kg m²/s]", _GREY),
+        SIGMA_MIN: Series("σ_min(J̄) [-]", _RGB[0]),
+        DET_KINEMATIC: Series("det(J_ωe J_ωeᵀ) [-]", _RGB[1]),
+        DET_ALGORITHMIC: Series("det(J̄ J̄ᵀ) [-]", _RGB[2]),
+        DET_COUPLING: Series("det(M~ M~ᵀ) [(kg m²)⁶]", _GREY),
+        CONTROLLER_STATE: Series("state code [-]", _GREY),
+        CONTROLLER_DAMPING: Series("DLS λ² [-]", _RGB[0]),
+        CONTROLLER_SPEED_SCALE: Series("speed scale [-]", _RGB[2]),
+        MOMENTUM_LINEAR: Series("|p| [kg m/s]", _RGB[0]),
+        MOMENTUM_ANGULAR: Series("|l| [kg m²/s]", _RGB[2]),
+    }
+    for index, axis in enumerate(AXES):
+        table[COUPLING_MOMENTUM_AXES[index]] = Series(f"{axis} [kg m²/s]", _RGB[index])
+        table[COMMANDED_ANGULAR_VELOCITY_AXES[index]] = Series(
+            f"commanded {axis} [rad/s]", _PALE_RGB[index]
+        )
+        table[ACHIEVED_ANGULAR_VELOCITY_AXES[index]] = Series(
+            f"achieved {axis} [rad/s]", _RGB[index]
+        )
+    for index, joint in enumerate(joint_names):
+        table[joint_velocity(joint)] = Series(
+            f"{joint} [rad/s]", _JOINT_RGB[index % len(_JOINT_RGB)]
+        )
+    return table

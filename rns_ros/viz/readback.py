@@ -1,0 +1,99 @@
+"""Read a saved ``.rrd`` back: which entities it holds, how many rows, and the plotted values.
+
+rerun 0.41 has no ``rerun.dataframe`` module any more (its DataFusion reader needs the optional
+``datafusion`` package, not installed here); the chunk API does the job: ``rerun.chunk.RrdReader``
+streams the chunks of the file's first recording, each with its entity path and an Arrow record
+batch (one column per timeline and per component).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+from rerun.chunk import RrdReader
+
+from rns_ros.core.errors import InputError
+from rns_ros.viz import paths
+
+_SCALARS = "Scalars:scalars"
+
+
+def _entity(path: str) -> str:
+    return path.lstrip("/")
+
+
+def _reader(path: str | Path) -> RrdReader:
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"no recording at {path}")
+    return RrdReader(path)
+
+
+def recording_summary(path: str | Path, *, include_static: bool = False) -> dict[str, int]:
+    """{entity path (no leading slash): number of samples} of the file's first recording.
+
+    A sample is one row on a timeline (one logged message for a time series, one pose for a
+    joint). Entities that only hold static data (URDF geometry, ``tf_static``, series styles)
+    are listed with 0, unless ``include_static`` counts their rows too.
+
+    Raises:
+        InputError: the file does not exist.
+    """
+    rows: Counter[str] = Counter()
+    for chunk in _reader(path).stream():
+        entity = _entity(chunk.entity_path)
+        rows[entity] += chunk.num_rows if include_static or not chunk.is_static else 0
+    return dict(rows)
+
+
+def recording_ids(path: str | Path) -> list[tuple[str, str]]:
+    """(application id, recording id) of every recording store in the file."""
+    return [(s.application_id, s.recording_id) for s in _reader(path).recordings()]
+
+
+def read_scalars(
+    path: str | Path, entity: str, timeline: str = paths.TIMELINE
+) -> tuple[np.ndarray, np.ndarray]:
+    """A time series back from a file: (times [s], values), sorted by time, shapes (k,).
+
+    Times are seconds on ``timeline`` (since zero for simulated time, since the Unix epoch for
+    timestamps). Rows logged without that timeline are skipped.
+    """
+    times, values = [], []
+    for chunk in _reader(path).stream():
+        if _entity(chunk.entity_path) != _entity(entity) or chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        names = batch.schema.names
+        if _SCALARS not in names or timeline not in names:
+            continue
+        stamp = batch.column(timeline)
+        times.append(stamp.cast(pa.int64()).to_numpy(zero_copy_only=False) * 1e-9)
+        values.append(np.array([row[0] for row in batch.column(_SCALARS).to_pylist()]))
+    if not times:
+        return np.zeros(0), np.zeros(0)
+    t, v = np.concatenate(times), np.concatenate(values)
+    order = np.argsort(t, kind="stable")
+    return t[order], v[order]
+
+
+def read_components(path: str | Path, entity: str) -> list[dict[str, list]]:
+    """Every row of ``entity`` as {component: value} (Arrow -> Python), in file order.
+
+    For checking what the viewer will get, e.g. the Transform3D rows of a joint.
+    """
+    rows = []
+    for chunk in _reader(path).stream():
+        if _entity(chunk.entity_path) != _entity(entity):
+            continue
+        batch = chunk.to_record_batch()
+        columns = [name for name in batch.schema.names if ":" in name]
+        data = {name: batch.column(name).to_pylist() for name in columns}
+        rows.extend(
+            {name: data[name][i] for name in columns if data[name][i] is not None}
+            for i in range(batch.num_rows)
+        )
+    return rows

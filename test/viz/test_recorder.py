@@ -1,0 +1,288 @@
+"""TelemetryRecorder into .rrd files, read back with rerun's chunk API (no DDS, no viewer)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from rerun.chunk import RrdReader
+from rns_testing import SATELLITE_OBSERVATION_DEG
+
+from rns_ros.core import ConfigError, FreeFloatingState, InputError, load_model_config
+from rns_ros.resources import default_model_config
+from rns_ros.viz import RecorderSettings, SinkSettings, TelemetryRecorder, paths
+from rns_ros.viz.readback import (
+    read_components,
+    read_scalars,
+    recording_ids,
+    recording_summary,
+)
+
+PERIOD_NS = 10_000_000  # 100 Hz
+STATUS = {
+    "state": "OK",
+    "method": "dls",
+    "frame": "world",
+    "sigma_min": "0.3",
+    "det_kinematic": "11",
+    "det_coupling": "1.3e+13",
+    "det_algorithmic": "0.2",
+    "damping": "0",
+    "speed_scale": "1",
+    "unachieved_angular": "0 0 0",
+    "unachieved_linear": "0 0 0",
+    "coupling_momentum": "3e-16 -1e-16 2e-16",
+}
+
+
+@pytest.fixture
+def open_recorder(robot, tmp_path):
+    """Factory: a recorder saving to tmp_path/<name>.rrd; all are closed at teardown."""
+    urdf, _ = load_model_config(default_model_config())
+    recorders = []
+
+    def factory(name="run", **settings):
+        sink = SinkSettings(kind="save", rrd_path=tmp_path / f"{name}.rrd")
+        recorder = TelemetryRecorder(robot, urdf, sink, RecorderSettings(**settings))
+        recorders.append(recorder)
+        return recorder
+
+    yield factory
+    for recorder in recorders:
+        recorder.close()
+
+
+def _theta(k: int) -> np.ndarray:
+    return np.radians(SATELLITE_OBSERVATION_DEG) + 0.002 * k
+
+
+def _base_quaternion(k: int) -> np.ndarray:
+    """Base yawing 0.01 deg per sample (x y z w)."""
+    half = math.radians(0.01 * k) / 2
+    return np.array([0.0, 0.0, math.sin(half), math.cos(half)])
+
+
+def _feed(recorder, samples: int, start_ns: int = 0) -> None:
+    """What the simulator + controller + operator publish at 100 Hz, for ``samples`` periods."""
+    for k in range(samples):
+        stamp = start_ns + k * PERIOD_NS
+        recorder.base_odom(stamp, [0.1, 0.0, 0.0], _base_quaternion(k), [0.0, 0.0, 0.001])
+        recorder.joint_state(stamp, _theta(k), np.full(7, 0.2))
+        recorder.momentum(stamp, [0.0, 0.0, 0.0], [1e-12, 0.0, 0.0])
+        recorder.controller_status(stamp, STATUS, 0, "")
+        recorder.commanded_twist(stamp, [0.0, 0.0, 0.1], "world")
+
+
+def _series_paths(robot) -> list[str]:
+    return list(paths.series_table(robot.joint_names))
+
+
+def test_every_documented_series_has_one_sample_per_message(open_recorder, robot):
+    recorder = open_recorder(recording_name="dls")
+    _feed(recorder, 50)
+    recorder.close()
+    summary = recording_summary(recorder.sink.rrd_path)
+    for path in _series_paths(robot):
+        assert summary.get(path) == 50, path
+    for joint in robot.joint_names:
+        assert summary[paths.joint_transform(joint)] == 50
+    assert summary[paths.BASE_POSE] == 50
+    assert summary[paths.CAMERA_POINTING] == 50
+    assert summary[paths.CAMERA_TRAIL] == 5  # one point per 0.1 s of stamps
+    assert summary[paths.CONTROLLER_LOG] == 1  # the state never changed
+    # the URDF model: every link's visual geometry, static, plus the fixed joint origins
+    visuals = recorder.view.visual_paths()
+    assert set(visuals) == {"base_link", *(f"link_{i}" for i in range(1, 8)), "camera", "wrist"}
+    for link_paths in visuals.values():
+        for path in link_paths:
+            assert summary[path] == 0  # present, static only
+    assert summary["tf_static"] == 0
+    assert recording_summary(recorder.sink.rrd_path, include_static=True)["tf_static"] == 9
+
+
+def test_saved_file_is_complete_after_close(open_recorder):
+    recorder = open_recorder()
+    _feed(recorder, 5)
+    assert not recorder.closed
+    recorder.close()
+    recorder.close()  # idempotent
+    recorder.joint_state(10**9, _theta(0), np.zeros(7))  # ignored after close
+    reader = RrdReader(recorder.sink.rrd_path)
+    # store() needs the footer (manifest) that only a finalized file has
+    store = reader.store()
+    assert len(store) > 0
+    assert len(reader.blueprints()) == 1  # the default layout travels with the file
+
+
+def test_plotted_values_and_sim_time_come_back(open_recorder):
+    recorder = open_recorder()
+    _feed(recorder, 30)
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    times, yaw = read_scalars(rrd, paths.BASE_ATTITUDE_YAW)
+    assert times == pytest.approx(np.arange(30) * 0.01)  # stamps from 0: a duration timeline
+    assert yaw == pytest.approx(0.01 * np.arange(30), abs=1e-9)  # relative to the first odom
+    _, total = read_scalars(rrd, paths.BASE_ATTITUDE_TOTAL)
+    assert total == pytest.approx(yaw, abs=1e-9)
+    _, coupling_x = read_scalars(rrd, paths.COUPLING_MOMENTUM_AXES[0])
+    assert coupling_x == pytest.approx(np.full(30, 3e-16))
+    _, sigma = read_scalars(rrd, paths.SIGMA_MIN)
+    assert np.all(sigma == 0.3)
+    _, state = read_scalars(rrd, paths.CONTROLLER_STATE)
+    assert np.all(state == paths.CONTROLLER_STATE_CODES["OK"])
+    _, commanded_z = read_scalars(rrd, paths.COMMANDED_ANGULAR_VELOCITY_AXES[2])
+    assert np.all(commanded_z == 0.1)
+    _, joint_velocity = read_scalars(rrd, paths.joint_velocity("joint_3"))
+    assert np.all(joint_velocity == 0.2)
+    _, angular = read_scalars(rrd, paths.MOMENTUM_ANGULAR)
+    assert angular == pytest.approx(np.full(30, 1e-12))
+
+
+def test_wall_clock_stamps_make_a_timestamp_timeline(open_recorder):
+    recorder = open_recorder()
+    start = 1_700_000_000 * 10**9 + 123  # nanoseconds since the epoch, kept exactly
+    _feed(recorder, 3, start_ns=start)
+    recorder.close()
+    times, _ = read_scalars(recorder.sink.rrd_path, paths.BASE_ATTITUDE_ROLL)
+    assert times == pytest.approx(1.7e9 + np.arange(3) * 0.01, abs=1e-6)
+
+
+def test_logged_frame_tree_places_the_camera_where_pinocchio_does(open_recorder, robot):
+    """Compose what the viewer composes: world -> base (base_pose), then the joint transforms
+    from the URDF's parent to child links, then the fixed camera joint from /tf_static."""
+    recorder = open_recorder()
+    theta = _theta(7)
+    quaternion = pin.Quaternion(pin.rpy.rpyToMatrix(0.2, -0.1, 0.7)).coeffs()
+    position = [0.3, -0.2, 1.5]
+    recorder.base_odom(0, position, quaternion)
+    recorder.joint_state(0, theta)
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+
+    def transform(row) -> pin.SE3:
+        x, y, z, w = row["Transform3D:quaternion"][0]
+        rotation = pin.Quaternion(w, x, y, z).normalized().toRotationMatrix()
+        return pin.SE3(rotation, np.array(row["Transform3D:translation"][0]))
+
+    edges = {}  # child frame -> (parent frame, transform)
+    for row in read_components(rrd, "tf_static"):
+        edges[row["Transform3D:child_frame"][0]] = (row["Transform3D:parent_frame"][0], row)
+    for path in [paths.BASE_POSE, *(paths.joint_transform(j) for j in robot.joint_names)]:
+        (row,) = read_components(rrd, path)
+        edges[row["Transform3D:child_frame"][0]] = (row["Transform3D:parent_frame"][0], row)
+    pose, frame = pin.SE3.Identity(), "camera"
+    while frame != paths.WORLD_FRAME_ID:
+        parent, row = edges[frame]
+        pose = transform(row) * pose
+        frame = parent
+
+    state = FreeFloatingState.compute(robot, robot.configuration(theta, position, quaternion))
+    assert pose.translation == pytest.approx(state.camera.position, abs=2e-6)  # float32 rows
+    assert pose.rotation == pytest.approx(state.camera.rotation, abs=2e-6)
+    (arrow,) = [r for r in read_components(rrd, paths.CAMERA_POINTING) if "Arrows3D:vectors" in r]
+    assert arrow["Arrows3D:origins"][0] == pytest.approx(state.camera.position, abs=1e-6)
+    direction = np.array(arrow["Arrows3D:vectors"][0])
+    assert direction / np.linalg.norm(direction) == pytest.approx(
+        state.camera.rotation[:, 2], abs=1e-6
+    )
+
+
+def test_three_recordings_in_one_process_make_three_complete_files(open_recorder):
+    recorders = [open_recorder(name, recording_name=name) for name in ("dls", "sc", "conv")]
+    for count, recorder in enumerate(recorders, start=1):
+        _feed(recorder, 10 * count)
+    for recorder in recorders:
+        recorder.close()
+    ids = set()
+    for count, recorder in enumerate(recorders, start=1):
+        ((application, recording),) = recording_ids(recorder.sink.rrd_path)
+        assert application == "rns_ros"
+        ids.add(recording)
+        summary = recording_summary(recorder.sink.rrd_path)
+        assert summary[paths.BASE_ATTITUDE_TOTAL] == 10 * count
+        names = [
+            row.get("RecordingInfo:name")
+            for row in read_components(recorder.sink.rrd_path, "__properties")
+        ]
+        assert [recorder.settings.recording_name] in names
+    assert len(ids) == 3
+
+
+def test_max_rate_thins_a_fast_stream(open_recorder):
+    recorder = open_recorder(max_rate=200.0)
+    for k in range(100):  # 1 kHz for 0.1 s
+        recorder.joint_state(k * 1_000_000, _theta(k), np.zeros(7))
+    recorder.close()
+    assert recorder.counts["joints"] == 20
+    assert recording_summary(recorder.sink.rrd_path)[paths.joint_transform("joint_1")] == 20
+
+
+def test_commanded_twist_is_turned_into_world_axes(open_recorder, robot):
+    recorder = open_recorder(max_rate=0.0)
+    # camera axes need the camera: nothing before the first joint state
+    assert not recorder.commanded_twist(0, [0.1, 0.0, 0.0], "camera")
+    quaternion = [0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)]  # base yawed 90 deg
+    recorder.base_odom(0, [0.0, 0.0, 0.0], quaternion)
+    assert recorder.commanded_twist(1, [0.1, 0.0, 0.0], "base")  # base x = world y
+    recorder.joint_state(2, _theta(0))
+    assert recorder.commanded_twist(3, [0.0, 0.0, 0.1], "camera")  # along the optical axis
+    with pytest.raises(ConfigError, match="twist frame"):
+        recorder.commanded_twist(4, [0.0, 0.0, 0.1], "map")
+    with pytest.raises(InputError, match="finite"):
+        recorder.commanded_twist(4, [math.nan, 0.0, 0.0], "world")
+    recorder.close()
+    omega = np.array(
+        [read_scalars(recorder.sink.rrd_path, p)[1] for p in paths.COMMANDED_ANGULAR_VELOCITY_AXES]
+    ).T
+    assert omega.shape == (2, 3)
+    assert omega[0] == pytest.approx([0.0, 0.1, 0.0], abs=1e-12)
+    assert omega[1] == pytest.approx(0.1 * recorder.state.camera.rotation[:, 2], abs=1e-12)
+
+
+def test_controller_log_records_state_changes_only(open_recorder):
+    recorder = open_recorder()
+    states = ["OK", "OK", "SINGULAR_REGION", "SINGULAR_REGION", "INVALID_COMMAND", "OK"]
+    for k, state in enumerate(states):
+        level = 2 if state == "INVALID_COMMAND" else 0
+        message = f"{state}: frame 'map' is not one of" if level else ""
+        recorder.controller_status(k * PERIOD_NS, {**STATUS, "state": state}, level, message)
+    recorder.controller_status(len(states) * PERIOD_NS, {"sigma_min": "0.5"})  # partial status
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    log = read_components(rrd, paths.CONTROLLER_LOG)
+    assert [row["TextLog:text"][0].split(":")[0] for row in log] == [
+        "OK",
+        "SINGULAR_REGION",
+        "INVALID_COMMAND",
+        "OK",
+    ]
+    assert [row["TextLog:level"][0] for row in log] == ["INFO", "INFO", "ERROR", "INFO"]
+    _, codes = read_scalars(rrd, paths.CONTROLLER_STATE)
+    assert codes.tolist() == [0, 0, 2, 2, 5, 0]
+    assert read_scalars(rrd, paths.SIGMA_MIN)[1].tolist() == [0.3] * 6 + [0.5]
+
+
+def test_bad_inputs_raise_typed_errors_and_leave_the_recording_usable(open_recorder):
+    recorder = open_recorder()
+    with pytest.raises(InputError, match="shape"):
+        recorder.joint_state(0, np.zeros(6))
+    with pytest.raises(InputError, match="non-zero"):
+        recorder.base_odom(0, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0])
+    _feed(recorder, 3)
+    recorder.close()
+    assert recording_summary(recorder.sink.rrd_path)[paths.BASE_ATTITUDE_TOTAL] == 3
+
+
+@pytest.mark.parametrize(
+    ("settings", "message"),
+    [
+        ({"trail_length": -1}, "trail_length"),
+        ({"max_rate": -5.0}, "max_rate"),
+        ({"application_id": ""}, "application_id"),
+    ],
+)
+def test_bad_settings_are_config_errors(settings, message):
+    with pytest.raises(ConfigError, match=message):
+        RecorderSettings(**settings)

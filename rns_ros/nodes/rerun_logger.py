@@ -1,0 +1,252 @@
+"""rns_rerun_logger: the running system in rerun (3D robot from its URDF, time series, log).
+
+Recording, kinematics and sinks are :class:`rns_ros.viz.TelemetryRecorder`; this node only turns
+messages into arrays. Entity paths and units: :mod:`rns_ros.viz.paths`. One timeline,
+``ros_time``, from the header stamps (sim time when the simulator publishes /clock; a zero stamp
+is replaced by this node's clock).
+
+Subscribes (best effort, depth 10: matches reliable and best-effort publishers):
+    joint_states              sensor_msgs/JointState (by joint name): joint transforms, camera
+                              arrow and trail, joint velocities, achieved camera angular velocity
+    base_odom                 nav_msgs/Odometry: base pose, attitude deviation from the first
+                              message; its twist (base axes) enters the achieved velocity
+    momentum                  geometry_msgs/WrenchStamped: |p| (force) and |l| (torque)
+    <controller_status_topic> diagnostic_msgs/DiagnosticArray of rns_controller: singularity
+                              measures, predicted coupling momentum, damping, state
+    cmd_twist                 geometry_msgs/TwistStamped: commanded angular velocity, turned into
+                              world axes (``header.frame_id``: ``world_frame``, the base link or the
+                              camera frame; empty: ``default_twist_frame``; others are skipped)
+
+Sinks (``sink``): ``spawn`` a native viewer, ``connect`` to one, ``serve`` a local web viewer,
+``save`` an .rrd, or ``auto`` (spawn with a display, else save). Everything binds 127.0.0.1.
+``destroy_node()`` sends what is buffered and closes the recording: a saved file is complete.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+
+from rns_ros.core import FreeFloatingModel, load_model_config
+from rns_ros.core.commands import match_named_command
+from rns_ros.core.controller import TwistFrame
+from rns_ros.core.errors import InputError
+from rns_ros.nodes.parameters import (
+    MODEL_CONFIG,
+    WORLD_FRAME,
+    ParameterSpec,
+    declare_parameters,
+    specs_by_name,
+)
+from rns_ros.nodes.runner import run_node
+from rns_ros.resources import default_model_config
+from rns_ros.viz.recorder import RecorderSettings, TelemetryRecorder
+from rns_ros.viz.sinks import SinkKind, SinkSettings
+
+NODE_NAME = "rns_rerun_logger"
+SUMMARY = (
+    "Logs the satellite + arm to rerun: 3D robot from its URDF, base attitude, coupling momentum, "
+    "commanded vs achieved angular velocity, joint velocities, singularity measures."
+)
+#: Wall time between batches sent to the sink [s] (samples are sent as columns).
+SEND_PERIOD = 0.1
+
+PARAMETERS = (
+    MODEL_CONFIG,
+    WORLD_FRAME,
+    ParameterSpec(
+        "sink",
+        "auto",
+        "spawn: start a native viewer; connect: stream to connect_url; serve: web viewer on "
+        "127.0.0.1:web_port; save: write rrd_path; auto: spawn with a display, else save",
+        choices=tuple(kind.value for kind in SinkKind),
+    ),
+    ParameterSpec(
+        "rrd_path",
+        "rns_ros.rrd",
+        "Recording file for sink save (relative: to the working directory); overwritten",
+    ),
+    ParameterSpec(
+        "connect_url",
+        "rerun+http://127.0.0.1:9876/proxy",
+        "Viewer to stream to for sink connect (rerun+http://HOST:PORT/proxy)",
+    ),
+    ParameterSpec(
+        "grpc_port",
+        9876,
+        "Port of the spawned viewer (spawn) or of the local gRPC server (serve)",
+        "[-]",
+        1024,
+        65535,
+    ),
+    ParameterSpec("web_port", 9090, "HTTP port of the web viewer (serve)", "[-]", 1024, 65535),
+    ParameterSpec(
+        "application_id",
+        "rns_ros",
+        "rerun application id; recordings with the same id share the viewer layout",
+    ),
+    ParameterSpec(
+        "recording_name", "", "Recording name shown in the viewer (e.g. the method); empty: none"
+    ),
+    ParameterSpec(
+        "controller_status_topic",
+        "rns_controller/status",
+        "DiagnosticArray status of the controller",
+    ),
+    ParameterSpec(
+        "default_twist_frame",
+        "camera",
+        "Axes of cmd_twist with an empty header.frame_id (as the controller's parameter)",
+        choices=tuple(frame.value for frame in TwistFrame),
+    ),
+    ParameterSpec("trail_length", 300, "Camera trail points kept; 0: no trail", "[-]", 0, 100000),
+    ParameterSpec(
+        "trail_period", 0.1, "Stamp time between two camera trail points", "[s]", 0.0, 60.0
+    ),
+    ParameterSpec(
+        "max_rate",
+        200.0,
+        "Highest recorded rate per input topic (by stamp); 0: every message",
+        "[Hz]",
+        0.0,
+        10000.0,
+    ),
+)
+SPECS = specs_by_name(PARAMETERS)
+
+
+class RerunLoggerNode(Node):
+    """ROS 2 front end of :class:`TelemetryRecorder` (see the module docstring)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, PARAMETERS)
+        urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
+        self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
+        self._frames = {
+            params["world_frame"]: TwistFrame.WORLD,
+            self.robot.base_link: TwistFrame.BASE,
+            self.robot.model.frames[self.robot.camera_frame_id].name: TwistFrame.CAMERA,
+            "": TwistFrame.parse(params["default_twist_frame"]),
+        }
+        sink = SinkSettings(
+            kind=params["sink"],
+            rrd_path=params["rrd_path"],
+            connect_url=params["connect_url"],
+            grpc_port=params["grpc_port"],
+            web_port=params["web_port"],
+        )
+        settings = RecorderSettings(
+            application_id=params["application_id"],
+            recording_name=params["recording_name"],
+            trail_length=params["trail_length"],
+            trail_period=params["trail_period"],
+            max_rate=params["max_rate"],
+            send_period=SEND_PERIOD,
+        )
+        # From here on the recording is open: close it if the rest of the set-up is interrupted
+        # (Ctrl-C during start-up), or the file would lack its footer.
+        self.recorder = TelemetryRecorder(self.robot, urdf_path, sink, settings)
+        try:
+            qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+            self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
+            self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
+            self.create_subscription(WrenchStamped, "momentum", self._on_momentum, qos)
+            self.create_subscription(
+                DiagnosticArray, params["controller_status_topic"], self._on_status, qos
+            )
+            self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, qos)
+            # A quiet system still shows its newest samples: send the buffer periodically.
+            self._timer = self.create_timer(SEND_PERIOD, self.recorder.send)
+            self.get_logger().info(f"{self.robot.name}: {self.recorder.sink.description}")
+        except BaseException:
+            self.recorder.close()
+            raise
+
+    # --- inputs ---------------------------------------------------------------------------------
+    def _stamp_ns(self, header) -> int:
+        stamp = header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+        return stamp if stamp > 0 else self.get_clock().now().nanoseconds
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            command = match_named_command(
+                msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
+            )
+            if command.positions is None:
+                raise InputError("joint_states has no positions")
+            self.recorder.joint_state(
+                self._stamp_ns(msg.header), command.positions, command.velocities
+            )
+        except InputError as exc:
+            self._ignored("joint_states", exc)
+
+    def _on_odom(self, msg: Odometry) -> None:
+        pose, twist = msg.pose.pose, msg.twist.twist
+        p, o, w = pose.position, pose.orientation, twist.angular
+        try:
+            self.recorder.base_odom(
+                self._stamp_ns(msg.header), [p.x, p.y, p.z], [o.x, o.y, o.z, o.w], [w.x, w.y, w.z]
+            )
+        except InputError as exc:
+            self._ignored("base_odom", exc)
+
+    def _on_momentum(self, msg: WrenchStamped) -> None:
+        f, t = msg.wrench.force, msg.wrench.torque
+        self.recorder.momentum(self._stamp_ns(msg.header), [f.x, f.y, f.z], [t.x, t.y, t.z])
+
+    def _on_status(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            values = {kv.key: kv.value for kv in status.values}
+            if "state" in values:  # the controller's entry; other diagnostics are not ours
+                level = status.level[0] if isinstance(status.level, bytes) else int(status.level)
+                self.recorder.controller_status(
+                    self._stamp_ns(msg.header), values, level, status.message
+                )
+                return
+
+    def _on_twist(self, msg: TwistStamped) -> None:
+        frame = self._frames.get(msg.header.frame_id)
+        if frame is None:
+            self._ignored(
+                "cmd_twist", f"frame_id {msg.header.frame_id!r} is not one of {list(self._frames)}"
+            )
+            return
+        a = msg.twist.angular
+        try:
+            self.recorder.commanded_twist(self._stamp_ns(msg.header), [a.x, a.y, a.z], frame)
+        except InputError as exc:
+            self._ignored("cmd_twist", exc)
+
+    def _ignored(self, topic: str, reason) -> None:
+        self.get_logger().warn(f"ignored {topic}: {reason}", throttle_duration_sec=2.0)
+
+    # --- shutdown -------------------------------------------------------------------------------
+    def destroy_node(self) -> None:
+        """Send the buffered samples, flush and close the recording, then tear down."""
+        recorder = getattr(self, "recorder", None)
+        if recorder is not None and not recorder.closed:
+            recorder.close()
+            counts = ", ".join(f"{key} {value}" for key, value in recorder.counts.items())
+            # The logging context may already be shut down (Ctrl-C): the file is closed anyway.
+            with contextlib.suppress(Exception):
+                self.get_logger().info(
+                    f"recording closed ({counts} messages): {recorder.sink.description}"
+                )
+        super().destroy_node()
+
+
+def main(args=None) -> int:
+    return run_node(
+        RerunLoggerNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
+    )
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

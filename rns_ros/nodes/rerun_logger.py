@@ -29,6 +29,7 @@ import contextlib
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from nav_msgs.msg import Odometry
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -162,8 +163,11 @@ class RerunLoggerNode(Node):
                 DiagnosticArray, params["controller_status_topic"], self._on_status, qos
             )
             self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, qos)
-            # A quiet system still shows its newest samples: send the buffer periodically.
-            self._timer = self.create_timer(SEND_PERIOD, self.recorder.send)
+            # A quiet system still shows its newest samples: send the buffer periodically, by
+            # wall time (a sim-time timer would fire 100x as often at real_time_factor 100).
+            self._timer = self.create_timer(
+                SEND_PERIOD, self.recorder.send, clock=Clock(clock_type=ClockType.STEADY_TIME)
+            )
             self.get_logger().info(f"{self.robot.name}: {self.recorder.sink.description}")
         except BaseException:
             self.recorder.close()

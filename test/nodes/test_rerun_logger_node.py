@@ -47,10 +47,17 @@ def test_config_yaml_mirrors_the_declared_defaults():
     assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
-def test_records_the_simulator_at_its_publish_rate(ros, tmp_path):
+def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
     rrd = tmp_path / "sim.rrd"
-    _node(ros, SimulatorNode)
-    logger = _node(ros, RerunLoggerNode, sink="save", rrd_path=str(rrd), recording_name="sim")
+    _node(ros, SimulatorNode, publish_clock=True)
+    logger = _node(
+        ros,
+        RerunLoggerNode,
+        sink="save",
+        rrd_path=str(rrd),
+        recording_name="sim",
+        use_sim_time=True,
+    )
     assert ros.spin_until(lambda: logger.recorder.counts["joints"] > 0, timeout=10.0)
     ros.spin_for(1.0)
     counts = dict(logger.recorder.counts)
@@ -67,6 +74,7 @@ def test_records_the_simulator_at_its_publish_rate(ros, tmp_path):
     assert len(times) >= 80
     # one pose per odometry, plus the identity pose placed before the first one arrived
     assert summary[paths.BASE_POSE] - len(times) in (0, 1)
+    assert times[-1] < 60.0  # sim-time stamps: a duration timeline starting near zero
     rate = (len(times) - 1) / (times[-1] - times[0])
     print(f"base attitude samples: {len(times)} at {rate:.1f} Hz")
     assert rate == pytest.approx(100.0, rel=0.1)  # the simulator's publish_rate

@@ -9,9 +9,11 @@ degrees, rates rad/s.
 =====================================  ================  =====================================
 path                                   archetype         content (source topic)
 =====================================  ================  =====================================
-``world/robot/<urdf name>/...``        URDF loader       link geometry from the URDF's
-                                                         ``<visual>`` elements, static; each
+``world/robot/<urdf name>/             URDF loader       link geometry from the URDF's
+visual_geometries/<link>/visual_<k>``                    ``<visual>`` elements, static; each
                                                          entity sits in its link's frame
+``tf_static``                          Transform3D       the URDF's joint origins (loader,
+                                                         static, outside ``world``)
 ``world/robot/base_pose``              Transform3D       base link pose in ``tf#/world``
                                                          (``base_odom``)
 ``world/robot/joints/<joint>``         Transform3D       parent link -> child link at the

@@ -22,7 +22,8 @@ _SCALARS = "Scalars:scalars"
 
 
 def _entity(path: str) -> str:
-    return path.lstrip("/")
+    """Entity path as in :mod:`rns_ros.viz.paths`: no leading slash (the root stays "/")."""
+    return path.lstrip("/") or "/"
 
 
 def _reader(path: str | Path) -> RrdReader:

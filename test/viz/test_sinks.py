@@ -2,20 +2,30 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import socket
+import subprocess
+import time
 import urllib.request
+import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 import rerun as rr
 
-from rns_ros.core import ConfigError
+from rns_ros.core import ConfigError, load_model_config
+from rns_ros.resources import default_model_config
+from rns_ros.viz import TelemetryRecorder, paths
+from rns_ros.viz.readback import recording_summary
 from rns_ros.viz.sinks import (
     SinkError,
     SinkKind,
     SinkSettings,
     has_display,
     open_sink,
+    rerun_executable,
     resolve_kind,
 )
 
@@ -122,3 +132,41 @@ def test_spawn_without_a_display_fails_clearly_and_auto_falls_back_to_save(tmp_p
     assert sink.kind is SinkKind.SAVE
     assert sink.description.startswith("could not spawn a viewer")
     assert sink.rrd_path == tmp_path / "fallback.rrd"
+
+
+def test_connect_streams_to_a_running_rerun_server(robot, tmp_path):
+    """A headless ``rerun --save`` server stands in for a viewer: what it receives is on disk."""
+    (port,) = _free_ports()
+    received = tmp_path / "received.rrd"
+    server = subprocess.Popen(
+        [rerun_executable(), "--bind", "127.0.0.1", "--port", str(port), "--save", str(received)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env={**os.environ, "RERUN_APP_ONLY": "true"},
+    )
+    try:
+        deadline = time.monotonic() + 10.0
+        while _listening_addresses(port) != {"0100007F"} and time.monotonic() < deadline:
+            time.sleep(0.05)
+        urdf, _ = load_model_config(default_model_config())
+        url = f"rerun+http://127.0.0.1:{port}/proxy"
+        recorder = TelemetryRecorder(robot, urdf, SinkSettings(kind="connect", connect_url=url))
+        assert recorder.sink.description == f"streaming to the viewer at {url}"
+        for k in range(20):
+            recorder.joint_state(k * 10_000_000, np.zeros(7), np.zeros(7))
+        recorder.close()  # flushes the gRPC stream
+        # spawn finds something listening on its port and streams there instead of starting one
+        other = rr.RecordingStream("rns_ros_test")
+        reused = open_sink(other, SinkSettings(kind="spawn", grpc_port=port))
+        other.disconnect()
+        assert reused.viewer_pid is None
+        assert reused.description == f"streaming to the viewer already running at {url}"
+        time.sleep(0.5)
+    finally:
+        server.send_signal(signal.SIGINT)  # the server writes what it received and exits
+        server.wait(timeout=10.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # an interrupted `rerun --save` writes no footer
+        summary = recording_summary(received)
+    assert summary[paths.joint_transform("joint_1")] == 20
+    assert summary[paths.ACHIEVED_ANGULAR_VELOCITY_AXES[2]] == 20

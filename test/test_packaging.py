@@ -413,11 +413,25 @@ def test_every_installed_console_script_answers_help(colcon_install, console_scr
         assert "usage:" in result.stdout
 
 
-def test_installed_rns_demo_runs_from_the_install_space(colcon_install):
-    """As `ros2 run rns_ros rns_demo` would: the installed script finds the installed model."""
+def test_installed_rns_demo_runs_from_the_install_space(colcon_install, tmp_path):
+    """As `ros2 run rns_ros rns_demo` would: the installed script finds the installed model and
+    scenarios, runs the stack over DDS and records with the installed rerun logger."""
     script = colcon_install / "lib" / PKG / "rns_demo"
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text(
+        "initial_joint_positions_deg: [-90, -30, 0, -70, 180, -30, 0]\n"
+        "axis: [1, 0, 0]\nangle_deg: 10.0\nduration: 1.0\n"
+    )
     result = _run(
-        [str(script), "--duration", "1", "--dt", "0.05"],
+        [
+            str(script),
+            "--scenario",
+            str(scenario),
+            "--methods",
+            "dls",
+            "--output",
+            str(tmp_path / "rec"),
+        ],
         timeout=RUN_TIMEOUT_S,
         what="rns_demo",
         cwd=colcon_install,
@@ -425,5 +439,6 @@ def test_installed_rns_demo_runs_from_the_install_space(colcon_install):
     )
     assert result.returncode == 0, result.stdout
     model_line = next(line for line in result.stdout.splitlines() if line.startswith("model:"))
-    assert Path(model_line.split(":", 1)[1].strip()).is_relative_to(colcon_install / "share" / PKG)
-    assert "reactionless" in result.stdout
+    model = model_line.split(":", 1)[1].split(";")[0].strip()
+    assert Path(model).is_relative_to(colcon_install / "share" / PKG)
+    assert (tmp_path / "rec" / "dls.rrd").is_file()

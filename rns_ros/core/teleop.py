@@ -18,6 +18,7 @@ import numpy as np
 
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import InputError
+from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import positive
 
 
@@ -48,6 +49,19 @@ class TwistCommand:
     linear: np.ndarray
     frame: TwistFrame
     received: float
+
+
+def twist_frame_ids(
+    robot: FreeFloatingModel, world_frame: str, default: TwistFrame | str
+) -> dict[str, TwistFrame]:
+    """frame_id -> axes of the accepted command frames: the world frame, the base link, the
+    camera frame, and "" (an empty frame_id) for ``default``."""
+    return {
+        world_frame: TwistFrame.WORLD,
+        robot.base_link: TwistFrame.BASE,
+        robot.model.frames[robot.camera_frame_id].name: TwistFrame.CAMERA,
+        "": TwistFrame.parse(default),
+    }
 
 
 def validate_twist(

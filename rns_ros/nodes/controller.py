@@ -50,7 +50,13 @@ from rns_ros.core.controller import (
     angular_velocity_in_world,
 )
 from rns_ros.core.errors import InputError, RnsError
-from rns_ros.core.teleop import CommandGate, ControllerState, GateOutput, validate_twist
+from rns_ros.core.teleop import (
+    CommandGate,
+    ControllerState,
+    GateOutput,
+    twist_frame_ids,
+    validate_twist,
+)
 from rns_ros.nodes.parameters import (
     MODEL_CONFIG,
     WORLD_FRAME,
@@ -193,12 +199,9 @@ class ControllerNode(Node):
             params["stop_deceleration"],
             TwistFrame.parse(params["default_twist_frame"]),
         )
-        self._frames = {
-            params["world_frame"]: TwistFrame.WORLD,
-            self.robot.base_link: TwistFrame.BASE,
-            self.robot.model.frames[self.robot.camera_frame_id].name: TwistFrame.CAMERA,
-            "": TwistFrame.parse(params["default_twist_frame"]),
-        }
+        self._frames = twist_frame_ids(
+            self.robot, params["world_frame"], params["default_twist_frame"]
+        )
         self._theta: np.ndarray | None = None
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])

@@ -38,6 +38,7 @@ from rns_ros.core import FreeFloatingModel, load_model_config
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import InputError
+from rns_ros.core.teleop import twist_frame_ids
 from rns_ros.nodes.parameters import (
     MODEL_CONFIG,
     WORLD_FRAME,
@@ -130,12 +131,9 @@ class RerunLoggerNode(Node):
         params = declare_parameters(self, PARAMETERS)
         urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
         self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
-        self._frames = {
-            params["world_frame"]: TwistFrame.WORLD,
-            self.robot.base_link: TwistFrame.BASE,
-            self.robot.model.frames[self.robot.camera_frame_id].name: TwistFrame.CAMERA,
-            "": TwistFrame.parse(params["default_twist_frame"]),
-        }
+        self._frames = twist_frame_ids(
+            self.robot, params["world_frame"], params["default_twist_frame"]
+        )
         sink = SinkSettings(
             kind=params["sink"],
             rrd_path=params["rrd_path"],

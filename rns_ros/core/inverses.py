@@ -126,16 +126,15 @@ def pseudoinverse_from_svd(svd: WideSvd, rcond: float = 1e-12) -> np.ndarray:
     return (vt.T * inverse_sigma) @ u.T
 
 
-def dls_damping(sigma: float, epsilon: float, lambda2_max: float) -> float:
-    """Damping lambda^2 of eq. (4.12) for one singular value sigma.
+def dls_damping(sigma, epsilon: float, lambda2_max: float):
+    """Damping lambda^2 of eq. (4.12) for a singular value sigma (float), or for each of an
+    array of them (array of the same shape).
 
     lambda^2 = 0 for sigma > epsilon, else (1 - 2 sigma^2/eps^2 + sigma^4/eps^4) lambda2_max,
     i.e. (1 - (sigma/eps)^2)^2 lambda2_max: continuous with zero slope at sigma = epsilon.
     """
-    if sigma > epsilon:
-        return 0.0
-    ratio = (sigma / epsilon) ** 2
-    return (1.0 - ratio) ** 2 * lambda2_max
+    damping = np.where(sigma > epsilon, 0.0, (1.0 - (sigma / epsilon) ** 2) ** 2 * lambda2_max)
+    return float(damping) if np.ndim(damping) == 0 else damping
 
 
 def damped_least_squares_inverse(
@@ -163,8 +162,7 @@ def damped_least_squares_inverse(
 def dls_from_svd(svd: WideSvd, epsilon: float, lambda2_max: float) -> DampedInverse:
     """:func:`damped_least_squares_inverse` from a precomputed SVD (no argument checks)."""
     u, sigma, vt = svd
-    # eq. (4.12) for every sigma at once (same values as dls_damping)
-    damping = np.where(sigma > epsilon, 0.0, (1.0 - (sigma / epsilon) ** 2) ** 2 * lambda2_max)
+    damping = dls_damping(sigma, epsilon, lambda2_max)
     denominator = sigma**2 + damping
     # denominator is 0 only when sigma = 0 and lambda2_max = 0 (excluded by the checks)
     gains = sigma / np.where(denominator > 0.0, denominator, 1.0)

@@ -186,6 +186,7 @@ class RerunLoggerNode(Node):
             self.recorder.joint_state(
                 self._stamp_ns(msg.header), command.positions, command.velocities
             )
+            self.get_logger().info("receiving joint_states", once=True)
         except InputError as exc:
             self._ignored("joint_states", exc)
 

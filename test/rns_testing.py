@@ -31,9 +31,9 @@ def configurations(robot_n: int = 7):
 class Recorder:
     """Keeps every message of a topic, keyed by header stamp when it has one."""
 
-    def __init__(self, node, msg_type, topic):
+    def __init__(self, node, msg_type, topic, qos=50):
         self.messages = []
-        node.create_subscription(msg_type, topic, self.messages.append, 50)
+        node.create_subscription(msg_type, topic, self.messages.append, qos)
 
     def by_stamp(self):
         return {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in self.messages}

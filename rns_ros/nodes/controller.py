@@ -15,8 +15,9 @@ Publishes (nothing until the first joint state):
     joint_references  trajectory_msgs/JointTrajectory, one point: positions = integrated
                       reference at the start of the period, velocities = held theta_dot
                       (``output_interface: trajectory``), or
-    joint_velocities  std_msgs/Float64MultiArray, theta_dot in model joint order
-                      (``output_interface: velocity``, ros2_control forward-velocity shape)
+    joint_velocities  std_msgs/Float64MultiArray, theta_dot [rad/s] in the order of the ``joints``
+                      parameter (``output_interface: velocity``; the ros2_control
+                      forward_command_controller convention: remap to <controller>/commands)
     ~/status          diagnostic_msgs/DiagnosticArray every period: state, sigma_min, the three
                       determinants, lambda^2, speed scale, unachieved twist, predicted coupling
                       momentum
@@ -58,11 +59,13 @@ from rns_ros.core.teleop import (
     validate_twist,
 )
 from rns_ros.nodes.parameters import (
+    JOINTS,
     MODEL_CONFIG,
     WORLD_FRAME,
     ParameterSpec,
     declare_parameters,
     specs_by_name,
+    velocity_joint_order,
 )
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
@@ -176,9 +179,10 @@ PARAMETERS = (
         "output_interface",
         "trajectory",
         "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
-        "joint_velocities (model joint order)",
+        "joint_velocities (order: the joints parameter)",
         choices=("trajectory", "velocity"),
     ),
+    JOINTS,
     WORLD_FRAME,
 )
 SPECS = specs_by_name(PARAMETERS)
@@ -224,6 +228,8 @@ class ControllerNode(Node):
         if self._trajectory:
             self._output = self.create_publisher(JointTrajectory, "joint_references", output_qos)
         else:
+            # ros2_control convention: data[p[i]] is model joint i (see velocity_joint_order)
+            self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
             self._output = self.create_publisher(Float64MultiArray, "joint_velocities", output_qos)
         self._status = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -332,7 +338,9 @@ class ControllerNode(Node):
                 JointTrajectoryPoint(positions=positions.tolist(), velocities=velocities.tolist())
             ]
         else:
-            msg = Float64MultiArray(data=velocities.tolist())
+            data = np.empty(self.robot.n)
+            data[self._velocity_order] = velocities
+            msg = Float64MultiArray(data=data.tolist())
         self._output.publish(msg)
 
     def _publish_status(

@@ -17,7 +17,10 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.node import Node
 
-from rns_ros.core.errors import ConfigError
+import numpy as np
+
+from rns_ros.core.commands import joint_order
+from rns_ros.core.errors import ConfigError, InputError
 
 
 @dataclass(frozen=True)
@@ -106,6 +109,27 @@ MODEL_CONFIG = ParameterSpec(
     "Model YAML (URDF, camera/wrist frames, subchains); empty: the default 7-DoF arm",
 )
 WORLD_FRAME = ParameterSpec("world_frame", "world", "Frame id of the inertial frame")
+#: Joint order of Float64MultiArray velocity commands, as ros2_control's forward_command_controller
+#: takes it from its ``joints`` parameter. The default is the default model's joints in URDF order;
+#: another model needs its own list (checked against the model when the velocity interface is used).
+JOINTS = ParameterSpec(
+    "joints",
+    [f"joint_{i}" for i in range(1, 8)],
+    "Joint order of Float64MultiArray velocities (velocity interface), like the 'joints' "
+    "parameter of a ros2_control forward_command_controller; a permutation of the model's joints",
+)
+
+
+def velocity_joint_order(joints: Sequence[str], model_joints: Sequence[str]) -> np.ndarray:
+    """Index array p, shape (n,): element p[i] of a ``joints``-ordered array is model joint i.
+
+    Raises:
+        ConfigError: ``joints`` is not a permutation of the model's joint names (names them).
+    """
+    try:
+        return joint_order(joints, model_joints)
+    except InputError as exc:
+        raise ConfigError(f"parameter 'joints' {list(joints)}: {exc}") from None
 
 
 def declare_parameters(node: Node, specs: Sequence[ParameterSpec]) -> dict[str, Any]:

@@ -17,7 +17,10 @@ Subscribes:
     joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
                       first point: positions/velocities/accelerations matched by joint name
     joint_velocities  std_msgs/Float64MultiArray (``command_interface: velocity``), one velocity
-                      per joint in the model's joint order (ros2_control forward controller shape)
+                      [rad/s] per joint in the order of the ``joints`` parameter (the
+                      ros2_control forward_command_controller convention)
+Also publishes, once, ``robot_description`` (std_msgs/String, transient local, depth 1): the URDF
+text of the simulated model, for robot_state_publisher / rviz users (latched: late joiners get it).
 Service:
     ~/reset       std_srvs/Trigger            back to the initial state
 """
@@ -34,23 +37,25 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
+from std_msgs.msg import Float64MultiArray, String
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from rns_ros.core import load_model
+from rns_ros.core import FreeFloatingModel, load_model_config
 from rns_ros.core.commands import check_velocity_limits, match_named_command
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.nodes.parameters import (
+    JOINTS,
     MODEL_CONFIG,
     WORLD_FRAME,
     ParameterSpec,
     declare_parameters,
     specs_by_name,
+    velocity_joint_order,
 )
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
@@ -119,9 +124,10 @@ PARAMETERS = (
         "command_interface",
         "trajectory",
         "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
-        "joint_velocities (model joint order)",
+        "joint_velocities (order: the joints parameter)",
         choices=("trajectory", "velocity"),
     ),
+    JOINTS,
     ParameterSpec(
         "command_timeout",
         0.5,
@@ -168,7 +174,8 @@ class SimulatorNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         params = declare_parameters(self, PARAMETERS)
-        self.robot = load_model(params["model_config"] or default_model_config())
+        urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
+        self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
         n = self.robot.n
         if len(params["initial_joint_positions"]) != n:
             raise ConfigError(
@@ -226,9 +233,18 @@ class SimulatorNode(Node):
                 JointTrajectory, "joint_references", self._on_trajectory, command_qos
             )
         else:
+            self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
+            self._velocity_joints = list(params["joints"])
             self.create_subscription(
                 Float64MultiArray, "joint_velocities", self._on_velocities, command_qos
             )
+        # Transient local, depth 1: the robot_state_publisher convention, so a subscriber that
+        # starts later still receives the model.
+        description_qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self._description_pub = self.create_publisher(
+            String, "robot_description", description_qos
+        )
+        self._description_pub.publish(String(data=urdf_path.read_text()))
         self.create_service(Trigger, "~/reset", self._on_reset)
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
@@ -268,8 +284,9 @@ class SimulatorNode(Node):
             if velocities.shape != (self.robot.n,):
                 raise InputError(
                     f"expected {self.robot.n} velocities in joint order "
-                    f"{list(self.robot.joint_names)}, got {velocities.size}"
+                    f"{self._velocity_joints} (parameter 'joints'), got {velocities.size}"
                 )
+            velocities = velocities[self._velocity_order]
             if not np.all(np.isfinite(velocities)):
                 raise InputError(f"velocities must be finite, got {velocities.tolist()}")
             check_velocity_limits(velocities, self.robot.velocity_limits, self.robot.joint_names)

@@ -31,6 +31,7 @@ from rns_ros.nodes.controller import PARAMETERS, ControllerNode
 from rns_ros.nodes.simulator import SimulatorNode
 
 REPO = Path(__file__).resolve().parents[2]
+JOINTS = [f"joint_{i}" for i in range(1, 8)]
 COMMAND_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
@@ -269,21 +270,38 @@ def _odom_rotation(msg: Odometry) -> np.ndarray:
 
 
 def test_velocity_output_interface_drives_the_simulator(ros):
-    """ros2_control shape: Float64MultiArray of joint velocities in model order."""
-    _node(ros, SimulatorNode, command_interface="velocity")
-    _node(ros, ControllerNode, output_interface="velocity")
+    """ros2_control shape: Float64MultiArray of joint velocities in the order of `joints`.
+
+    Both ends use a reversed order. Were either end to ignore it, the simulator would drive the
+    joints with a permuted theta_dot, which is not in the reaction null space: the base would turn.
+    """
+    order = [f"joint_{i}" for i in range(7, 0, -1)]
+    _node(ros, SimulatorNode, command_interface="velocity", joints=order)
+    _node(ros, ControllerNode, output_interface="velocity", joints=order)
     probe = ros.probe()
     velocities = Recorder(probe, Float64MultiArray, "joint_velocities")
     joints = Recorder(probe, JointState, "joint_states")
+    odom = Recorder(probe, Odometry, "base_odom")
     operator = Operator(probe)
     operator.angular, operator.active = (0.0, 0.0, 0.1), True
     assert ros.spin_until(
         lambda: velocities.messages and np.abs(velocities.messages[-1].data).max() > 0.01
     )
-    ros.spin_for(0.3)
+    ros.spin_for(1.0)
     assert len(velocities.messages[-1].data) == 7
     moved = np.ptp([m.position for m in joints.messages], axis=0).max()
-    assert moved > 1e-3
+    assert moved > 1e-2
+    messages = odom.messages
+    deviation = max(
+        attitude_deviation(_odom_rotation(messages[0]), _odom_rotation(m)) for m in messages
+    )
+    print(f"base attitude deviation, reversed joint order: {math.degrees(deviation):.2e} deg")
+    assert math.degrees(deviation) < 1e-3
+
+
+def test_velocity_output_joint_order_must_match_the_model(ros):
+    with pytest.raises(ConfigError, match=r"'joints'.*missing joints \['joint_7'\]"):
+        _node(ros, ControllerNode, output_interface="velocity", joints=JOINTS[:6])
 
 
 def test_ctrl_c_publishes_zero_velocity(ros):

@@ -20,7 +20,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from rns_ros.core import ConfigError, FreeFloatingState
+from rns_ros.core import ConfigError, FreeFloatingModel, FreeFloatingState
 from rns_ros.core.momentum import base_twist_from_momentum
 from rns_ros.nodes.simulator import PARAMETERS, SimulatorNode
 
@@ -152,6 +152,41 @@ def test_velocity_interface_and_command_timeout(ros):
     assert np.allclose(joints.messages[-1].position, resting)
 
 
+def test_velocity_interface_takes_the_order_of_the_joints_parameter(ros):
+    """The ros2_control forward_command_controller convention: data[i] is for joints[i]."""
+    order = ["joint_3", "joint_1", "joint_2", "joint_7", "joint_6", "joint_5", "joint_4"]
+    _simulator(ros, command_interface="velocity", joints=order)
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states")
+    command = probe.create_publisher(Float64MultiArray, "joint_velocities", COMMAND_QOS)
+    by_name = {name: 0.01 * (k + 1) for k, name in enumerate(JOINTS)}
+
+    def keep_commanding():
+        command.publish(Float64MultiArray(data=[by_name[name] for name in order]))
+        return joints.messages and np.any(joints.messages[-1].velocity)
+
+    assert ros.spin_until(keep_commanding)
+    last = joints.messages[-1]
+    assert dict(zip(last.name, last.velocity, strict=True)) == pytest.approx(by_name)
+
+
+def test_robot_description_is_latched_for_late_subscribers(ros):
+    from rclpy.qos import DurabilityPolicy
+    from std_msgs.msg import String
+
+    node = _simulator(ros)
+    ros.spin_for(0.5)  # published long before anyone listens
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    description = Recorder(ros.probe(), String, "robot_description", qos=latched)
+    assert ros.spin_until(lambda: description.messages, timeout=10.0)
+    (message,) = description.messages
+    urdf = (REPO / "config" / "urdf" / "rns_7dof_arm.urdf").read_text()
+    assert message.data == urdf
+    # and it is the model the simulator integrates: the same joints in the same order
+    rebuilt = FreeFloatingModel.from_urdf_string(message.data, node.robot.spec)
+    assert rebuilt.joint_names == node.robot.joint_names
+
+
 def test_reset_service_restores_the_initial_state(ros):
     _simulator(ros, real_time_factor=0.0, command_timeout=0.1)
     probe = ros.probe()
@@ -230,6 +265,7 @@ def test_config_yaml_mirrors_the_declared_defaults():
         ({"initial_joint_positions": [0.1, 0.2]}, "needs 7 values"),
         ({"initial_momentum": [0.0, 1.0]}, "'initial_momentum' must have length in [6]"),
         ({"publish_rate": 100}, "wrong type"),
+        ({"command_interface": "velocity", "joints": ["joint_1", "elbow"]}, "unknown joints"),
     ],
 )
 def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):

@@ -241,9 +241,7 @@ class SimulatorNode(Node):
         # Transient local, depth 1: the robot_state_publisher convention, so a subscriber that
         # starts later still receives the model.
         description_qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self._description_pub = self.create_publisher(
-            String, "robot_description", description_qos
-        )
+        self._description_pub = self.create_publisher(String, "robot_description", description_qos)
         self._description_pub.publish(String(data=urdf_path.read_text()))
         self.create_service(Trigger, "~/reset", self._on_reset)
         self.add_on_set_parameters_callback(self._on_set_parameters)

@@ -181,6 +181,61 @@ def test_nothing_is_published_before_the_first_joint_state(ros):
     assert float(_state(status.messages[-1])["sigma_min"]) > 0.0
 
 
+def test_teleop_twist_keyboard_style_input_turns_the_camera_about_its_own_z(ros):
+    """What teleop_twist_keyboard sends when 'j' is held: plain Twist, angular z, on cmd_vel,
+    reliable QoS, no frame. The README's remap and twist_stamped:=false make it a camera-frame
+    yaw command; the camera turns about its own z axis and the base stays put."""
+    _node(ros, SimulatorNode)
+    controller = ros.add(
+        ControllerNode,
+        {"twist_stamped": False, "default_twist_frame": "camera"},
+        remappings={"cmd_twist": "cmd_vel"},
+    )
+    probe = ros.probe()
+    odom = Recorder(probe, Odometry, "base_odom")
+    status = Recorder(probe, DiagnosticArray, "rns_controller/status")
+    keyboard = probe.create_publisher(Twist, "cmd_vel", 10)  # rclpy's default: reliable
+    yaw = Twist()
+    yaw.angular.z = 0.1
+    probe.create_timer(0.05, lambda: keyboard.publish(yaw))  # key auto-repeat, ~20 Hz
+    assert ros.spin_until(lambda: status.messages and _state(status.messages[-1])["state"] == "OK")
+    camera_0 = _camera_rotation(controller)
+    t0 = time.monotonic()
+    ros.spin_for(1.0)
+    elapsed = time.monotonic() - t0
+    assert _state(status.messages[-1])["frame"] == "camera"
+    # the rotation between the two camera attitudes, in the first camera's axes
+    turned = pin.log3(camera_0.T @ _camera_rotation(controller))
+    assert turned[2] == pytest.approx(0.1 * elapsed, rel=0.3)
+    assert np.abs(turned[:2]).max() < 0.05 * turned[2]
+    messages = odom.messages
+    deviation = max(
+        attitude_deviation(_odom_rotation(messages[0]), _odom_rotation(m)) for m in messages
+    )
+    assert math.degrees(deviation) < 1e-3
+
+
+def test_shipped_teleop_twist_files_fit_the_controller():
+    """config/teleop_twist_{joy,keyboard}.yaml: stamped, a frame the controller accepts, turbo
+    rates below max_angular_speed, no linear axes on the joystick."""
+    defaults = yaml.safe_load((REPO / "config" / "controller.yaml").read_text())
+    limit = defaults["/**"]["ros__parameters"]["max_angular_speed"]
+    accepted = {"world", "base_link", "camera"}
+    joy = yaml.safe_load((REPO / "config" / "teleop_twist_joy.yaml").read_text())
+    joy = joy["/**"]["ros__parameters"]
+    assert joy["publish_stamped_twist"] is True
+    assert joy["frame"] in accepted
+    for axis in ("roll", "pitch", "yaw"):
+        assert isinstance(joy[f"axis_angular.{axis}"], int)
+        assert joy[f"axis_angular.{axis}"] >= 0
+        assert 0.0 < joy[f"scale_angular.{axis}"] <= joy[f"scale_angular_turbo.{axis}"] < limit
+    assert all(joy[f"axis_linear.{axis}"] == -1 for axis in "xyz")
+    keyboard = yaml.safe_load((REPO / "config" / "teleop_twist_keyboard.yaml").read_text())
+    keyboard = keyboard["/**"]["ros__parameters"]
+    assert keyboard["stamped"] is True
+    assert keyboard["frame_id"] in accepted
+
+
 def test_linear_part_is_reported_as_unachieved(ros, stack):
     probe, streams = stack.probe, stack.streams
     publisher = probe.create_publisher(TwistStamped, "cmd_twist", COMMAND_QOS)

@@ -68,7 +68,7 @@ def run_method(
     )
     start = time.perf_counter()
     recording = None
-    with Harness(args.domain_id) as stack:
+    with Harness(args.domain_id, args.ros_args) as stack:
         streams = {
             "joints": stack.record(JointState, "joint_states"),
             "odom": stack.record(Odometry, "base_odom"),
@@ -174,9 +174,23 @@ def format_table(rows: list[DemoRow]) -> str:
     return "\n".join(lines)
 
 
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """(own arguments, ROS arguments): ``--ros-args ... [--]`` is cut out, as rcl reads it."""
+    if "--ros-args" not in argv:
+        return list(argv), []
+    start = argv.index("--ros-args")
+    end = argv.index("--", start) if "--" in argv[start:] else len(argv)
+    return argv[:start] + argv[end + 1 :], argv[start:end]
+
+
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     parser = argparse.ArgumentParser(
         prog="rns_demo",
+        usage="%(prog)s [options] [--ros-args -p NAME:=VALUE --params-file FILE -r FROM:=TO]",
+        epilog="--ros-args apply to every node of every run (e.g. -p wrist_gain:=10.0, "
+        "-r joint_states:=arm/joint_states); the demo's own settings (method, rate, scenario "
+        "angles) win where they overlap.",
         description="Thesis satellite-observation scenario over DDS (simulator + controller + "
         "scripted operator + rerun recording): reactionless DLS and SC vs the conventional "
         "baseline, compared in one table.",
@@ -211,6 +225,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="ROS domain of the runs (default: ROS_DOMAIN_ID, else 42)",
     )
     args = parser.parse_args(argv)
+    args.ros_args = ros_args
     args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     unknown = [m for m in args.methods if m not in METHODS]
     if unknown or not args.methods:

@@ -105,16 +105,29 @@ class Harness:
 
     Args:
         domain_id: ROS domain [0, 101]; default: ``ROS_DOMAIN_ID`` of the environment, else 0.
+        ros_args: global ROS arguments for every node of the stack, as a command line gives them
+            (``["--ros-args", "-p", "rate:=50.0", "-r", "joint_states:=arm/joint_states"]``).
+            Parameters given to :meth:`add` take precedence over them.
+
+    Raises:
+        ConfigError: ``domain_id`` out of range, or ``ros_args`` that rcl cannot parse.
 
     Sets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` in this process's environment before the
     Context starts, so nothing it creates is discoverable from other machines.
     """
 
-    def __init__(self, domain_id: int | None = None) -> None:
+    def __init__(self, domain_id: int | None = None, ros_args: Iterable[str] = ()) -> None:
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
         self.domain_id = _domain(domain_id)
         self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=self.domain_id)
+        ros_args = list(ros_args)
+        if ros_args and ros_args[0] != "--ros-args":
+            raise ConfigError(f"ros_args must start with '--ros-args', got {ros_args}")
+        try:
+            # argv[0] is a program name to rcl
+            rclpy.init(args=["harness", *ros_args], context=self.context, domain_id=self.domain_id)
+        except RuntimeError as exc:  # rcl's parse errors (RCLError derives from RuntimeError)
+            raise ConfigError(f"invalid ROS arguments {ros_args}: {exc}") from None
         self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
         self._probe: Node | None = None
@@ -207,10 +220,17 @@ class ProcessStack:
     Args:
         domain_id: ROS domain of every process.
         bin_dir: folder of the executables; default: next to this Python, else PATH.
+        base_env: environment to start from (default: this process's), e.g. what sourcing a
+            colcon ``install/setup.bash`` gives; the domain and LOCALHOST discovery are set on it.
     """
 
-    def __init__(self, domain_id: int, bin_dir: str | Path | None = None) -> None:
-        self.env = ros_environment(domain_id)
+    def __init__(
+        self,
+        domain_id: int,
+        bin_dir: str | Path | None = None,
+        base_env: Mapping[str, str] | None = None,
+    ) -> None:
+        self.env = ros_environment(domain_id, base_env)
         self.bin_dir = Path(bin_dir) if bin_dir else Path(sys.executable).parent
         self.processes: list[subprocess.Popen] = []
         self._logs: dict[int, Any] = {}

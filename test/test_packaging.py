@@ -21,6 +21,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 from catkin_pkg.package import parse_package
 
@@ -415,30 +416,186 @@ def test_every_installed_console_script_answers_help(colcon_install, console_scr
 
 def test_installed_rns_demo_runs_from_the_install_space(colcon_install, tmp_path):
     """As `ros2 run rns_ros rns_demo` would: the installed script finds the installed model and
-    scenarios, runs the stack over DDS and records with the installed rerun logger."""
+    scenarios, runs the stack over DDS and records with the installed rerun logger. Its
+    --ros-args reach every node: a global remap moves joint_states for the whole stack."""
+    from sensor_msgs.msg import JointState
+
+    from rns_ros.harness import Harness
+
     script = colcon_install / "lib" / PKG / "rns_demo"
     scenario = tmp_path / "short.yaml"
     scenario.write_text(
         "initial_joint_positions_deg: [-90, -30, 0, -70, 180, -30, 0]\n"
         "axis: [1, 0, 0]\nangle_deg: 10.0\nduration: 1.0\n"
     )
-    result = _run(
-        [
-            str(script),
-            "--scenario",
-            str(scenario),
-            "--methods",
-            "dls",
-            "--output",
-            str(tmp_path / "rec"),
-        ],
-        timeout=RUN_TIMEOUT_S,
-        what="rns_demo",
-        cwd=colcon_install,
-        env=_installed_env(colcon_install),
-    )
-    assert result.returncode == 0, result.stdout
-    model_line = next(line for line in result.stdout.splitlines() if line.startswith("model:"))
+    command = [
+        str(script),
+        "--scenario",
+        str(scenario),
+        "--methods",
+        "dls",
+        "--output",
+        str(tmp_path / "rec"),
+        "--ros-args",
+        "-r",
+        "joint_states:=arm/joint_states",
+    ]
+    env = _installed_env(colcon_install)
+    with Harness(int(env["ROS_DOMAIN_ID"])) as ros:
+        arm = ros.record(JointState, "arm/joint_states")
+        unmapped = ros.record(JointState, "joint_states")
+        log = tmp_path / "demo.log"
+        with log.open("w") as out:
+            demo = subprocess.Popen(
+                command, cwd=colcon_install, env=env, stdout=out, stderr=subprocess.STDOUT
+            )
+            try:
+                ros.spin_until(lambda: demo.poll() is not None, timeout=RUN_TIMEOUT_S)
+            finally:
+                if demo.poll() is None:
+                    demo.kill()
+                demo.wait(timeout=10)
+    output = log.read_text()
+    assert demo.returncode == 0, output
+    model_line = next(line for line in output.splitlines() if line.startswith("model:"))
     model = model_line.split(":", 1)[1].split(";")[0].strip()
     assert Path(model).is_relative_to(colcon_install / "share" / PKG)
     assert (tmp_path / "rec" / "dls.rrd").is_file()
+    assert len(arm) > 50, output
+    assert len(unmapped) == 0
+
+
+def test_installed_rns_demo_rejects_bad_ros_args(colcon_install):
+    result = _run(
+        [str(colcon_install / "lib" / PKG / "rns_demo"), "--ros-args", "-p", "no_value"],
+        timeout=RUN_TIMEOUT_S,
+        what="rns_demo with bad --ros-args",
+        cwd=colcon_install,
+        env=_installed_env(colcon_install),
+    )
+    assert result.returncode == 2, result.stdout
+    assert "rns_demo: invalid ROS arguments" in result.stdout
+    assert "Traceback" not in result.stdout
+
+
+# --- ros2-run parity --------------------------------------------------------------------------
+
+
+def _colcon_environment(install_prefix: Path) -> dict[str, str]:
+    """The environment of a shell that sourced ``install/setup.bash``, from a minimal base (no
+    virtualenv on PATH, no PYTHONPATH): what ``ros2 run`` hands to the executable it starts."""
+    base = {
+        "HOME": os.environ.get("HOME", "/root"),
+        "PATH": "/usr/local/bin:/usr/bin:/bin",
+        "PYTHONUNBUFFERED": "1",
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
+    }
+    setup = install_prefix.parent / "setup.bash"
+    result = subprocess.run(
+        ["bash", "-c", f'source "{setup}" && env -0'],
+        env=base,
+        capture_output=True,
+        timeout=RUN_TIMEOUT_S,
+        check=True,
+    )
+    env = dict(item.split("=", 1) for item in result.stdout.decode().split("\0") if "=" in item)
+    assert str(_site_packages(install_prefix)) in env["PYTHONPATH"].split(os.pathsep)
+    return env
+
+
+PARITY_PARAMS = """\
+rns_simulator:
+  ros__parameters:
+    publish_rate: 50.0
+rns_controller:
+  ros__parameters:
+    rate: 50.0
+    method: sc
+"""
+
+
+def test_ros2_run_parity_installed_executables_with_ros_args(colcon_install, tmp_path):
+    """Each executable started from install/rns_ros/lib/rns_ros with the colcon environment, as
+    `ros2 run rns_ros <exe> --ros-args ...` would, comes up, honours -p / --params-file / -r, and
+    publishes; together they close the loop. SIGINT stops each with exit code 0."""
+    from geometry_msgs.msg import TwistStamped
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+    from trajectory_msgs.msg import JointTrajectory
+
+    from rns_ros.harness import Harness, ProcessStack
+    from rns_ros.viz import paths
+    from rns_ros.viz.readback import recording_summary
+
+    domain = int(os.environ.get("ROS_DOMAIN_ID", "43"))
+    params = tmp_path / "stack.yaml"
+    params.write_text(PARITY_PARAMS)
+    scenario = tmp_path / "yaw.yaml"
+    scenario.write_text(
+        "initial_joint_positions_deg: [-90, -30, 0, -70, 180, -30, 0]\n"
+        "frame: camera\naxis: [0, 0, 1]\nangle_deg: 30.0\nduration: 60.0\n"
+        "time_scaling: constant\n"
+    )
+    rrd = tmp_path / "parity.rrd"
+    arm_states = {"joint_states": "arm/joint_states"}
+    processes = ProcessStack(
+        domain, bin_dir=colcon_install / "lib" / PKG, base_env=_colcon_environment(colcon_install)
+    )
+    with Harness(domain) as ros, processes:
+        arm = ros.record(JointState, "arm/joint_states")
+        unmapped = ros.record(JointState, "joint_states")
+        commands = ros.record(TwistStamped, "cmd_vel")
+        references = ros.record(JointTrajectory, "joint_references")
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        description = ros.record(String, "robot_description", qos=latched)
+        started = {
+            "rns_simulator": processes.start(
+                "rns_simulator", params_file=params, remappings=arm_states
+            ),
+            "rns_controller": processes.start(
+                "rns_controller",
+                {"wrist_gain": 0.0},
+                params_file=params,
+                remappings={**arm_states, "cmd_twist": "cmd_vel"},
+            ),
+            "rns_operator": processes.start(
+                "rns_operator",
+                {"scenario": str(scenario), "rate": 25.0, "start_delay": 0.0},
+                remappings={"cmd_twist": "cmd_vel"},
+            ),
+            "rns_rerun_logger": processes.start(
+                "rns_rerun_logger",
+                {"sink": "save", "rrd_path": str(rrd)},
+                remappings={**arm_states, "cmd_twist": "cmd_vel"},
+            ),
+        }
+        probe = ros.probe()
+
+        def everyone_up() -> bool:
+            for name, process in started.items():
+                assert process.poll() is None, f"{name} exited:\n{processes.output(process)}"
+            return set(started) <= set(probe.get_node_names()) and len(references) > 5
+
+        assert ros.spin_until(everyone_up, timeout=40.0), {
+            name: processes.output(p) for name, p in started.items()
+        }
+        counts = len(arm), len(references)
+        ros.spin_for(2.0)
+        arm_rate = (len(arm) - counts[0]) / 2.0
+        reference_rate = (len(references) - counts[1]) / 2.0
+        exit_codes = processes.stop(timeout=10.0)
+        outputs = {name: processes.output(p) for name, p in started.items()}
+
+    assert exit_codes == [0, 0, 0, 0], outputs
+    assert arm_rate == pytest.approx(50.0, rel=0.2), "simulator --params-file publish_rate: 50"
+    assert reference_rate == pytest.approx(50.0, rel=0.2), "controller --params-file rate: 50"
+    assert len(unmapped) == 0, "-r joint_states:=arm/joint_states"
+    assert "sc reactionless control" in outputs["rns_controller"]  # method from the file
+    assert commands.latest().header.frame_id == "camera"  # the operator's remapped output
+    assert commands.latest().twist.angular.z > 0.0
+    moved = np.ptp(arm.array(lambda m: m.position), axis=0).max()
+    assert moved > 1e-3, "the remapped loop moved the arm"
+    assert description.latest().data.lstrip().startswith("<")
+    assert recording_summary(rrd)[paths.joint_transform("joint_4")] > 10

@@ -14,6 +14,7 @@ CONSOLE_SCRIPTS = [
     "rns_controller = rns_ros.nodes.controller:main",
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",
     "rns_operator = rns_ros.nodes.operator:main",
+    "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -1,0 +1,373 @@
+"""Keyboard teleoperation logic of ``rns_teleop_keyboard``: key map, key-hold state machine, panel.
+
+Pure Python (never rclpy): the node in :mod:`rns_ros.nodes.teleop_keyboard` feeds key strings and
+monotonic times in and publishes what comes out.
+
+Keys (the first key of each pair is the positive direction):
+
+    q / e   roll  +/-   angular x        i / k   linear x +/-
+    w / s   pitch +/-   angular y        j / l   linear y +/-
+    a / d   yaw   +/-   angular z        u / o   linear z +/-
+    + / -   all speeds x speed_step / ÷ speed_step ('=' and '_' also work), bounded
+    f       cycle the command frame camera -> world -> base (and stop)
+    space   stop now: zero command, held keys forgotten
+    Q, Ctrl-C, Ctrl-D, Ctrl-\\   quit (a zero twist is sent first)
+
+The linear keys exist for completeness: a reactionless camera-pointing controller reports any
+linear command as not achievable.
+
+Terminals send no key-release events, only the characters of a press and then auto-repeats
+(first repeat after ~250-660 ms, then ~25-30 Hz). So a key counts as *held* from its press until
+``key_hold`` seconds pass without another repeat of it; ``key_hold`` must exceed the initial
+auto-repeat delay or the command would drop to zero between the press and the first repeat. A
+terminal repeats only the newest key, so holding two keys at once drives one axis, not two.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import NamedTuple
+
+from rns_ros.core.controller import TwistFrame
+from rns_ros.core.errors import ConfigError
+
+#: Order of :attr:`KeyboardTeleop.frame` cycling with the frame key.
+FRAME_CYCLE = (TwistFrame.CAMERA, TwistFrame.WORLD, TwistFrame.BASE)
+#: Lowest speed the slow-down key reaches, in [rad/s] for angular and [m/s] for linear speed.
+MIN_SPEED = 1e-3
+#: A controller status older than this is shown as stale [s].
+STATUS_STALE_AFTER = 1.0
+
+_AXIS_NAMES = ("roll", "pitch", "yaw", "x", "y", "z")
+
+
+class Action(StrEnum):
+    """What a key does."""
+
+    MOVE = "move"
+    STOP = "stop"
+    FASTER = "faster"
+    SLOWER = "slower"
+    FRAME = "frame"
+    QUIT = "quit"
+
+
+@dataclass(frozen=True)
+class Binding:
+    """One key's meaning: ``axis`` 0-2 angular x/y/z, 3-5 linear x/y/z; ``sign`` +1 or -1."""
+
+    action: Action
+    axis: int = -1
+    sign: int = 0
+
+    @property
+    def label(self) -> str:
+        if self.action is Action.MOVE:
+            return f"{_AXIS_NAMES[self.axis]} {'+' if self.sign > 0 else '-'}"
+        return self.action.value
+
+
+def _moves(pairs: str) -> dict[str, Binding]:
+    """'qewsad...' -> bindings: consecutive pairs are (+, -) of axes 0, 1, 2, ..."""
+    keys = {}
+    for axis in range(len(pairs) // 2):
+        keys[pairs[2 * axis]] = Binding(Action.MOVE, axis, +1)
+        keys[pairs[2 * axis + 1]] = Binding(Action.MOVE, axis, -1)
+    return keys
+
+
+#: Key string -> binding. Keys not in here are ignored.
+KEY_MAP: dict[str, Binding] = {
+    **_moves("qewsadikjluo"),
+    **dict.fromkeys("+=", Binding(Action.FASTER)),
+    **dict.fromkeys("-_", Binding(Action.SLOWER)),
+    "f": Binding(Action.FRAME),
+    " ": Binding(Action.STOP),
+    **dict.fromkeys(("Q", "\x03", "\x04", "\x1c"), Binding(Action.QUIT)),
+}
+
+#: Key help shown at the bottom of the panel.
+KEY_HELP = (
+    "q/e roll +/-     w/s pitch +/-    a/d yaw +/-     (angular x/y/z)",
+    "i/k x +/-        j/l y +/-        u/o z +/-       (linear: not reactionless)",
+    "+/- speed        f frame          space stop      Q or Ctrl-C quit",
+)
+
+
+class Speeds(NamedTuple):
+    """Magnitudes a held key commands: angular [rad/s], linear [m/s]."""
+
+    angular: float
+    linear: float
+
+
+@dataclass(frozen=True)
+class TeleopCommand:
+    """One twist command.
+
+    Attributes:
+        angular: angular velocity (x, y, z) in ``frame`` axes [rad/s].
+        linear: linear velocity (x, y, z) in ``frame`` axes [m/s].
+        frame: axes of both vectors.
+    """
+
+    angular: tuple[float, float, float]
+    linear: tuple[float, float, float]
+    frame: TwistFrame
+
+    @property
+    def is_zero(self) -> bool:
+        return not any(self.angular) and not any(self.linear)
+
+
+class KeyEvent(NamedTuple):
+    """Outcome of one key: its binding (None: ignored) and whether the command changed in a
+    way that should be published at once rather than at the next rate tick."""
+
+    key: str
+    binding: Binding | None
+    urgent: bool
+
+
+class ControllerStatus(NamedTuple):
+    """The controller's newest status entry: ``level`` is DiagnosticStatus.level (0 OK, 1 WARN,
+    2 ERROR, 3 STALE); ``received`` is its receipt time on the monotonic clock [s]."""
+
+    state: str
+    level: int
+    message: str
+    received: float
+
+
+class KeyboardTeleop:
+    """Key presses in, twist commands out (see the module docstring for the key semantics).
+
+    Args:
+        angular_speed: initial angular speed of a held key [rad/s].
+        linear_speed: initial linear speed of a held key [m/s].
+        key_hold: a key stays held this long after its newest press or repeat [s].
+        zero_duration: after motion ends (release, stop, frame change), :meth:`tick` returns zero
+            commands this long, then None (nothing to publish) [s].
+        speed_step: factor of one speed-up / slow-down key (> 1) [-].
+        max_angular_speed: bound of the angular speed [rad/s].
+        max_linear_speed: bound of the linear speed [m/s].
+        frame: initial command frame.
+
+    Raises:
+        ConfigError: a non-positive duration or speed, ``speed_step <= 1``, or an initial speed
+            outside [MIN_SPEED, its maximum].
+    """
+
+    def __init__(
+        self,
+        *,
+        angular_speed: float,
+        linear_speed: float,
+        key_hold: float,
+        zero_duration: float,
+        speed_step: float,
+        max_angular_speed: float,
+        max_linear_speed: float,
+        frame: TwistFrame | str = TwistFrame.CAMERA,
+    ) -> None:
+        if not key_hold > 0.0:
+            raise ConfigError(f"key_hold must be > 0 [s], got {key_hold!r}")
+        if not zero_duration >= 0.0:
+            raise ConfigError(f"zero_duration must be >= 0 [s], got {zero_duration!r}")
+        if not speed_step > 1.0:
+            raise ConfigError(f"speed_step must be > 1, got {speed_step!r}")
+        for name, speed, high, unit in (
+            ("angular_speed", angular_speed, max_angular_speed, "[rad/s]"),
+            ("linear_speed", linear_speed, max_linear_speed, "[m/s]"),
+        ):
+            if not MIN_SPEED <= speed <= high:
+                raise ConfigError(
+                    f"{name} must be in [{MIN_SPEED}, max_{name} = {high}] {unit}, got {speed!r}"
+                )
+        self.key_hold = float(key_hold)
+        self.zero_duration = float(zero_duration)
+        self.speed_step = float(speed_step)
+        self.max_speeds = Speeds(float(max_angular_speed), float(max_linear_speed))
+        self.speeds = Speeds(float(angular_speed), float(linear_speed))
+        self.frame = TwistFrame.parse(frame)
+        self.quit_requested = False
+        # axis -> (sign, time of the newest press or repeat [s]); one entry per axis, so the
+        # newest direction wins when both keys of a pair were pressed within key_hold.
+        self._held: dict[int, tuple[int, float]] = {}
+        # Zero commands still owed after motion: None = idle, else when the zeros started
+        # (-inf: not started yet; the next tick starts them).
+        self._zeros_since: float | None = None
+
+    # --- input ----------------------------------------------------------------------------------
+    def press(self, key: str, now: float) -> KeyEvent:
+        """Apply one key (a press or an auto-repeat) at monotonic time ``now`` [s]."""
+        binding = KEY_MAP.get(key)
+        if binding is None:
+            return KeyEvent(key, None, False)
+        before = self.command(now)
+        action = binding.action
+        if action is Action.MOVE:
+            self._held[binding.axis] = (binding.sign, now)
+        elif action is Action.STOP:
+            self._release_all()
+        elif action is Action.FRAME:
+            # New axes under a held key would swing the camera elsewhere mid-motion: stop first.
+            self._release_all()
+            self.frame = FRAME_CYCLE[(FRAME_CYCLE.index(self.frame) + 1) % len(FRAME_CYCLE)]
+        elif action is Action.FASTER:
+            self.speeds = self._scaled(self.speed_step)
+        elif action is Action.SLOWER:
+            self.speeds = self._scaled(1.0 / self.speed_step)
+        else:
+            self.quit_requested = True
+            self._release_all()
+        after = self.command(now)
+        urgent = after != before or action is Action.STOP
+        return KeyEvent(key, binding, urgent)
+
+    def _release_all(self) -> None:
+        self._held.clear()
+        # Always owe zeros after a stop, even when idle: the operator asked for a stop.
+        self._zeros_since = float("-inf")
+
+    def _scaled(self, factor: float) -> Speeds:
+        return Speeds(
+            min(max(self.speeds.angular * factor, MIN_SPEED), self.max_speeds.angular),
+            min(max(self.speeds.linear * factor, MIN_SPEED), self.max_speeds.linear),
+        )
+
+    # --- output ---------------------------------------------------------------------------------
+    def held_axes(self, now: float) -> dict[int, int]:
+        """axis -> sign of every key still held at ``now`` [s]."""
+        return {
+            axis: sign for axis, (sign, last) in self._held.items() if now - last <= self.key_hold
+        }
+
+    def command(self, now: float) -> TeleopCommand:
+        """The command at monotonic time ``now`` [s]: held axes at the current speeds."""
+        values = [0.0] * 6
+        for axis, sign in self.held_axes(now).items():
+            speed = self.speeds.angular if axis < 3 else self.speeds.linear
+            values[axis] = sign * speed
+        return TeleopCommand(tuple(values[:3]), tuple(values[3:]), self.frame)
+
+    def tick(self, now: float) -> TeleopCommand | None:
+        """What to publish at a rate tick at ``now`` [s]: the command while a key is held, then
+        zeros for ``zero_duration``, then None (nothing) until the next key."""
+        self._held = {
+            axis: entry
+            for axis, entry in self._held.items()
+            if now - entry[1] <= self.key_hold  # forget released keys
+        }
+        command = self.command(now)
+        if not command.is_zero:
+            self._zeros_since = float("-inf")
+            return command
+        if self._zeros_since is None:
+            return None
+        if self._zeros_since == float("-inf"):
+            self._zeros_since = now
+        if now - self._zeros_since <= self.zero_duration:
+            return command
+        self._zeros_since = None
+        return None
+
+    @property
+    def sending(self) -> bool:
+        """True while :meth:`tick` returns commands (motion or trailing zeros)."""
+        return self._zeros_since is not None
+
+
+# --- terminal input -------------------------------------------------------------------------------
+def split_keys(text: str) -> list[str]:
+    """Split terminal input into keys: one character each, except escape sequences (arrow and
+    function keys, Alt+key), which stay whole so that none of their characters acts as a key."""
+    keys = []
+    i = 0
+    while i < len(text):
+        if text[i] != "\x1b" or i + 1 >= len(text):
+            keys.append(text[i])
+            i += 1
+            continue
+        end = i + 2
+        if text[i + 1] == "[":  # CSI: parameters, then one final byte in @..~
+            while end < len(text) and not "@" <= text[end] <= "~":
+                end += 1
+            end += 1
+        elif text[i + 1] == "O":  # SS3: one more character
+            end += 1
+        keys.append(text[i : min(end, len(text))])
+        i = min(end, len(text))
+    return keys
+
+
+# --- panel ----------------------------------------------------------------------------------------
+_LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+
+
+def status_line(status: ControllerStatus | None, now: float, topic: str) -> str:
+    """One line describing the controller's newest status at monotonic time ``now`` [s]."""
+    if status is None:
+        return f"controller  no status yet on {topic}"
+    detail = status.message.removeprefix(f"{status.state}:").strip()
+    text = f"controller  {status.state} [{_LEVELS.get(status.level, status.level)}]"
+    if detail and detail != status.state:
+        text += f"  {detail}"
+    age = now - status.received
+    if age > STATUS_STALE_AFTER:
+        text += f"  (no update for {age:.1f} s)"
+    return text
+
+
+def _vector(values: Sequence[float]) -> str:
+    return "  ".join(f"{name} {value:+.3f}" for name, value in zip("xyz", values, strict=True))
+
+
+def render_panel(
+    command: TeleopCommand,
+    speeds: Speeds,
+    status: str,
+    *,
+    frame_id: str = "",
+    sending: bool = False,
+    last_key: KeyEvent | None = None,
+    help_lines: Sequence[str] = KEY_HELP,
+) -> list[str]:
+    """Panel text, one string per line (no escape codes, at most 80 columns plus the status).
+
+    Args:
+        command: the command now (its frame is shown).
+        speeds: current speeds.
+        status: the controller line (:func:`status_line`).
+        frame_id: header.frame_id sent for ``command.frame``.
+        sending: whether twists are being published.
+        last_key: the newest key, shown with what it did.
+        help_lines: key help.
+    """
+    frames = " -> ".join(frame.value for frame in FRAME_CYCLE)
+    if last_key is None:
+        key_text = "-"
+    else:
+        label = last_key.binding.label if last_key.binding else "ignored"
+        key_text = f"{last_key.key!r} {label}"
+    if not sending:
+        activity = "idle (nothing published)"
+    elif command.is_zero:
+        activity = "sending zero"
+    else:
+        activity = "sending"
+    return [
+        "rns_teleop_keyboard  reactionless camera teleop",
+        "",
+        f"frame     {command.frame.value} (frame_id '{frame_id}')   f cycles {frames}",
+        f"speed     angular {speeds.angular:.3f} rad/s   linear {speeds.linear:.3f} m/s",
+        f"angular   {_vector(command.angular)}  [rad/s]",
+        f"linear    {_vector(command.linear)}  [m/s]",
+        f"cmd_twist {activity}",
+        f"last key  {key_text}",
+        status,
+        "",
+        *help_lines,
+    ]

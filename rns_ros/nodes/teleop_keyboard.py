@@ -1,0 +1,399 @@
+"""rns_teleop_keyboard: drive the camera's angular velocity from a terminal, one key per axis.
+
+Keys, key-hold semantics and the panel are in :mod:`rns_ros.keyboard` (pure logic); this module
+owns the terminal and the ROS side.
+
+Publishes:
+    cmd_twist   geometry_msgs/TwistStamped, best effort depth 1 (as rns_operator): while a key is
+                held, the command at ``rate``; after release or the stop key, zeros at ``rate``
+                for ``zero_duration``; then nothing until the next key (the controller idles on
+                its own timeout). A few zeros are also sent on quit, Ctrl-C, SIGTERM and when the
+                terminal goes away (SIGHUP, end of file or EIO on stdin).
+Subscribes:
+    <controller_status_topic>  diagnostic_msgs/DiagnosticArray of rns_controller; the entry with
+                a ``state`` value is shown in the panel.
+
+Why ``key_hold`` (0.7 s) may exceed the controller's ``command_timeout`` (0.5 s): the timeout is
+judged on the age of the newest message, and this node republishes the held command every
+1/``rate`` s, so the controller never sees a command older than one period while a key is held.
+``key_hold`` only has to bridge the terminal's auto-repeat delay.
+
+The terminal runs in cbreak mode without signal characters (Ctrl-C arrives as a key and quits
+cleanly; Ctrl-Z does nothing, since a stopped teleop would leave the terminal in cbreak mode) and
+is restored on every way out.
+"""
+
+from __future__ import annotations
+
+import codecs
+import contextlib
+import errno
+import os
+import select
+import shutil
+import signal
+import sys
+import termios
+import threading
+import time
+import tty
+from collections.abc import Sequence
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.utilities import remove_ros_args
+
+from rns_ros.core.controller import TwistFrame
+from rns_ros.core.errors import RnsError
+from rns_ros.keyboard import (
+    ControllerStatus,
+    KeyboardTeleop,
+    KeyEvent,
+    TeleopCommand,
+    render_panel,
+    split_keys,
+    status_line,
+)
+from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
+from rns_ros.nodes.runner import parameter_help
+
+NODE_NAME = "rns_teleop_keyboard"
+SUMMARY = (
+    "Keyboard teleop: held keys -> TwistStamped on cmd_twist (q/e roll, w/s pitch, a/d yaw, "
+    "i/k j/l u/o linear, +/- speed, f frame, space stop, Q or Ctrl-C quit). Needs a terminal."
+)
+#: Exit code when the terminal went away (a zero twist was still sent).
+EXIT_TERMINAL_LOST = 1
+#: Zero twists sent on the way out, this far apart [s]: best effort may drop one.
+EXIT_ZEROS = 3
+EXIT_ZERO_GAP = 0.02
+#: Longest wait for a key before the loop looks at the clock again [s].
+POLL = 0.05
+
+PARAMETERS = (
+    ParameterSpec("rate", 20.0, "Publishing rate while a key is held", "[Hz]", 1.0, 200.0),
+    ParameterSpec(
+        "angular_speed", 0.1, "Initial angular speed of a held key", "[rad/s]", 0.001, 1.0
+    ),
+    ParameterSpec(
+        "max_angular_speed",
+        1.0,
+        "Upper bound of the angular speed keys (the controller rejects faster commands)",
+        "[rad/s]",
+        0.001,
+        10.0,
+    ),
+    ParameterSpec("linear_speed", 0.05, "Initial linear speed of a held key", "[m/s]", 0.001, 1.0),
+    ParameterSpec(
+        "max_linear_speed", 0.5, "Upper bound of the linear speed keys", "[m/s]", 0.001, 10.0
+    ),
+    ParameterSpec(
+        "speed_step", 1.25, "Factor of one speed-up (+) or slow-down (-) key", "[-]", 1.01, 10.0
+    ),
+    ParameterSpec(
+        "key_hold",
+        0.7,
+        "A key counts as held this long after its last auto-repeat; must exceed the terminal's "
+        "auto-repeat delay (X11 default 660 ms), may exceed the controller's command_timeout",
+        "[s]",
+        0.05,
+        5.0,
+    ),
+    ParameterSpec(
+        "zero_duration",
+        0.5,
+        "Zero twists are published at rate this long after release or stop, then nothing",
+        "[s]",
+        0.0,
+        60.0,
+    ),
+    WORLD_FRAME,
+    ParameterSpec("base_frame", "base_link", "frame_id sent in the base frame"),
+    ParameterSpec("camera_frame", "camera", "frame_id sent in the camera frame"),
+    ParameterSpec(
+        "initial_frame",
+        "camera",
+        "Command frame at start (key f cycles camera -> world -> base)",
+        choices=tuple(frame.value for frame in TwistFrame),
+    ),
+    ParameterSpec(
+        "controller_status_topic",
+        "rns_controller/status",
+        "DiagnosticArray status of the controller, shown in the panel",
+    ),
+)
+
+
+class TerminalLost(Exception):  # noqa: N818 - an event, not a programming error
+    """The controlling terminal hung up or stdin ended."""
+
+
+class TeleopKeyboardNode(Node):
+    """Publishes the :class:`~rns_ros.keyboard.KeyboardTeleop` commands (module docstring).
+
+    Raises:
+        ConfigError: a parameter is out of range, or an initial speed exceeds its maximum.
+    """
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, PARAMETERS)
+        self.teleop = KeyboardTeleop(
+            angular_speed=params["angular_speed"],
+            linear_speed=params["linear_speed"],
+            key_hold=params["key_hold"],
+            zero_duration=params["zero_duration"],
+            speed_step=params["speed_step"],
+            max_angular_speed=params["max_angular_speed"],
+            max_linear_speed=params["max_linear_speed"],
+            frame=params["initial_frame"],
+        )
+        self.period = 1.0 / params["rate"]
+        self.frame_ids = {
+            TwistFrame.WORLD: params["world_frame"],
+            TwistFrame.BASE: params["base_frame"],
+            TwistFrame.CAMERA: params["camera_frame"],
+        }
+        # Commands: best effort, depth 1 - a late twist is worth nothing (as rns_operator).
+        qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self._publisher = self.create_publisher(TwistStamped, "cmd_twist", qos)
+        # Best effort also matches the controller's reliable status publisher; only the newest
+        # entry is shown.
+        self.status_topic = self.resolve_topic_name(params["controller_status_topic"])
+        self.create_subscription(DiagnosticArray, self.status_topic, self._on_status, qos)
+        self.status: ControllerStatus | None = None
+
+    def _on_status(self, msg: DiagnosticArray) -> None:
+        for entry in msg.status:
+            values = {kv.key: kv.value for kv in entry.values}
+            if "state" in values:  # the controller's entry (as rns_rerun_logger reads it)
+                level = entry.level[0] if isinstance(entry.level, bytes) else int(entry.level)
+                # one assignment: the panel thread reads it without a lock
+                self.status = ControllerStatus(
+                    values["state"], level, entry.message, time.monotonic()
+                )
+                return
+
+    def publish(self, command: TeleopCommand) -> None:
+        """Publish one command as TwistStamped stamped with the node clock."""
+        msg = TwistStamped()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = self.frame_ids[command.frame]
+        msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z = command.angular
+        msg.twist.linear.x, msg.twist.linear.y, msg.twist.linear.z = command.linear
+        self._publisher.publish(msg)
+
+    def publish_exit_zeros(self) -> None:
+        """A few zero twists, :data:`EXIT_ZERO_GAP` apart, before the node goes away."""
+        zero = TeleopCommand((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), self.teleop.frame)
+        for i in range(EXIT_ZEROS):
+            if i:
+                time.sleep(EXIT_ZERO_GAP)
+            self.publish(zero)
+
+
+class RawTerminal:
+    """stdin in cbreak mode without signal characters or flow control, the panel drawn on the
+    alternate screen; :meth:`restore` (idempotent, also on a dead terminal) undoes both."""
+
+    def __init__(self, fd_in: int, fd_out: int) -> None:
+        self.fd_in, self.fd_out = fd_in, fd_out
+        self._saved: list | None = None
+        self._decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
+        self._shown: list[str] = []
+
+    def __enter__(self) -> RawTerminal:
+        self._saved = termios.tcgetattr(self.fd_in)
+        try:
+            tty.setcbreak(self.fd_in, termios.TCSAFLUSH)  # drop keys typed before the panel
+            mode = termios.tcgetattr(self.fd_in)
+            mode[tty.LFLAG] &= ~termios.ISIG  # Ctrl-C, Ctrl-\, Ctrl-Z arrive as keys
+            mode[tty.IFLAG] &= ~termios.IXON  # Ctrl-S must not freeze the panel
+            termios.tcsetattr(self.fd_in, termios.TCSANOW, mode)
+            self._write("\x1b[?1049h\x1b[?25l")  # alternate screen, hide cursor
+        except BaseException:
+            self.restore()
+            raise
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        self.restore()
+
+    def restore(self) -> None:
+        if self._saved is None:
+            return
+        saved, self._saved = self._saved, None
+        with contextlib.suppress(TerminalLost):
+            self._write("\x1b[?25h\x1b[?1049l")  # show cursor, main screen
+        # a hung-up terminal refuses: then there is nothing left to restore
+        with contextlib.suppress(termios.error, OSError):
+            termios.tcsetattr(self.fd_in, termios.TCSANOW, saved)
+
+    def read_keys(self, timeout: float) -> list[str]:
+        """Keys typed within ``timeout`` [s] (possibly none).
+
+        Raises:
+            TerminalLost: end of file or EIO on stdin.
+        """
+        ready, _, _ = select.select([self.fd_in], [], [], max(timeout, 0.0))
+        if not ready:
+            return []
+        try:
+            data = os.read(self.fd_in, 1024)
+        except OSError as exc:
+            if exc.errno == errno.EIO:
+                raise TerminalLost("stdin: input/output error") from None
+            raise
+        if not data:
+            raise TerminalLost("stdin: end of file")
+        return split_keys(self._decoder.decode(data))
+
+    def draw(self, lines: Sequence[str]) -> None:
+        """Show ``lines`` from the top left, cut to the terminal width; no-op when unchanged."""
+        width = shutil.get_terminal_size((100, 40)).columns
+        lines = [line[: max(width - 1, 1)] for line in lines]
+        if lines == self._shown:
+            return
+        self._shown = lines
+        self._write("\x1b[H" + "".join(f"{line}\x1b[K\r\n" for line in lines) + "\x1b[J")
+
+    def _write(self, text: str) -> None:
+        data = text.encode()
+        try:
+            while data:
+                data = data[os.write(self.fd_out, data) :]
+        except OSError as exc:
+            # a hung-up terminal answers EIO; a closed pipe EPIPE
+            raise TerminalLost(f"stdout: {exc.strerror}") from None
+
+
+def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal) -> None:
+    """Keys in, twists out, panel redrawn, until a quit key, a signal or a lost terminal."""
+    teleop = node.teleop
+    next_tick = time.monotonic()
+    last_key: KeyEvent | None = None
+    while rclpy.ok(context=node.context) and not teleop.quit_requested:
+        # wake at the next tick, and at least every POLL so the status age stays fresh
+        wait = min(next_tick - time.monotonic(), POLL)
+        for key in terminal.read_keys(wait):
+            now = time.monotonic()
+            last_key = teleop.press(key, now)
+            if teleop.quit_requested:
+                break  # keys typed after a quit key must not move anything
+            if last_key.urgent:
+                # a start, change or stop goes out now, not up to one period later
+                command = teleop.tick(now)
+                if command is not None:
+                    node.publish(command)
+                next_tick = now + node.period
+        now = time.monotonic()
+        if now >= next_tick:
+            command = teleop.tick(now)
+            if command is not None:
+                node.publish(command)
+            # late (a slow redraw): restart the grid instead of publishing a burst
+            next_tick = max(next_tick + node.period, now)
+        terminal.draw(
+            render_panel(
+                teleop.command(now),
+                teleop.speeds,
+                status_line(node.status, now, node.status_topic),
+                frame_id=node.frame_ids[teleop.frame],
+                sending=teleop.sending,
+                last_key=last_key,
+            )
+        )
+
+
+# --- signals --------------------------------------------------------------------------------------
+_stopping = threading.Event()
+
+
+def _on_signal(signum, _frame) -> None:
+    # Only the first signal interrupts: a second one must not break the clean-up it started.
+    if _stopping.is_set():
+        return
+    _stopping.set()
+    if signum == signal.SIGHUP:
+        raise TerminalLost("terminal hung up (SIGHUP)")
+    raise KeyboardInterrupt
+
+
+def _spin(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
+    try:
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=0.05)
+    except ExternalShutdownException:
+        pass
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    """Run the teleop in this terminal; exit code 0 (quit, Ctrl-C, SIGTERM), 1 (terminal lost)
+    or 2 (bad parameters, stdin not a terminal)."""
+    argv = list(sys.argv if args is None else args)
+    if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
+        print(parameter_help(NODE_NAME, SUMMARY, PARAMETERS))
+        return 0
+    # Our own handlers (no rclpy one): the Context must outlive the final zero twists.
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    _stopping.clear()
+    node = executor = spinner = None
+    stop_spinning = threading.Event()
+    code = 0
+    panel_started = False
+    try:
+        for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            signal.signal(signum, _on_signal)
+        node = TeleopKeyboardNode()
+        stdin = sys.stdin.fileno() if sys.stdin is not None else -1
+        if stdin < 0 or not os.isatty(stdin):
+            print(
+                f"{NODE_NAME}: stdin is not a terminal; run it in an interactive terminal "
+                "(not with a pipe, a file or a launch file without a console)",
+                file=sys.stderr,
+            )
+            return 2
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        spinner = threading.Thread(
+            target=_spin, args=(executor, stop_spinning), name="ros-spin", daemon=True
+        )
+        spinner.start()
+        panel_started = True
+        with RawTerminal(stdin, sys.stdout.fileno()) as terminal:
+            run_panel(node, terminal)
+    except RnsError as exc:
+        print(f"{NODE_NAME}: {exc}", file=sys.stderr)
+        return 2
+    except TerminalLost:
+        code = EXIT_TERMINAL_LOST
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        _stopping.set()  # from here on signals no longer interrupt
+        try:
+            # whatever ended the panel, the last word on cmd_twist is zero
+            if panel_started and rclpy.ok():
+                node.publish_exit_zeros()
+        finally:
+            stop_spinning.set()
+            if spinner is not None:
+                spinner.join(timeout=2.0)
+            if node is not None:
+                node.destroy_node()
+            if executor is not None:
+                executor.shutdown()
+            rclpy.try_shutdown()
+    if code == 0:
+        with contextlib.suppress(OSError):  # the terminal may be gone (SIGTERM after hang-up)
+            print(f"{NODE_NAME}: stopped, zero twist sent")
+    return code
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

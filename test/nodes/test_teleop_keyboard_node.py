@@ -1,0 +1,324 @@
+"""rns_teleop_keyboard driven as a person would: the real executable in a tmux pane, keys typed
+with ``tmux send-keys`` (repeated sends stand in for auto-repeat), the panel read back with
+``tmux capture-pane``, and cmd_twist recorded over DDS (loopback only) by the harness probe."""
+
+from __future__ import annotations
+
+import itertools
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import TwistStamped
+from rclpy.qos import QoSProfile
+
+from rns_ros.harness import ros_environment
+from rns_ros.nodes.teleop_keyboard import PARAMETERS
+from rns_ros.resources import config_dir
+
+REPO = Path(__file__).resolve().parents[2]
+TMUX = shutil.which("tmux")
+needs_tmux = pytest.mark.skipif(
+    TMUX is None, reason="tmux is not installed: the terminal tests type into a tmux pane"
+)
+COMMAND = [sys.executable, "-m", "rns_ros.nodes.teleop_keyboard", "--ros-args"]
+STATUS_TOPIC = "rns_controller/status"  # the node's default
+STATUS_DETAIL = "sigma_min 0.04 near a singularity"
+START_TIMEOUT = 20.0  # [s] for the process to start and see the fake controller
+
+
+def _vector(v) -> tuple[float, float, float]:
+    return (v.x, v.y, v.z)
+
+
+def _is_zero(msg: TwistStamped) -> bool:
+    return not any(_vector(msg.twist.angular)) and not any(_vector(msg.twist.linear))
+
+
+class Pane:
+    """One tmux pane on a private server (its own socket), 100 x 40."""
+
+    def __init__(self, env: dict[str, str], command: list[str]) -> None:
+        self.socket = f"rns-teleop-test-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+        # The server, and so the pane, inherits this environment.
+        self.tmux(
+            "new-session", "-d", "-s", "teleop", "-x", "100", "-y", "40", "-c", str(REPO),
+            *command, env=env,
+        )  # fmt: skip
+        try:
+            self.socket_path = Path(self.show("#{socket_path}"))
+        except BaseException:
+            self.kill_server()
+            raise
+
+    def tmux(self, *args: str, env: dict[str, str] | None = None) -> str:
+        result = subprocess.run(
+            [TMUX, "-L", self.socket, "-f", "/dev/null", *args],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            env=env,
+            check=True,
+        )
+        return result.stdout
+
+    def keys(self, *keys: str) -> float:
+        """Type tmux key names (``q``, ``Space``, ``C-c``, ``Enter``); returns when [s]."""
+        self.tmux("send-keys", "-t", "teleop", *keys)
+        return time.monotonic()
+
+    def text(self) -> str:
+        return self.tmux("capture-pane", "-p", "-t", "teleop")
+
+    def show(self, fmt: str) -> str:
+        return self.tmux("display-message", "-p", "-t", "teleop", fmt).strip()
+
+    def kill_server(self) -> float:
+        subprocess.run(
+            [TMUX, "-L", self.socket, "kill-server"], capture_output=True, timeout=10, check=False
+        )
+        return time.monotonic()
+
+    def remove_socket(self) -> None:
+        """kill-server leaves the socket file behind."""
+        self.socket_path.unlink(missing_ok=True)
+
+
+@pytest.fixture
+def terminal_env(ros) -> dict[str, str]:
+    env = ros_environment(ros.domain_id)  # the test's domain, loopback discovery, Fast DDS
+    env.update(PS1="$ ", HISTFILE="/dev/null", PYTHONUNBUFFERED="1")
+    return env
+
+
+@pytest.fixture
+def fake_controller(ros):
+    """Publishes a controller status (WARN, SINGULAR_REGION) at 10 Hz on the default topic."""
+    probe = ros.probe()
+    publisher = probe.create_publisher(DiagnosticArray, STATUS_TOPIC, QoSProfile(depth=10))
+
+    def publish() -> None:
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.WARN,
+            name="rns_controller: reactionless control",
+            message=f"SINGULAR_REGION: {STATUS_DETAIL}",
+            values=[KeyValue(key="state", value="SINGULAR_REGION")],
+        )
+        publisher.publish(DiagnosticArray(status=[status]))
+
+    probe.create_timer(0.1, publish)
+
+
+@pytest.fixture
+def panes():
+    """Every pane made through it; their tmux servers are killed at teardown, whatever happens."""
+    made: list[Pane] = []
+
+    def make(env: dict[str, str], command: list[str]) -> Pane:
+        made.append(Pane(env, command))
+        return made[-1]
+
+    yield make
+    for pane in made:
+        pane.kill_server()
+        pane.remove_socket()
+
+
+def wait(ros, condition: Callable[[], bool], timeout: float, what: str, pane=None) -> None:
+    """Spin the harness until ``condition()``; fail naming ``what`` (and showing the pane)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            screen = f"\n--- pane ---\n{pane.text()}" if pane is not None else ""
+            pytest.fail(f"timed out after {timeout} s waiting for {what}{screen}")
+        ros.spin_for(0.05)
+
+
+def hold(ros, pane: Pane, key: str, duration: float, first_gap: float) -> tuple[float, float]:
+    """A held key as a terminal sends it: press, a first repeat after ``first_gap``, then repeats
+    every 0.1 s for ``duration`` [s]. Returns the times of the press and of the last repeat."""
+    start = last = pane.keys(key)
+    ros.spin_for(first_gap)
+    while last - start < duration:
+        last = pane.keys(key)
+        ros.spin_for(0.1)
+    return start, last
+
+
+def matched(ros, topic: str) -> Callable[[], bool]:
+    """Whether the probe's subscription to ``topic`` is matched with a publisher (data can flow;
+    discovery of a fresh process can take seconds on a loaded machine)."""
+    subscription = next(s for s in ros.probe().subscriptions if s.topic_name == f"/{topic}")
+    return lambda: subscription.get_publisher_count() > 0
+
+
+def received_after(twists, t: float) -> list[tuple[float, TwistStamped]]:
+    return [(r, m) for r, m in zip(twists.received, twists.messages, strict=True) if r > t]
+
+
+@needs_tmux
+def test_keys_drive_cmd_twist_and_ctrl_c_restores_the_terminal(
+    ros, terminal_env, fake_controller, panes
+):
+    key_hold, zero_duration = 1.0, 0.3  # [s]
+    twists = ros.record(TwistStamped, "cmd_twist")
+    pane = panes(terminal_env, ["bash", "--norc", "--noprofile"])
+    command = [*COMMAND, "-p", f"key_hold:={key_hold}", "-p", f"zero_duration:={zero_duration}"]
+    pane.keys("-l", shlex.join(command))
+    pane.keys("Enter")
+    wait(ros, lambda: STATUS_DETAIL in pane.text(), START_TIMEOUT, "the controller status", pane)
+    wait(ros, matched(ros, "cmd_twist"), START_TIMEOUT, "cmd_twist to match", pane)
+    screen = pane.text()
+    assert "controller  SINGULAR_REGION [WARN]  " + STATUS_DETAIL in screen
+    assert "frame     camera (frame_id 'camera')" in screen
+    assert "cmd_twist idle (nothing published)" in screen
+    assert not twists.messages  # nothing before a key
+
+    # --- roll held through an auto-repeat delay shorter than key_hold: no stutter -------------
+    start, last = hold(ros, pane, "q", duration=1.2, first_gap=0.6)
+    assert "angular   x +0.100  y +0.000  z +0.000" in pane.text()
+    wait(ros, lambda: any(_is_zero(m) for m in twists.messages), 3.0, "the release zero", pane)
+    moving = [(r, m) for r, m in zip(twists.received, twists.messages, strict=True)]
+    first_zero = next(i for i, (_, m) in enumerate(moving) if _is_zero(m))
+    held, release = moving[:first_zero], moving[first_zero][0]
+    assert held, "no twist while q was held"
+    for _, msg in held:
+        assert _vector(msg.twist.angular) == (0.1, 0.0, 0.0)
+        assert _vector(msg.twist.linear) == (0.0, 0.0, 0.0)
+        assert msg.header.frame_id == "camera"
+    receipts = [r for r, _ in held]
+    assert receipts[0] - start < 0.5  # the press is published at once
+    assert max(b - a for a, b in itertools.pairwise(receipts)) < 0.3  # at rate
+    assert len(held) >= 0.5 * 20 * (last + key_hold - start)  # ~20 Hz over the hold
+    assert key_hold - 0.15 < release - last < key_hold + 0.5  # zero key_hold after the last repeat
+    # then zeros for zero_duration, then silence
+    ros.spin_for(zero_duration + 0.5)
+    after = received_after(twists, release - 1e-6)
+    assert all(_is_zero(m) for _, m in after)
+    assert len(after) >= 3
+    assert after[-1][0] - release < zero_duration + 0.3
+    assert "cmd_twist idle" in pane.text()
+
+    # --- frame toggle, then yaw in world axes; the stop key zeroes before key_hold ------------
+    pane.keys("f")
+    wait(ros, lambda: "frame     world (frame_id 'world')" in pane.text(), 3.0, "frame world")
+    mark = time.monotonic()
+    hold(ros, pane, "d", duration=0.2, first_gap=0.1)
+    stop = pane.keys("Space")
+    wait(ros, lambda: any(_is_zero(m) for _, m in received_after(twists, stop)), 3.0, "stop zero")
+    during = received_after(twists, mark)
+    yaw = [m for _, m in during if not _is_zero(m)]
+    assert yaw
+    assert all(_vector(m.twist.angular) == (0.0, 0.0, -0.1) for m in yaw)
+    assert {m.header.frame_id for _, m in during} == {"world"}
+    zero_at = next(r for r, m in received_after(twists, stop) if _is_zero(m))
+    assert zero_at - stop < 0.5  # well before key_hold (1.0 s) would have released it
+    assert "last key  ' ' stop" in pane.text()
+
+    # --- faster, pitch held, Ctrl-C: the last word is zero, exit 0, terminal restored ---------
+    pane.keys("+")
+    wait(ros, lambda: "angular 0.125 rad/s" in pane.text(), 3.0, "the faster speed")
+    hold(ros, pane, "w", duration=0.3, first_gap=0.1)
+    assert "angular   x +0.000  y +0.125  z +0.000" in pane.text()
+    interrupt = pane.keys("C-c")
+    wait(ros, lambda: pane.show("#{pane_current_command}") == "bash", 10.0, "the exit", pane)
+    before = [m for r, m in zip(twists.received, twists.messages, strict=True) if r <= interrupt]
+    assert _vector(before[-1].twist.angular) == pytest.approx((0.0, 0.125, 0.0))
+    ros.spin_for(0.3)
+    # (receipt times are when the probe spun: a tick sent while send-keys ran may come later)
+    after = received_after(twists, interrupt)
+    first = next((i for i, (_, m) in enumerate(after) if _is_zero(m)), None)
+    assert first is not None, "no zero twist after Ctrl-C"
+    assert after[first][0] - interrupt < 0.7  # the exit zero, not the key-hold release
+    assert all(_is_zero(m) for _, m in after[first:])
+
+    pane.keys("-l", "echo exit=$?")
+    pane.keys("Enter")
+    wait(ros, lambda: "exit=0" in pane.text(), 5.0, "the exit code", pane)
+    assert "rns_teleop_keyboard: stopped, zero twist sent" in pane.text()
+    pane.keys("-l", "stty -a")
+    pane.keys("Enter")
+    wait(ros, lambda: "icanon" in pane.text(), 5.0, "stty -a", pane)
+    flags = set(pane.text().split())
+    assert {"icanon", "echo", "isig", "ixon"} <= flags  # not -icanon, -echo, ...
+
+
+@needs_tmux
+def test_lost_terminal_publishes_zero_and_exits(ros, terminal_env, panes):
+    key_hold = 3.0  # [s]: the zero must come from the hang-up, long before the key's release
+    twists = ros.record(TwistStamped, "cmd_twist")
+    pane = panes(terminal_env, [*COMMAND, "-p", f"key_hold:={key_hold}", "-p", "rate:=50.0"])
+    pid = int(pane.show("#{pane_pid}"))
+    wait(ros, lambda: "no status yet on /rns_controller/status" in pane.text(), START_TIMEOUT,
+         "the panel", pane)  # fmt: skip
+    wait(ros, matched(ros, "cmd_twist"), START_TIMEOUT, "cmd_twist to match", pane)
+    pane.keys("a")
+    wait(ros, lambda: len(twists) >= 10, 5.0, "yaw twists", pane)  # matched and flowing
+    assert all(_vector(m.twist.angular) == (0.0, 0.0, 0.1) for m in twists.messages)
+
+    lost = pane.kill_server()
+    wait(ros, lambda: _process_gone(pid), 10.0, "the process to exit")
+    ros.spin_for(0.2)
+    zeros = [(r, m) for r, m in received_after(twists, lost) if _is_zero(m)]
+    assert zeros, "no zero twist after the terminal went away"
+    assert zeros[0][0] - lost < 1.5 < key_hold
+    assert _is_zero(twists.latest())
+
+
+def _process_gone(pid: int) -> bool:
+    """True once ``pid`` has exited (reaped, or a zombie of a parent that does not reap)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return True
+    return stat.rsplit(")", 1)[1].split()[0] in {"Z", "X"}
+
+
+def _run(args: list[str], ros, **kwargs) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [*COMMAND[:3], *args],
+        env=ros_environment(ros.domain_id),
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        **kwargs,
+    )
+
+
+def test_without_a_terminal_it_exits_2_with_a_clear_message(ros):
+    result = _run([], ros, stdin=subprocess.DEVNULL)
+    assert result.returncode == 2
+    assert "stdin is not a terminal" in result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+
+
+def test_bad_parameter_is_one_line_and_exit_2(ros):
+    result = _run(["--ros-args", "-p", "key_hold:=0.0"], ros, stdin=subprocess.DEVNULL)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert "key_hold" in lines[0]
+    assert "Traceback" not in result.stderr
+
+
+def test_help_lists_every_parameter(ros):
+    result = _run(["--help"], ros, stdin=subprocess.DEVNULL)
+    assert result.returncode == 0
+    assert result.stdout.startswith("usage: rns_teleop_keyboard")
+    for spec in PARAMETERS:
+        assert f"  {spec.name} = " in result.stdout
+
+
+def test_config_yaml_mirrors_the_declared_defaults():
+    content = yaml.safe_load((config_dir() / "teleop_keyboard.yaml").read_text())
+    assert content["/**"]["ros__parameters"] == {spec.name: spec.default for spec in PARAMETERS}

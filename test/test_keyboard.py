@@ -1,0 +1,288 @@
+"""Key-hold state machine, key map and panel of the keyboard teleop (no DDS, no terminal)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from rns_ros.core.controller import TwistFrame
+from rns_ros.core.errors import ConfigError
+from rns_ros.keyboard import (
+    KEY_HELP,
+    KEY_MAP,
+    MIN_SPEED,
+    Action,
+    ControllerStatus,
+    KeyboardTeleop,
+    Speeds,
+    TeleopCommand,
+    render_panel,
+    split_keys,
+    status_line,
+)
+
+HOLD = 0.6  # [s]
+ZEROS = 0.5  # [s]
+SETTINGS = {
+    "angular_speed": 0.1,
+    "linear_speed": 0.05,
+    "key_hold": HOLD,
+    "zero_duration": ZEROS,
+    "speed_step": 1.25,
+    "max_angular_speed": 1.0,
+    "max_linear_speed": 0.5,
+}
+ZERO3 = (0.0, 0.0, 0.0)
+
+
+def teleop(**overrides) -> KeyboardTeleop:
+    return KeyboardTeleop(**{**SETTINGS, **overrides})
+
+
+def auto_repeat(keys: KeyboardTeleop, key: str, start: float, delay: float, stop: float) -> float:
+    """A held key as a terminal sends it: press, first repeat after ``delay``, then 30 Hz up to
+    ``stop`` [s]; returns the time of the newest repeat [s]."""
+    keys.press(key, start)
+    last = start
+    t = start + delay
+    while t <= stop:
+        keys.press(key, t)
+        last = t
+        t += 1.0 / 30.0
+    return last
+
+
+@pytest.mark.parametrize(
+    ("key", "angular", "linear"),
+    [
+        ("q", (0.1, 0, 0), ZERO3),
+        ("e", (-0.1, 0, 0), ZERO3),
+        ("w", (0, 0.1, 0), ZERO3),
+        ("s", (0, -0.1, 0), ZERO3),
+        ("a", (0, 0, 0.1), ZERO3),
+        ("d", (0, 0, -0.1), ZERO3),
+        ("i", ZERO3, (0.05, 0, 0)),
+        ("k", ZERO3, (-0.05, 0, 0)),
+        ("j", ZERO3, (0, 0.05, 0)),
+        ("l", ZERO3, (0, -0.05, 0)),
+        ("u", ZERO3, (0, 0, 0.05)),
+        ("o", ZERO3, (0, 0, -0.05)),
+    ],
+)
+def test_each_motion_key_drives_one_axis_with_its_sign(key, angular, linear):
+    keys = teleop()
+    event = keys.press(key, 0.0)
+    assert event.binding.action is Action.MOVE
+    assert event.urgent  # a start is published at once
+    assert keys.command(0.1) == TeleopCommand(angular, linear, TwistFrame.CAMERA)
+
+
+def test_auto_repeat_gaps_shorter_than_key_hold_keep_the_command():
+    keys = teleop()
+    # initial auto-repeat delay 0.55 s < key_hold: never a zero while the key is down
+    auto_repeat(keys, "a", 0.0, delay=0.55, stop=2.0)
+    for k in range(200):
+        t = k * 0.01
+        assert keys.tick(t).angular == (0.0, 0.0, 0.1), t
+
+
+def test_a_gap_longer_than_key_hold_releases_to_zero():
+    keys = teleop()
+    last = auto_repeat(keys, "w", 0.0, delay=0.5, stop=1.0)
+    assert keys.tick(last + HOLD - 0.01).angular == (0.0, 0.1, 0.0)
+    assert keys.tick(last + HOLD + 0.01).is_zero
+    assert keys.held_axes(last + HOLD + 0.01) == {}
+
+
+def test_initial_delay_longer_than_key_hold_stutters():
+    """Why key_hold must exceed the terminal's auto-repeat delay."""
+    keys = teleop()
+    keys.press("q", 0.0)
+    assert keys.command(HOLD + 0.05).is_zero
+    keys.press("q", HOLD + 0.1)  # the late first repeat starts it again
+    assert not keys.command(HOLD + 0.1).is_zero
+
+
+def test_zeros_follow_a_release_for_zero_duration_then_silence():
+    keys = teleop()
+    assert keys.tick(0.0) is None  # idle: nothing to publish
+    keys.press("d", 0.0)
+    assert not keys.tick(0.05).is_zero
+    release = HOLD + 0.05
+    ticks = {t: keys.tick(release + t) for t in (0.0, 0.2, ZEROS)}
+    assert all(command is not None and command.is_zero for command in ticks.values())
+    assert keys.sending
+    assert keys.tick(release + ZEROS + 0.05) is None
+    assert not keys.sending
+
+
+def test_stop_key_zeroes_at_once_and_forgets_held_keys():
+    keys = teleop()
+    auto_repeat(keys, "q", 0.0, delay=0.3, stop=0.5)
+    event = keys.press(" ", 0.51)
+    assert event.binding.action is Action.STOP
+    assert event.urgent
+    assert keys.command(0.51).is_zero
+    assert keys.tick(0.51).is_zero  # published now, not after key_hold
+    assert keys.tick(0.51 + ZEROS + 0.01) is None
+
+
+def test_stop_when_idle_still_sends_zeros():
+    keys = teleop()
+    assert keys.press(" ", 0.0).urgent
+    assert keys.tick(0.0).is_zero
+
+
+def test_newest_direction_of_an_axis_wins():
+    keys = teleop()
+    keys.press("q", 0.0)
+    event = keys.press("e", 0.1)
+    assert event.urgent
+    assert keys.command(0.2).angular == (-0.1, 0.0, 0.0)
+
+
+def test_two_axes_pressed_within_key_hold_combine():
+    keys = teleop()
+    keys.press("q", 0.0)
+    keys.press("a", 0.1)
+    assert keys.command(0.2).angular == (0.1, 0.0, 0.1)
+    assert keys.command(HOLD + 0.05).angular == (0.0, 0.0, 0.1)  # q no longer repeats
+
+
+def test_repeats_are_not_urgent():
+    keys = teleop()
+    assert keys.press("w", 0.0).urgent
+    assert not keys.press("w", 0.5).urgent
+
+
+def test_speed_keys_scale_both_speeds_within_bounds():
+    keys = teleop()
+    keys.press("+", 0.0)
+    assert keys.speeds == pytest.approx(Speeds(0.125, 0.0625))
+    keys.press("-", 0.0)
+    assert keys.speeds == pytest.approx(Speeds(0.1, 0.05))
+    for _ in range(100):
+        keys.press("=", 0.0)
+    assert keys.speeds == Speeds(1.0, 0.5)  # max_angular_speed, max_linear_speed
+    for _ in range(100):
+        keys.press("_", 0.0)
+    assert keys.speeds == Speeds(MIN_SPEED, MIN_SPEED)
+
+
+def test_speed_change_applies_to_a_held_key_at_once():
+    keys = teleop()
+    keys.press("a", 0.0)
+    event = keys.press("+", 0.1)
+    assert event.urgent
+    assert keys.command(0.1).angular == pytest.approx((0.0, 0.0, 0.125))
+
+
+def test_frame_key_cycles_camera_world_base_and_stops():
+    keys = teleop()
+    keys.press("w", 0.0)
+    frames = []
+    for _ in range(3):
+        event = keys.press("f", 0.1)
+        frames.append(keys.frame)
+    assert frames == [TwistFrame.WORLD, TwistFrame.BASE, TwistFrame.CAMERA]
+    assert event.binding.action is Action.FRAME
+    assert keys.command(0.1).is_zero  # motion does not carry over to new axes
+    assert teleop(frame="base").command(0.0).frame is TwistFrame.BASE
+
+
+@pytest.mark.parametrize("key", ["x", "W", "1", "\r", "\x1b", "\x1b[A", "\x1bq", "\x1a", "ä"])
+def test_unknown_keys_are_ignored(key):
+    keys = teleop()
+    keys.press("q", 0.0)
+    before = (keys.command(0.1), keys.speeds, keys.frame)
+    event = keys.press(key, 0.1)
+    assert event.binding is None
+    assert not event.urgent
+    assert (keys.command(0.1), keys.speeds, keys.frame) == before
+    assert not keys.quit_requested
+
+
+@pytest.mark.parametrize("key", ["Q", "\x03", "\x04", "\x1c"])
+def test_quit_keys_request_quit_and_stop(key):
+    keys = teleop()
+    keys.press("a", 0.0)
+    event = keys.press(key, 0.1)
+    assert event.binding.action is Action.QUIT
+    assert keys.quit_requested
+    assert keys.command(0.1).is_zero
+
+
+def test_commands_are_immutable():
+    command = teleop().command(0.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        command.frame = TwistFrame.WORLD
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"key_hold": 0.0}, "key_hold"),
+        ({"speed_step": 1.0}, "speed_step"),
+        ({"zero_duration": -1.0}, "zero_duration"),
+        ({"angular_speed": 2.0}, "angular_speed"),
+        ({"linear_speed": 0.0}, "linear_speed"),
+        ({"frame": "tool"}, "twist frame"),
+    ],
+)
+def test_bad_settings_are_config_errors(overrides, message):
+    with pytest.raises(ConfigError, match=message):
+        teleop(**overrides)
+
+
+def test_key_map_has_no_letter_for_two_actions_and_help_names_every_motion_key():
+    help_text = " ".join(KEY_HELP)
+    for key, binding in KEY_MAP.items():
+        if binding.action is Action.MOVE:
+            assert f"{key}/" in help_text or f"/{key}" in help_text, key
+
+
+def test_split_keys_keeps_escape_sequences_whole():
+    text = "q\x1b[Aw\x1b[1;5D\x1bOPa\x1bq\x1b"
+    assert split_keys(text) == ["q", "\x1b[A", "w", "\x1b[1;5D", "\x1bOP", "a", "\x1bq", "\x1b"]
+    # none of an arrow key's characters acts as a key ('[' and 'A' alone are unbound anyway)
+    keys = teleop()
+    for key in split_keys("\x1b[D\x1b[C"):
+        assert keys.press(key, 0.0).binding is None
+
+
+def test_status_line_shows_state_level_message_and_staleness():
+    status = ControllerStatus("SINGULAR_REGION", 1, "SINGULAR_REGION: sigma_min 0.1", 10.0)
+    line = status_line(status, 10.2, "/rns_controller/status")
+    assert line == "controller  SINGULAR_REGION [WARN]  sigma_min 0.1"
+    assert "no update for 3.0 s" in status_line(status, 13.0, "/x")
+    assert status_line(ControllerStatus("OK", 0, "OK", 0.0), 0.0, "/x") == "controller  OK [OK]"
+    assert "no status yet on /rns_controller/status" in status_line(
+        None, 0.0, "/rns_controller/status"
+    )
+
+
+def test_panel_shows_command_frame_speeds_status_and_help():
+    keys = teleop()
+    keys.press("f", 0.0)
+    event = keys.press("d", 0.0)
+    lines = render_panel(
+        keys.command(0.1),
+        keys.speeds,
+        "controller  OK [OK]",
+        frame_id="world",
+        sending=True,
+        last_key=event,
+    )
+    text = "\n".join(lines)
+    assert "frame     world (frame_id 'world')" in text
+    assert "angular 0.100 rad/s   linear 0.050 m/s" in text
+    assert "angular   x +0.000  y +0.000  z -0.100  [rad/s]" in text
+    assert "linear    x +0.000  y +0.000  z +0.000  [m/s]" in text
+    assert "cmd_twist sending" in text
+    assert "last key  'd' yaw -" in text
+    assert "controller  OK [OK]" in lines
+    assert lines[-len(KEY_HELP) :] == list(KEY_HELP)
+    assert max(len(line) for line in lines) <= 80
+    idle = render_panel(keys.command(5.0), keys.speeds, "", sending=False)
+    assert "cmd_twist idle (nothing published)" in idle

@@ -13,6 +13,7 @@ import ast
 import fnmatch
 import json
 import os
+import pty
 import re
 import shutil
 import signal
@@ -571,6 +572,22 @@ def test_ros2_run_parity_installed_executables_with_ros_args(colcon_install, tmp
                 remappings={**arm_states, "cmd_twist": "cmd_vel"},
             ),
         }
+        # the keyboard teleop needs a terminal: a pseudo-terminal stands in for the user's
+        teleop_twists = ros.record(TwistStamped, "teleop_twist")
+        user, terminal = pty.openpty()
+        teleop = subprocess.Popen(
+            processes.command(
+                "rns_teleop_keyboard",
+                {"rate": 25.0},
+                remappings={"cmd_twist": "teleop_twist"},
+            ),
+            env=processes.env,
+            stdin=terminal,
+            stdout=terminal,
+            stderr=terminal,
+            start_new_session=True,
+        )
+        os.close(terminal)
         probe = ros.probe()
 
         def everyone_up() -> bool:
@@ -587,6 +604,25 @@ def test_ros2_run_parity_installed_executables_with_ros_args(colcon_install, tmp
         reference_rate = (len(references) - counts[1]) / 2.0
         exit_codes = processes.stop(timeout=10.0)
         outputs = {name: processes.output(p) for name, p in started.items()}
+
+        def rolling() -> bool:
+            os.write(user, b"q")  # roll +, as auto-repeat would send it
+            ros.spin_for(0.05)
+            return any(m.twist.angular.x > 0.0 for m in teleop_twists.messages)
+
+        try:
+            teleop_rolled = ros.spin_until(rolling, timeout=20.0)
+            os.write(user, b"Q")  # quit
+            ros.spin_until(lambda: teleop.poll() is not None, timeout=10.0)
+        finally:
+            if teleop.poll() is None:
+                teleop.kill()
+            teleop.wait(timeout=5)
+            os.close(user)
+
+    assert teleop_rolled, "rns_teleop_keyboard published no roll twist on the remapped topic"
+    assert teleop.returncode == 0
+    assert teleop_twists.latest().twist.angular.x == 0.0  # quitting sends a zero
 
     assert exit_codes == [0, 0, 0, 0], outputs
     assert arm_rate == pytest.approx(50.0, rel=0.2), "simulator --params-file publish_rate: 50"

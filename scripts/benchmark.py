@@ -2,6 +2,8 @@
 """rns_ros benchmarks on this machine: numbers, not tests (nothing here asserts).
 
 Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller] [--samples N]
+        .venv/bin/python scripts/benchmark.py --only latency [--commands N] [--rates HZ ...]
+                                              [--domain-id ID]
 
 core       median / p99 of one FreeFloatingState, the DLS and SC inverses, one P_RNS projection.
 simulator  step time (median, p99) of FreeFloatingSimulator at 1 ms RK4 in kinematic and dynamic
@@ -11,14 +13,65 @@ controller one evaluation of the law (4.5)/(4.15) per method, and one controller
            held over a 10 ms period) with the naive and the midpoint hold correction; "tick" adds
            the FreeFloatingState of the sampled robot, i.e. what rns_controller computes per period.
            Goal (controller issue): <= 100 us median step for dls and sc.
+latency    end to end, over DDS on localhost: an operator twist's publish() on cmd_twist to the
+           reception of the first joint_references that reflects it, p50 / p99 / max / mean over
+           --commands (default 1000) commands, per controller rate (default 100 and 500 Hz).
+           Goal: p99 <= one control period + 2 ms. Opt-in (not in the default run): it starts
+           ROS processes and takes ~30-40 s per rate with a responsive controller, up to ~2.5 min
+           per rate when it stalls (each lost command costs MATCH_TIMEOUT).
+
+Latency method (measure_latency):
+  * rns_controller runs as a subprocess (the installed console script, its own executor as
+    deployed: rns_ros.nodes.runner's EventsExecutor), with method dls, wrist_gain (k_g) 0,
+    the given rate, all other parameters at their defaults (midpoint hold, predict_state on).
+    Both sides are forced onto ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and --domain-id
+    (default 55): the environment variables are overwritten, not defaulted.
+  * This process has one plain node on a private Context and a SingleThreadedExecutor spun in
+    the main loop (no threads): it publishes a static joint_states (the satellite-observation
+    angles, zero velocities, reliable, 100 Hz, as the simulator would), the twists (TwistStamped
+    in the world frame, best effort depth 1 like rns_operator) and receives joint_references
+    (best effort, depth 10). With a fixed configuration and k_g = 0 the controller's output
+    velocity is a fixed function of omega, so a reference identifies its command by its velocities.
+  * Commands are about world x with 8 codes: command k is +-LATENCY_SPEEDS[(k // 2) % 4], sign +
+    for even k, so consecutive commands always differ. Before measuring, each code is held until
+    two consecutive references agree: that velocity vector is the code's signature. A reference
+    reflects command k when its velocities are within MATCH_TOLERANCE (relative) of code k's
+    signature, while the codes are >= 20 % apart.
+  * Closed loop: command k is sent, the main loop spins until the first reference matching it
+    arrives (or MATCH_TIMEOUT = 0.45 s, below the controller's 0.5 s command_timeout: counted as
+    lost, left out of the percentiles, and "met" requires none lost), then waits a random
+    15-25 ms (uniform, seeded) before command k + 1 (about 35-45 commands/s with a responsive
+    controller). The random gap spans a multiple of both control periods, so the send instant is
+    uniformly spread over the controller's timer phase; only one command is ever in flight, so
+    the controller's depth-1 subscription never drops one.
+  * Latency = time.perf_counter() at the reference's subscription callback minus just before
+    publish(). It includes: our serialization and DDS to the controller, the controller's executor
+    picking the twist up, the tick (state, midpoint law, status, publish; with the default
+    immediate_reaction a changed command is served at once, otherwise it waits for the next
+    timer tick, uniform in [0, T)), DDS back, and our own executor's
+    wake-up and deserialization (not subtracted). The lines under the table split each latency at
+    the controller's publish: the reference's header stamp (the controller's system clock, same
+    machine) against time.time() at our callback gives "controller publish -> our callback" (DDS
+    plus our executor, ~1-1.5 ms p50 on the 2-core dev VM), the rest is "send -> controller
+    publish". They also give the interval between references (should be the period) and the
+    controller process's CPU load (/proc) during the measurement.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+from geometry_msgs.msg import TwistStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.core import (
     FreeFloatingState,
@@ -31,6 +84,7 @@ from rns_ros.core.control import reactionless_camera_control, wrist_offset
 from rns_ros.core.controller import ControllerSettings, ReactionlessController
 from rns_ros.core.fastmath import has_fast_solve
 from rns_ros.core.simulation import FreeFloatingSimulator
+from rns_ros.harness import Harness, ProcessStack
 from rns_ros.resources import default_model_config
 
 SATELLITE_OBSERVATION_RAD = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0])
@@ -121,12 +175,335 @@ def controller(robot, samples: int) -> None:
     print(row("tick dls midpoint (+ sampled state)", timings(tick, samples)))
 
 
+# --- latency ------------------------------------------------------------------------------------
+#: Command speeds about world x [rad/s]; command k is +-LATENCY_SPEEDS[(k // 2) % 4] (+ for even k).
+LATENCY_SPEEDS = (0.10, 0.15, 0.20, 0.25)
+LATENCY_CODES = 2 * len(LATENCY_SPEEDS)
+#: A reference matches a code when |v - signature| <= MATCH_TOLERANCE |signature|.
+MATCH_TOLERANCE = 1e-3
+#: A command whose reference has not arrived after this [s] is lost: below the controller's
+#: command_timeout (0.5 s), after which the held command ramps down and matches no code.
+MATCH_TIMEOUT = 0.45
+#: Random pause after a command's reference arrived, before the next command [s].
+LATENCY_GAP = (0.015, 0.025)
+#: Publish rate of the static joint_states [Hz].
+JOINT_STATE_RATE = 100.0
+#: Goal: p99 latency <= one control period + this [s].
+LATENCY_MARGIN = 2e-3
+BEST_EFFORT_1 = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def code_of(k: int) -> int:
+    """Code (0..LATENCY_CODES-1) of command k."""
+    return k % LATENCY_CODES
+
+
+def code_speed(code: int) -> float:
+    """Angular speed about world x of a code [rad/s]: even codes +, odd codes -."""
+    return (1.0 if code % 2 == 0 else -1.0) * LATENCY_SPEEDS[code // 2]
+
+
+@dataclass
+class LatencyRun:
+    """One measure_latency run.
+
+    Attributes:
+        rate: controller rate [Hz].
+        latencies: twist publish() -> first matching reference's callback [s], per command
+            (command order; NaN for a lost command).
+        matched: command index of each match, in the order the matches happened.
+        decoded: code of every reference received while measuring (-1: matches no code).
+        intervals: time between consecutive references received while measuring [s].
+        transport: controller publish (the matching reference's header stamp) -> our callback
+            (wall clock) [s], per command (NaN for a lost command).
+        mismatch: largest |v - signature| / |signature| of the matching references.
+        duration: wall time of the measurement [s].
+        controller_cpu: CPU time of the controller process during the measurement / duration.
+    """
+
+    rate: float
+    latencies: np.ndarray
+    matched: list[int]
+    decoded: list[int]
+    intervals: np.ndarray
+    transport: np.ndarray
+    mismatch: float
+    duration: float
+    controller_cpu: float
+
+    @property
+    def period(self) -> float:
+        return 1.0 / self.rate
+
+    @property
+    def lost(self) -> int:
+        return int(np.count_nonzero(np.isnan(self.latencies)))
+
+    @property
+    def goal(self) -> float:
+        return self.period + LATENCY_MARGIN
+
+
+class _LatencyProbe:
+    """The measuring side: one node on the harness's executor, spun by this class's loop."""
+
+    def __init__(self, stack: Harness, joint_names: Sequence[str]) -> None:
+        self.executor = stack.executor
+        node = stack.probe("rns_latency_probe")
+        self.clock = node.get_clock()
+        self.twist = node.create_publisher(TwistStamped, "cmd_twist", BEST_EFFORT_1)
+        self.joints = node.create_publisher(JointState, "joint_states", QoSProfile(depth=10))
+        self.joint_state = JointState(
+            name=list(joint_names),
+            position=SATELLITE_OBSERVATION_RAD.tolist(),
+            velocity=[0.0] * len(joint_names),
+        )
+        node.create_subscription(
+            JointTrajectory,
+            "joint_references",
+            self._on_reference,
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT),
+        )
+        self.signatures: np.ndarray | None = None  # (codes, n) once calibrated
+        self.recent: deque[np.ndarray] = deque(maxlen=2)
+        self.received = 0
+        # (perf_counter, code) of every reference while recording
+        self.log: list[tuple[float, int]] | None = None
+        self.pending: int | None = None  # code awaited
+        self.sent = 0.0
+        self.arrived = 0.0
+        self.transport = 0.0
+        self.mismatch = 0.0
+        self.next_state = time.perf_counter()
+
+    def _on_reference(self, msg: JointTrajectory) -> None:
+        now = time.perf_counter()
+        wall = time.time()
+        velocity = np.asarray(msg.points[0].velocities, dtype=float) if msg.points else None
+        self.received += 1
+        if velocity is None:
+            return
+        self.recent.append(velocity)
+        if self.signatures is None:
+            return
+        errors = np.linalg.norm(self.signatures - velocity, axis=1) / self._norms
+        code = int(np.argmin(errors))
+        if errors[code] > MATCH_TOLERANCE:
+            code = -1
+        if self.log is not None:
+            self.log.append((now, code))
+        if self.pending is not None and code == self.pending:
+            self.pending = None
+            self.arrived = now
+            self.transport = wall - (msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
+            self.mismatch = max(self.mismatch, float(errors[code]))
+
+    def calibrate(self, signatures: np.ndarray) -> None:
+        self.signatures = signatures
+        self._norms = np.linalg.norm(signatures, axis=1)
+
+    def send(self, speed: float, code: int | None = None) -> None:
+        msg = TwistStamped()
+        msg.header.frame_id = "world"
+        msg.header.stamp = self.clock.now().to_msg()
+        msg.twist.angular.x = speed
+        self.pending = code
+        self.sent = time.perf_counter()
+        self.twist.publish(msg)
+
+    def spin_until(self, condition: Callable[[], bool], deadline: float) -> bool:
+        """Spin (and publish joint_states on time) until condition() or perf_counter deadline."""
+        while True:
+            now = time.perf_counter()
+            if now >= self.next_state:
+                self.joint_state.header.stamp = self.clock.now().to_msg()
+                self.joints.publish(self.joint_state)
+                self.next_state = max(self.next_state + 1.0 / JOINT_STATE_RATE, now)
+            if condition():
+                return True
+            if now >= deadline:
+                return False
+            wait = min(deadline, self.next_state) - time.perf_counter()
+            self.executor.spin_once(timeout_sec=max(wait, 0.0))
+
+
+def measure_latency(
+    rate: float,
+    commands: int,
+    domain_id: int,
+    joint_names: Sequence[str],
+    *,
+    seed: int = 0,
+    executable: str = "rns_controller",
+    match_timeout: float = MATCH_TIMEOUT,
+    parameters: dict | None = None,
+) -> LatencyRun:
+    """End-to-end twist -> joint reference latency against an rns_controller subprocess at
+    ``rate`` [Hz] (method in the module docstring). ``executable``: another program taking the
+    controller's ``--ros-args`` (a name in the venv / on PATH, or a path), for comparisons.
+    ``match_timeout`` [s] and extra controller ``parameters`` (e.g. a longer command_timeout
+    with a longer match_timeout: stalls then delay commands instead of losing them).
+
+    Raises:
+        RuntimeError: the controller did not start, or a code could not be calibrated.
+    """
+    # Both sides: never beyond this machine, only this domain (overwrite, do not default).
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+    rng = np.random.default_rng(seed)
+    with ProcessStack(domain_id) as processes, Harness(domain_id) as stack:
+        probe = _LatencyProbe(stack, joint_names)
+        controller = processes.start(
+            executable,
+            {"method": "dls", "rate": float(rate), "wrist_gain": 0.0, **(parameters or {})},
+        )
+
+        def fail(what: str) -> RuntimeError:
+            return RuntimeError(f"{what} (rate {rate} Hz):\n{processes.output(controller)}")
+
+        started = probe.spin_until(
+            lambda: probe.received >= 3 or controller.poll() is not None,
+            time.perf_counter() + 30.0,
+        )
+        if not started or controller.poll() is not None:
+            raise fail("rns_controller published no joint_references")
+        signatures = []
+        for code in range(LATENCY_CODES):
+            for _attempt in range(5):
+                before = probe.recent[-1].copy()
+                probe.send(code_speed(code))
+                start = probe.received
+
+                def steady(start=start, before=before) -> bool:
+                    # a new, nonzero velocity, twice in a row
+                    last = probe.recent[-1]
+                    return (
+                        probe.received - start >= 2
+                        and np.linalg.norm(last) > 0.0
+                        and not np.allclose(last, before, rtol=1e-6, atol=0.0)
+                        and np.allclose(last, probe.recent[-2], rtol=1e-9, atol=0.0)
+                    )
+
+                if probe.spin_until(steady, time.perf_counter() + 1.0):
+                    signatures.append(probe.recent[-1].copy())
+                    break
+            else:
+                raise fail(f"no steady joint_references for code {code}")
+        signatures = np.array(signatures)
+        norms = np.linalg.norm(signatures, axis=1)
+        gaps = np.linalg.norm(signatures[:, None] - signatures[None], axis=2) / norms[:, None]
+        if gaps[~np.eye(LATENCY_CODES, dtype=bool)].min() < 100 * MATCH_TOLERANCE:
+            raise fail(f"code signatures too close to tell apart: {signatures}")
+        probe.calibrate(signatures)
+
+        latencies = np.full(commands, np.nan)
+        transport = np.full(commands, np.nan)
+        matched = []
+        probe.log = []
+        begin = next_send = time.perf_counter()
+        cpu = _cpu_seconds(controller.pid)
+        for k in range(commands):
+            probe.spin_until(lambda: False, next_send)
+            code = code_of(k)
+            probe.send(code_speed(code), code)
+            if probe.spin_until(lambda: probe.pending is None, probe.sent + match_timeout):
+                latencies[k] = probe.arrived - probe.sent
+                transport[k] = probe.transport
+                matched.append(k)
+            probe.pending = None
+            next_send = time.perf_counter() + rng.uniform(*LATENCY_GAP)
+        duration = time.perf_counter() - begin
+        cpu = (_cpu_seconds(controller.pid) - cpu) / duration
+        log = np.array(probe.log, dtype=float).reshape(-1, 2)
+        probe.log = None
+    return LatencyRun(
+        rate=float(rate),
+        latencies=latencies,
+        matched=matched,
+        decoded=log[:, 1].astype(int).tolist(),
+        intervals=np.diff(log[:, 0]),
+        transport=transport,
+        mismatch=probe.mismatch,
+        duration=duration,
+        controller_cpu=cpu,
+    )
+
+
+def latency(robot, commands: int, rates: Sequence[float], domain_id: int) -> list[LatencyRun]:
+    runs = [measure_latency(rate, commands, domain_id, robot.joint_names) for rate in rates]
+    print(
+        f"\nlatency: cmd_twist publish() -> first joint_references reflecting it "
+        f"(rns_controller subprocess, dls, k_g = 0, domain {domain_id}, localhost)"
+    )
+    header = ("rate [Hz]", "period [ms]", "n", "lost", "p50 [ms]", "p99 [ms]", "max [ms]")
+    print("".join(f"{h:>12}" for h in (*header, "mean [ms]", "goal [ms]", "met")))
+    for run in runs:
+        ms = run.latencies[~np.isnan(run.latencies)] * 1e3
+        p50, p99, top, mean = _stats(ms)
+        met = "yes" if p99 <= run.goal * 1e3 and run.lost == 0 else "no"
+        print(
+            f"{run.rate:>12.0f}{run.period * 1e3:>12.2f}{len(ms):>12d}{run.lost:>12d}"
+            + "".join(f"{value:>12.2f}" for value in (p50, p99, top, mean, run.goal * 1e3))
+            + f"{met:>12}"
+        )
+    print("split at the controller's publish (its header stamp vs wall clock), p50 / p99 [ms]:")
+    for run in runs:
+        inbound = _stats((run.latencies - run.transport) * 1e3)
+        outbound = _stats(run.transport * 1e3)
+        gaps = _stats(run.intervals * 1e3)
+        print(
+            f"  {run.rate:.0f} Hz: send -> controller publish {inbound[0]:.2f} / {inbound[1]:.2f}, "
+            f"controller publish -> our callback {outbound[0]:.2f} / {outbound[1]:.2f}; "
+            f"reference interval {gaps[0]:.2f} / {gaps[1]:.2f} (max {gaps[2]:.1f}); controller "
+            f"CPU {run.controller_cpu:.0%} of a core; {len(run.latencies)} commands in "
+            f"{run.duration:.1f} s"
+        )
+    return runs
+
+
+def _stats(values: np.ndarray) -> tuple[float, float, float, float]:
+    """p50, p99, max, mean of the finite values (NaN if none)."""
+    values = values[np.isfinite(values)]
+    if not len(values):
+        return (np.nan,) * 4
+    p50, p99 = np.percentile(values, [50, 99])
+    return float(p50), float(p99), float(values.max()), float(values.mean())
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process so far [s] (Linux /proc; NaN elsewhere)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        description=__doc__.splitlines()[0],
+        epilog="Without --only: core, simulator and controller. latency is opt-in (--only "
+        "latency): it starts rns_controller subprocesses and takes ~0.5-2.5 min per rate.",
+    )
     parser.add_argument(
-        "--only", choices=("core", "simulator", "controller"), help="run one section"
+        "--only",
+        choices=("core", "simulator", "controller", "latency"),
+        help="run one section (latency only this way)",
     )
     parser.add_argument("--samples", type=int, default=5000, help="repetitions per operation")
+    parser.add_argument(
+        "--commands", type=int, default=1000, help="latency: operator commands per rate"
+    )
+    parser.add_argument(
+        "--rates",
+        type=float,
+        nargs="+",
+        default=[100.0, 500.0],
+        help="latency: controller rates [Hz]",
+    )
+    parser.add_argument(
+        "--domain-id", type=int, default=55, help="latency: ROS_DOMAIN_ID of every node"
+    )
     args = parser.parse_args()
     robot = load_model(default_model_config())
     if args.only in (None, "core"):
@@ -135,6 +512,8 @@ def main() -> None:
         simulator(robot, args.samples)
     if args.only in (None, "controller"):
         controller(robot, args.samples)
+    if args.only == "latency":
+        latency(robot, args.commands, args.rates, args.domain_id)
 
 
 if __name__ == "__main__":

@@ -143,6 +143,8 @@ class ReactionlessController:
         self.settings = settings or ControllerSettings()
         self._wrist_reference: np.ndarray | None = None
         self._reference: np.ndarray | None = None
+        # the hold in progress: theta_ref at its start and theta_dot held (for cut_hold)
+        self._hold: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def wrist_reference(self) -> np.ndarray | None:
@@ -158,10 +160,26 @@ class ReactionlessController:
         """Take p_w^init and theta_ref from ``state`` (start, or after the operator idled)."""
         self._wrist_reference = wrist_offset(state) if state.wrist is not None else None
         self._reference = state.theta.copy()
+        self._hold = None
 
     def resync(self, state: FreeFloatingState) -> None:
         """Restart theta_ref at the measured angles, keeping the wrist reference."""
         self._reference = state.theta.copy()
+        self._hold = None
+
+    def cut_hold(self, elapsed: float) -> None:
+        """End the hold in progress after ``elapsed`` [s] instead of the full period T.
+
+        A new command is served at once rather than at the next period; theta_ref then stands
+        where the held theta_dot brought it: theta_ref = theta_ref,start + elapsed * theta_dot,
+        with ``elapsed`` clipped to [0, T]. Without a hold in progress this does nothing.
+        """
+        if self._hold is None:
+            return
+        start, theta_dot = self._hold
+        elapsed = min(max(float(elapsed), 0.0), self.settings.period)
+        self._reference = start + elapsed * theta_dot
+        self._hold = None
 
     def configure(self, settings: ControllerSettings) -> None:
         """Swap settings between steps (run-time parameter changes)."""
@@ -196,6 +214,7 @@ class ReactionlessController:
         theta_dot = output.joint_velocity
         start = self._reference
         self._reference = start + settings.period * theta_dot
+        self._hold = (start, theta_dot)
         return ControllerStep(
             output=output,
             joint_velocity=theta_dot,

@@ -55,6 +55,7 @@ from rns_ros.core.teleop import (
     CommandGate,
     ControllerState,
     GateOutput,
+    TwistCommand,
     twist_frame_ids,
     validate_twist,
 )
@@ -76,6 +77,9 @@ SUMMARY = "Reactionless camera-pointing controller: twist in, joint references o
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
+#: Shortest interval between two ticks when commands are served at once [s]: a command flood
+#: cannot make the controller compute faster than this; a change within it waits for the tick.
+MIN_TICK_INTERVAL = 1e-3
 
 PARAMETERS = (
     MODEL_CONFIG,
@@ -163,6 +167,12 @@ PARAMETERS = (
         read_only=False,
     ),
     ParameterSpec(
+        "immediate_reaction",
+        True,
+        "Serve a changed command at once and restart the period (the hold in progress is cut "
+        "short) instead of at the next tick: latency ~2 ms instead of up to one period",
+    ),
+    ParameterSpec(
         "predict_state",
         True,
         "Extrapolate the last joint_states by their age at their measured rates before "
@@ -211,6 +221,9 @@ class ControllerNode(Node):
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
         self._stopped = True
         self._predict = params["predict_state"]
+        self._immediate = params["immediate_reaction"]
+        self._last_tick = -np.inf  # monotonic time of the last tick [s]
+        self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._theta_rate: np.ndarray | None = None
         self._theta_stamp = None
 
@@ -262,6 +275,19 @@ class ControllerNode(Node):
             self.get_logger().error(f"rejected cmd_twist: {exc}", throttle_duration_sec=1.0)
             return
         self._gate.accept(command)
+        if self._immediate and self._changes_output(command):
+            now = time.monotonic()
+            if now - self._last_tick >= MIN_TICK_INTERVAL:
+                self.controller.cut_hold(now - self._last_tick)
+                self._timer.reset()  # the next tick is one full period from now
+                self._on_tick()
+
+    def _changes_output(self, command: TwistCommand) -> bool:
+        """True when ``command`` differs from what the last tick served (and ticks run)."""
+        if self._theta is None or self._served is None:
+            return False
+        angular, frame = self._served
+        return frame is not command.frame or not np.array_equal(angular, command.angular)
 
     def _on_joint_state(self, msg: JointState) -> None:
         try:
@@ -291,6 +317,7 @@ class ControllerNode(Node):
     def _on_tick(self) -> None:
         if self._theta is None:
             return  # nothing is published until the first joint state
+        self._last_tick = time.monotonic()
         state = FreeFloatingState.compute(
             self.robot,
             self.robot.configuration(
@@ -303,6 +330,7 @@ class ControllerNode(Node):
         elif np.abs(self.controller.reference_positions - state.theta).max() > RESYNC_TOLERANCE:
             self.get_logger().warn("joint reference far from the measured angles: resynced")
             self.controller.resync(state)
+        self._served = (gate.angular, gate.frame)
         omega = angular_velocity_in_world(state, gate.angular, gate.frame)
         step = self.controller.step(state, omega)
         self._stopped = gate.stopped

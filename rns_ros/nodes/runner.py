@@ -7,7 +7,8 @@ import sys
 from collections.abc import Callable, Sequence
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
@@ -60,7 +61,10 @@ def run_node(
     node = executor = None
     try:
         node = factory()
-        executor = MultiThreadedExecutor(num_threads=2)
+        # The events executor: rclpy's wait-set executors cost ~0.6 ms of CPU per wake-up here,
+        # and the multi-threaded one kept the controller at 90 % of a core with output stalls of
+        # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.
+        executor = EventsExecutor()
         executor.add_node(node)
         while rclpy.ok():
             # bounded waits: without rclpy's handler only Python code sees Ctrl-C

@@ -18,6 +18,8 @@ from rns_ros.core.controller import (
     TwistFrame,
     angular_velocity_in_world,
 )
+from rns_ros.core.integration import attitude_deviation
+from rns_ros.core.simulation import FreeFloatingSimulator
 
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
 
@@ -86,6 +88,42 @@ def test_reference_positions_integrate_the_held_velocity(robot):
     out = second.output
     assert np.abs(out.coupling_momentum).max() < 1e-9
     assert not np.allclose(second.evaluated_theta, state.theta)
+
+
+def test_cut_hold_keeps_the_reference_on_the_plant_when_commands_come_early(robot):
+    """Commands served at once (rns_controller's immediate reaction) end each hold after 30 %
+    of T. cut_hold puts theta_ref where the held velocity actually took the arm: over 40 early
+    changes the reference stays on the (kinematic) plant, instead of running 0.7 T theta_dot
+    ahead per change, and the base stays put."""
+    period, cut = 0.02, 0.006
+    q0 = robot.configuration(THETA_0)
+    state = FreeFloatingState.compute(robot, q0)
+    simulator = FreeFloatingSimulator(robot, dt=0.001, initial_q=q0)
+    controller = ReactionlessController(robot, ControllerSettings(period=period))
+    controller.reset(state)
+    base_0 = state.base_rotation
+    worst_base, worst_reference = 0.0, 0.0
+    for k in range(40):
+        omega = [0.1, 0.05 * (-1) ** k, 0.0]  # a new command every cycle
+        step = controller.step(state, omega)
+        worst_reference = max(
+            worst_reference, float(np.abs(step.reference_positions - state.theta).max())
+        )
+        simulator.set_reference(velocities=step.joint_velocity)
+        for _ in range(round(cut / simulator.dt)):
+            simulator.step()
+        controller.cut_hold(cut)
+        state = FreeFloatingState.compute(robot, simulator.q)
+        worst_base = max(worst_base, attitude_deviation(base_0, state.base_rotation))
+    assert worst_reference < 1e-12
+    assert np.degrees(worst_base) < 1e-5
+    # a no-op without a hold in progress; clipped to [0, T]
+    before = controller.reference_positions.copy()
+    controller.cut_hold(0.001)
+    assert np.array_equal(controller.reference_positions, before)
+    step = controller.step(state, [0.1, 0.0, 0.0])
+    controller.cut_hold(5.0)
+    assert np.allclose(controller.reference_positions, before + period * step.joint_velocity)
 
 
 def test_bad_settings_are_rejected():

@@ -236,6 +236,49 @@ def test_shipped_teleop_twist_files_fit_the_controller():
     assert keyboard["frame_id"] in accepted
 
 
+def test_a_changed_command_is_served_at_once_and_restarts_the_period(ros):
+    """immediate_reaction: at 2 Hz a new command does not wait up to 0.5 s for the next tick; it
+    gets its own reference between ticks, and the period restarts from there."""
+    _node(ros, ControllerNode, rate=2.0, command_timeout=5.0, wrist_gain=0.0)
+    probe = ros.probe()
+    references = Recorder(probe, JointTrajectory, "joint_references")
+    state_pub = probe.create_publisher(JointState, "joint_states", 10)
+    state = JointState(name=JOINTS, position=np.deg2rad([-90, -30, 0, -70, 180, -30, 0]).tolist())
+    probe.create_timer(0.02, lambda: state_pub.publish(state))
+    operator = Operator(probe, rate=20.0)
+    operator.angular, operator.active = (0.1, 0.0, 0.0), True
+
+    def velocities(msg) -> np.ndarray:
+        return np.array(msg.points[0].velocities)
+
+    assert ros.spin_until(
+        lambda: (
+            len(references.messages) >= 2
+            and np.abs(velocities(references.messages[-1])).max() > 1e-3
+        ),
+        timeout=10.0,
+    )
+    forward = velocities(references.messages[-1])
+    ros.spin_for(0.1)  # somewhere inside a period
+    operator.angular = (-0.1, 0.0, 0.0)
+    assert ros.spin_until(
+        lambda: np.dot(velocities(references.messages[-1]), forward) < 0.0, timeout=5.0
+    )
+    ros.spin_for(1.2)  # two more periods
+
+    def stamp(msg) -> float:
+        return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+
+    stamps = [stamp(m) for m in references.messages]
+    first_reverse = next(
+        k for k, m in enumerate(references.messages) if np.dot(velocities(m), forward) < 0.0
+    )
+    early = stamps[first_reverse] - stamps[first_reverse - 1]
+    assert early < 0.45, f"the reversed command waited for the tick ({early:.3f} s)"
+    later = np.diff(stamps[first_reverse:])
+    assert later == pytest.approx(0.5, abs=0.05), "the period restarts at the early tick"
+
+
 def test_linear_part_is_reported_as_unachieved(ros, stack):
     probe, streams = stack.probe, stack.streams
     publisher = probe.create_publisher(TwistStamped, "cmd_twist", COMMAND_QOS)

@@ -95,7 +95,7 @@ def run_method(
         if not stack.spin_until(lambda: operator.finished, timeout=budget):
             raise RnsError(f"{method}: the scenario did not finish within {budget:.0f} s")
         stack.spin_for(SETTLE)
-        data = _arrays(streams)
+        data = robot_arrays(streams)
     figures = run_figures(robot, scenario, **data)
     return DemoRow(method, figures, time.perf_counter() - start, recording)
 
@@ -113,7 +113,7 @@ def _add_logger(stack: Harness, method: str, args, timing: dict) -> str | None:
     return str(path) if sink == "save" else None
 
 
-def _arrays(streams: dict[str, TopicLog]) -> dict[str, np.ndarray]:
+def robot_arrays(streams: dict[str, TopicLog]) -> dict[str, np.ndarray]:
     """Robot samples where joint_states and base_odom share a stamp (the simulator publishes
     both per step), plus momentum and commands."""
     joints, odom = streams["joints"], streams["odom"]

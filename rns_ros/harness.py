@@ -56,10 +56,11 @@ RECORD_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 def ros_environment(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
     """Environment for ROS processes: ``base`` (default os.environ) with the domain, localhost
-    discovery and the Fast DDS RMW (unless another is chosen)."""
+    discovery without static peers, and the Fast DDS RMW (unless another is chosen)."""
     env = dict(os.environ if base is None else base)
     env["ROS_DOMAIN_ID"] = str(_domain(domain_id))
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
+    env.pop("ROS_STATIC_PEERS", None)  # peers would reach beyond this machine
     env.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
     return env
 
@@ -112,12 +113,14 @@ class Harness:
     Raises:
         ConfigError: ``domain_id`` out of range, or ``ros_args`` that rcl cannot parse.
 
-    Sets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` in this process's environment before the
-    Context starts, so nothing it creates is discoverable from other machines.
+    Sets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and removes ``ROS_STATIC_PEERS`` in this
+    process's environment before the Context starts, so nothing it creates is discoverable from
+    other machines.
     """
 
     def __init__(self, domain_id: int | None = None, ros_args: Iterable[str] = ()) -> None:
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
+        os.environ.pop("ROS_STATIC_PEERS", None)
         self.domain_id = _domain(domain_id)
         self.context = rclpy.Context()
         ros_args = list(ros_args)

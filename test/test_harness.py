@@ -106,8 +106,10 @@ def test_installed_executables_run_as_subprocesses_with_ros_args():
 
 
 def test_environment_stays_on_localhost():
-    env = ros_environment(12, base={"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
+    base = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET", "ROS_STATIC_PEERS": "192.0.2.7"}
+    env = ros_environment(12, base=base)
     assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert "ROS_STATIC_PEERS" not in env  # static peers would reach other machines
     assert env["ROS_DOMAIN_ID"] == "12"
     with pytest.raises(ConfigError, match="domain_id"):
         Harness(domain_id=250)

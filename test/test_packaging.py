@@ -462,8 +462,13 @@ def test_installed_rns_demo_runs_from_the_install_space(colcon_install, tmp_path
     model = model_line.split(":", 1)[1].split(";")[0].strip()
     assert Path(model).is_relative_to(colcon_install / "share" / PKG)
     assert (tmp_path / "rec" / "dls.rrd").is_file()
-    assert len(arm) > 50, output
+    # the stream moved: our probe (which may match the demo's participant a few seconds late)
+    # saw it on the remapped topic only, and the demo's own logger, remapped too, got all of it
+    assert len(arm) > 0, output
     assert len(unmapped) == 0
+    closed = re.search(r"recording closed \(joints (\d+),", output)
+    assert closed is not None, output
+    assert int(closed.group(1)) > 200, output  # ~3 s at 100 Hz
 
 
 def test_installed_rns_demo_rejects_bad_ros_args(colcon_install):

@@ -7,6 +7,18 @@ from hypothesis import strategies as st
 
 #: Initial configuration of the thesis satellite-observation scenario (section 4.2.2) [deg].
 SATELLITE_OBSERVATION_DEG = (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)
+#: A short satellite-observation run for DDS tests: 30 deg roll about world x in 3 s, no wrist
+#: term (scenario file contents; see rns_ros/core/scenario.py).
+SHORT_ROLL_SCENARIO = {
+    "name": "short_observation",
+    "description": "30 deg roll about world x in 3 s",
+    "initial_joint_positions_deg": list(SATELLITE_OBSERVATION_DEG),
+    "frame": "world",
+    "axis": [1, 0, 0],
+    "angle_deg": 30.0,
+    "duration": 3.0,
+    "controller": {"wrist_gain": 0.0},
+}
 
 
 def unit_quaternions():

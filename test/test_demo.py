@@ -7,6 +7,7 @@ import os
 
 import pytest
 import yaml
+from rns_testing import SHORT_ROLL_SCENARIO
 
 from rns_ros.core import load_model
 from rns_ros.core.closed_loop import run_scenario
@@ -16,16 +17,6 @@ from rns_ros.resources import default_model_config
 from rns_ros.viz import paths
 from rns_ros.viz.readback import recording_summary
 
-SHORT = {
-    "name": "short_observation",
-    "description": "30 deg roll about world x in 3 s",
-    "initial_joint_positions_deg": [-90, -30, 0, -70, 180, -30, 0],
-    "frame": "world",
-    "axis": [1, 0, 0],
-    "angle_deg": 30.0,
-    "duration": 3.0,
-    "controller": {"wrist_gain": 0.0},
-}
 DOMAIN = os.environ.setdefault("ROS_DOMAIN_ID", "43")
 
 
@@ -33,7 +24,7 @@ DOMAIN = os.environ.setdefault("ROS_DOMAIN_ID", "43")
 def demo_run(tmp_path_factory):
     folder = tmp_path_factory.mktemp("demo")
     scenario = folder / "short.yaml"
-    scenario.write_text(yaml.safe_dump(SHORT))
+    scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
     summary = folder / "summary.json"
     argv = ["--scenario", str(scenario), "--summary", str(summary)]
     argv += ["--output", str(folder / "recordings"), "--domain-id", DOMAIN]

@@ -27,23 +27,13 @@ from pathlib import Path
 
 import pytest
 import yaml
+from rns_testing import SHORT_ROLL_SCENARIO
 
 from rns_ros.observer import static_peer_environment
 
 DOMAIN = int(os.environ.get("ROS_DOMAIN_ID", "43"))
 #: Private /24 only ever assigned inside our own namespaces (the third octet varies per run).
 SUBNET = "10.231.{}"
-#: 30 deg roll about world x in 3 s (the DDS demo test's scenario).
-SHORT = {
-    "name": "two_hosts_short",
-    "description": "30 deg roll about world x in 3 s",
-    "initial_joint_positions_deg": [-90, -30, 0, -70, 180, -30, 0],
-    "frame": "world",
-    "axis": [1, 0, 0],
-    "angle_deg": 30.0,
-    "duration": 3.0,
-    "controller": {"wrist_gain": 0.0},
-}
 SIMULATOR_READY = "kinematic simulation of"  # the simulator's first log line
 
 
@@ -227,7 +217,7 @@ def _run(hosts: TwoHosts, scenario: Path, report_file: Path) -> dict:
 
 def test_closed_loop_across_two_hosts_via_static_peers(hosts, tmp_path):
     scenario = tmp_path / "short.yaml"
-    scenario.write_text(yaml.safe_dump(SHORT))
+    scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
     # Retries for discovery only: between namespaces a pair of Fast DDS participants now and
     # then never matches (see docs/two_hosts.md); any other failure fails the test at once.
     failures = []

@@ -15,6 +15,7 @@ CONSOLE_SCRIPTS = [
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",
     "rns_operator = rns_ros.nodes.operator:main",
     "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",
+    "rns_observer = rns_ros.observer:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

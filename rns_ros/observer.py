@@ -1,9 +1,10 @@
 """Link check for a split set-up: watch the robot over DDS from the operator's computer.
 
-``python -m rns_ros.observer [--scenario NAME|FILE] [--json report.json]`` joins the ROS domain
-of its environment (``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE``, ``ROS_STATIC_PEERS``,
-``FASTDDS_BUILTIN_TRANSPORTS`` are used as given, unlike :class:`rns_ros.harness.Harness`, which
-forces localhost), records what the robot side publishes (``joint_states``, ``base_odom``,
+``rns_observer [--scenario NAME|FILE] [--json report.json] [--ros-args -r FROM:=TO]`` (also
+``python -m rns_ros.observer``, or ``ros2 run rns_ros rns_observer`` on a ROS install) joins the
+ROS domain of its environment (``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE``,
+``ROS_STATIC_PEERS`` are used as given, unlike :class:`rns_ros.harness.Harness`, which forces
+localhost), records what the robot side publishes (``joint_states``, ``base_odom``,
 ``momentum``) and what the operator side sends (``cmd_twist``, ``joint_references``), and writes
 a JSON report: per topic the message count, receive rate and serialized payload bytes, how long
 the robot took to appear, and, with ``--scenario``, the run's figures
@@ -43,10 +44,10 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.analysis import run_figures
-from rns_ros.core import RnsError, load_model
+from rns_ros.core import ConfigError, RnsError, load_model
 from rns_ros.core.scenario import load_scenario
 from rns_ros.core.state import FreeFloatingState
-from rns_ros.demo import robot_arrays
+from rns_ros.demo import robot_arrays, split_ros_args
 from rns_ros.harness import RECORD_QOS, TopicLog, ros_environment
 from rns_ros.resources import default_model_config, scenario_path
 
@@ -63,7 +64,6 @@ DISCOVERY_VARIABLES = (
     "ROS_DOMAIN_ID",
     "ROS_AUTOMATIC_DISCOVERY_RANGE",
     "ROS_STATIC_PEERS",
-    "FASTDDS_BUILTIN_TRANSPORTS",
     "RMW_IMPLEMENTATION",
 )
 
@@ -90,7 +90,10 @@ def static_peer_environment(
 def observe(args: argparse.Namespace) -> dict[str, Any]:
     """Record the topics as ``args`` says; return the report (see the module docstring)."""
     context = rclpy.Context()
-    rclpy.init(context=context, domain_id=args.domain_id)
+    try:  # argv[0] is a program name to rcl; remaps (-r) apply to the topics below
+        rclpy.init(args=["rns_observer", *args.ros_args], context=context, domain_id=args.domain_id)
+    except RuntimeError as exc:  # rcl's parse errors (RCLError derives from RuntimeError)
+        raise ConfigError(f"invalid ROS arguments {args.ros_args}: {exc}") from None
     executor = SingleThreadedExecutor(context=context)
     node = rclpy.create_node("rns_observer", context=context)
     try:
@@ -216,8 +219,11 @@ def _run_report(scenario_file: Path, logs: dict[str, TopicLog]) -> dict[str, Any
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     parser = argparse.ArgumentParser(
-        prog="python -m rns_ros.observer",
+        prog="rns_observer",
+        usage="%(prog)s [options] [--ros-args -r FROM:=TO]",
+        epilog="--ros-args: remaps (-r joint_states:=arm/joint_states) apply to the topics.",
         description="Watch the robot's topics over DDS (e.g. from the operator's computer) and "
         "report counts, rates and, with --scenario, the run's figures as JSON.",
     )
@@ -239,6 +245,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="ROS domain (default: ROS_DOMAIN_ID, else 0)",
     )
     args = parser.parse_args(argv)
+    args.ros_args = ros_args
     if not 0 <= args.domain_id <= 101:
         parser.error(f"--domain-id must be in [0, 101], got {args.domain_id}")
     for name in ("wait", "duration", "idle", "settle", "timeout"):

@@ -1,7 +1,7 @@
 """Two hosts, simulated with two network namespaces joined by a veth pair (needs root and `ip`).
 
 Namespace A is the robot computer (rns_simulator); namespace B is the operator's computer
-(rns_controller, rns_operator and the link check ``python -m rns_ros.observer``). The only way
+(rns_controller, rns_operator and the link check ``rns_ros.observer``). The only way
 between them is the veth pair. Every process runs the documented two-computer recipe: discovery
 range LOCALHOST (no multicast: discovery goes to 127.0.0.1 and the static peers only) with the
 other namespace's address in ROS_STATIC_PEERS. A control run without the peers shows that

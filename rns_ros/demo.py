@@ -27,6 +27,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
 from rns_ros.analysis import RunFigures, run_figures
+from rns_ros.cli import add_domain_id_argument, split_ros_args
 from rns_ros.core import RnsError, load_model
 from rns_ros.core.scenario import load_scenario
 from rns_ros.harness import Harness, TopicLog
@@ -174,15 +175,6 @@ def format_table(rows: list[DemoRow]) -> str:
     return "\n".join(lines)
 
 
-def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
-    """(own arguments, ROS arguments): ``--ros-args ... [--]`` is cut out, as rcl reads it."""
-    if "--ros-args" not in argv:
-        return list(argv), []
-    start = argv.index("--ros-args")
-    end = argv.index("--", start) if "--" in argv[start:] else len(argv)
-    return argv[:start] + argv[end + 1 :], argv[start:end]
-
-
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     parser = argparse.ArgumentParser(
@@ -218,12 +210,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-record", action="store_true", help="no rerun recording")
     parser.add_argument("--viewer", action="store_true", help="live rerun viewer (needs display)")
     parser.add_argument("--summary", type=Path, default=None, help="also write the table as JSON")
-    parser.add_argument(
-        "--domain-id",
-        type=int,
-        default=int(os.environ.get("ROS_DOMAIN_ID", "42")),
-        help="ROS domain of the runs (default: ROS_DOMAIN_ID, else 42)",
-    )
+    add_domain_id_argument(parser, 42, "of the runs")
     args = parser.parse_args(argv)
     args.ros_args = ros_args
     args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
@@ -234,8 +221,6 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         parser.error(f"--rate must be in [1, 1000] Hz, got {args.rate}")
     if not 0.0 <= args.real_time_factor <= 1000.0:
         parser.error(f"--real-time-factor must be in [0, 1000], got {args.real_time_factor}")
-    if not 0 <= args.domain_id <= 101:
-        parser.error(f"--domain-id must be in [0, 101], got {args.domain_id}")
     return args
 
 

@@ -44,10 +44,11 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.analysis import run_figures
+from rns_ros.cli import add_domain_id_argument, split_ros_args
 from rns_ros.core import ConfigError, RnsError, load_model
 from rns_ros.core.scenario import load_scenario
 from rns_ros.core.state import FreeFloatingState
-from rns_ros.demo import robot_arrays, split_ros_args
+from rns_ros.demo import robot_arrays
 from rns_ros.harness import RECORD_QOS, TopicLog, ros_environment
 from rns_ros.resources import default_model_config, scenario_path
 
@@ -238,16 +239,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     )
     parser.add_argument("--settle", type=float, default=0.3, help="record this long after [s]")
     parser.add_argument("--timeout", type=float, default=120.0, help="overall limit [s]")
-    parser.add_argument(
-        "--domain-id",
-        type=int,
-        default=int(os.environ.get("ROS_DOMAIN_ID", "0")),
-        help="ROS domain (default: ROS_DOMAIN_ID, else 0)",
-    )
+    add_domain_id_argument(parser, 0, "to watch")
     args = parser.parse_args(argv)
     args.ros_args = ros_args
-    if not 0 <= args.domain_id <= 101:
-        parser.error(f"--domain-id must be in [0, 101], got {args.domain_id}")
     for name in ("wait", "duration", "idle", "settle", "timeout"):
         if getattr(args, name) < 0:
             parser.error(f"--{name} must be >= 0")

@@ -61,7 +61,10 @@ def test_remapped_robot_topics_are_watched(tmp_path):
 
 @pytest.mark.parametrize(
     ("argv", "message"),
-    [(["--domain-id", "200"], "--domain-id must be in [0, 101]"), (["--idle", "-1"], "--idle")],
+    [
+        (["--domain-id", "200"], "--domain-id: must be an integer in [0, 101]"),
+        (["--idle", "-1"], "--idle"),
+    ],
 )
 def test_bad_numbers_name_the_option(argv, message, capsys):
     with pytest.raises(SystemExit) as exit_info:

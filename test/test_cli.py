@@ -1,0 +1,57 @@
+"""rns_ros.cli: --ros-args splitting and the --domain-id option shared by rns_demo and
+rns_observer."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from rns_ros.cli import add_domain_id_argument, split_ros_args
+
+ROS = ["--ros-args", "-r", "x:=y"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "own", "ros"),
+    [
+        (["--rate", "50"], ["--rate", "50"], []),
+        (["--rate", "50", *ROS], ["--rate", "50"], ROS),
+        ([*ROS, "--", "--rate", "50"], ["--rate", "50"], ROS),
+        (["--ros-args"], [], ["--ros-args"]),
+    ],
+)
+def test_split_ros_args_cuts_out_what_rcl_reads(argv, own, ros):
+    assert split_ros_args(argv) == (own, ros)
+
+
+def _parser(fallback: int = 42) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="tool")
+    add_domain_id_argument(parser, fallback, "of the runs")
+    return parser
+
+
+def test_domain_id_comes_from_option_then_environment_then_fallback(monkeypatch):
+    monkeypatch.delenv("ROS_DOMAIN_ID", raising=False)
+    assert _parser(42).parse_args([]).domain_id == 42
+    monkeypatch.setenv("ROS_DOMAIN_ID", "17")
+    assert _parser(42).parse_args([]).domain_id == 17
+    assert _parser(42).parse_args(["--domain-id", "101"]).domain_id == 101
+
+
+@pytest.mark.parametrize(
+    ("argv", "env", "bad"),
+    [
+        (["--domain-id", "102"], "5", "'102'"),
+        (["--domain-id", "-1"], "5", "'-1'"),
+        ([], "abc", "'abc'"),
+    ],
+)
+def test_bad_domain_id_is_a_usage_error_naming_the_range(monkeypatch, capsys, argv, env, bad):
+    monkeypatch.setenv("ROS_DOMAIN_ID", env)
+    with pytest.raises(SystemExit) as exit_info:
+        _parser().parse_args(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "--domain-id: must be an integer in [0, 101]" in err
+    assert bad in err

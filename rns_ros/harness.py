@@ -46,6 +46,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
+from rns_ros.cli import DOMAIN_ID_RANGE
 from rns_ros.core.errors import ConfigError
 
 #: DDS discovery never leaves the machine.
@@ -66,11 +67,17 @@ def ros_environment(domain_id: int, base: Mapping[str, str] | None = None) -> di
 
 
 def _domain(domain_id: int | None) -> int:
+    """``domain_id``, or ``ROS_DOMAIN_ID`` of the environment (else 0), checked."""
     if domain_id is None:
-        domain_id = int(os.environ.get("ROS_DOMAIN_ID", "0"))
-    if not 0 <= int(domain_id) <= 101:
-        raise ConfigError(f"domain_id must be in [0, 101], got {domain_id!r}")
-    return int(domain_id)
+        domain_id = os.environ.get("ROS_DOMAIN_ID", "0")
+    low, high = DOMAIN_ID_RANGE
+    try:
+        value = int(domain_id)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or not low <= value <= high:
+        raise ConfigError(f"domain_id must be an integer in [{low}, {high}], got {domain_id!r}")
+    return value
 
 
 class TopicLog:

@@ -111,5 +111,11 @@ def test_environment_stays_on_localhost():
     assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
     assert "ROS_STATIC_PEERS" not in env  # static peers would reach other machines
     assert env["ROS_DOMAIN_ID"] == "12"
-    with pytest.raises(ConfigError, match="domain_id"):
+    with pytest.raises(ConfigError, match=r"domain_id must be an integer in \[0, 101\], got 250"):
         Harness(domain_id=250)
+
+
+def test_a_bad_ros_domain_id_in_the_environment_is_a_config_error(monkeypatch):
+    monkeypatch.setenv("ROS_DOMAIN_ID", "abc")
+    with pytest.raises(ConfigError, match="got 'abc'"):
+        Harness()

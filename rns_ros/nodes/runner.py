@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import signal
 import sys
+import threading
 from collections.abc import Callable, Sequence
 
 import rclpy
@@ -54,10 +55,16 @@ def run_node(
         print(parameter_help(executable, summary, specs))
         return 0
     # rclpy's own SIGINT handler would shut the Context down before destroy_node() runs, and a
-    # node could no longer publish its final zero command; Ctrl-C and SIGTERM raise
-    # KeyboardInterrupt here instead, and the Context is shut down last, in `finally`.
+    # node could no longer publish its final zero command. Ctrl-C and SIGTERM only set a flag
+    # that the spin loop reads: an exception raised from a signal handler can land inside
+    # rclpy's C++ argument conversion, which turns it into a RuntimeError (exit code 1 seen in
+    # CI). The Context is shut down last, in `finally`.
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    signal.signal(signal.SIGTERM, _interrupt)
+    stop = threading.Event()
+    previous = {
+        signum: signal.signal(signum, lambda _signum, _frame: stop.set())
+        for signum in (signal.SIGINT, signal.SIGTERM)
+    }
     node = executor = None
     try:
         node = factory()
@@ -66,8 +73,8 @@ def run_node(
         # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.
         executor = EventsExecutor()
         executor.add_node(node)
-        while rclpy.ok():
-            # bounded waits: without rclpy's handler only Python code sees Ctrl-C
+        while rclpy.ok() and not stop.is_set():
+            # bounded waits: the stop flag is read at least every 0.1 s
             executor.spin_once(timeout_sec=0.1)
     except RnsError as exc:
         print(f"{executable}: {exc}", file=sys.stderr)
@@ -80,8 +87,6 @@ def run_node(
         if executor is not None:
             executor.shutdown()
         rclpy.try_shutdown()
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     return 0
-
-
-def _interrupt(_signum, _frame) -> None:
-    raise KeyboardInterrupt

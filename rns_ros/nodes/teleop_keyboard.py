@@ -272,12 +272,20 @@ class RawTerminal:
             raise TerminalLost(f"stdout: {exc.strerror}") from None
 
 
-def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal) -> None:
-    """Keys in, twists out, panel redrawn, until a quit key, a signal or a lost terminal."""
+def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal, signals: Sequence[int] = ()) -> None:
+    """Keys in, twists out, panel redrawn, until a quit key, a signal or a lost terminal.
+
+    ``signals`` is read each loop: once it holds a signal number the panel ends (within
+    ``POLL`` [s]); SIGHUP means the terminal is gone.
+    """
     teleop = node.teleop
     next_tick = time.monotonic()
     last_key: KeyEvent | None = None
     while rclpy.ok(context=node.context) and not teleop.quit_requested:
+        if signals:
+            if signal.SIGHUP in signals:
+                raise TerminalLost("terminal hung up (SIGHUP)")
+            return
         # wake at the next tick, and at least every POLL so the status age stays fresh
         wait = min(next_tick - time.monotonic(), POLL)
         for key in terminal.read_keys(wait):
@@ -311,17 +319,13 @@ def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal) -> None:
 
 
 # --- signals --------------------------------------------------------------------------------------
-_stopping = threading.Event()
+# Handlers only record the signal: an exception raised from a handler can land inside rclpy's C++
+# argument conversion (a publish), which turns it into a RuntimeError. The panel loop reads it.
+_signals: list[int] = []
 
 
 def _on_signal(signum, _frame) -> None:
-    # Only the first signal interrupts: a second one must not break the clean-up it started.
-    if _stopping.is_set():
-        return
-    _stopping.set()
-    if signum == signal.SIGHUP:
-        raise TerminalLost("terminal hung up (SIGHUP)")
-    raise KeyboardInterrupt
+    _signals.append(signum)
 
 
 def _spin(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
@@ -341,7 +345,7 @@ def main(args: Sequence[str] | None = None) -> int:
         return 0
     # Our own handlers (no rclpy one): the Context must outlive the final zero twists.
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    _stopping.clear()
+    _signals.clear()
     node = executor = spinner = None
     stop_spinning = threading.Event()
     code = 0
@@ -366,7 +370,7 @@ def main(args: Sequence[str] | None = None) -> int:
         spinner.start()
         panel_started = True
         with RawTerminal(stdin, sys.stdout.fileno()) as terminal:
-            run_panel(node, terminal)
+            run_panel(node, terminal, _signals)
     except RnsError as exc:
         print(f"{NODE_NAME}: {exc}", file=sys.stderr)
         return 2
@@ -375,7 +379,6 @@ def main(args: Sequence[str] | None = None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        _stopping.set()  # from here on signals no longer interrupt
         try:
             # whatever ended the panel, the last word on cmd_twist is zero
             if panel_started and rclpy.ok():

@@ -77,6 +77,10 @@ def run_method(
             "commands": stack.record(TwistStamped, "cmd_twist"),
             "status": stack.record(DiagnosticArray, "rns_controller/status"),
         }
+        # the logger first: its subscriptions exist (like the streams above) before the first
+        # robot state, so the recording holds the whole run
+        if not args.no_record:
+            recording = _add_logger(stack, method, args, timing)
         stack.add(
             SimulatorNode,
             {
@@ -87,8 +91,6 @@ def run_method(
             },
         )
         stack.add(ControllerNode, controller_parameters)
-        if not args.no_record:
-            recording = _add_logger(stack, method, args, timing)
         operator = stack.add(
             OperatorNode, {"scenario": str(scenario_file), "start_delay": 0.5, **timing}
         )

@@ -63,10 +63,12 @@ def test_demo_recordings_load_back_with_the_documented_entities(demo_run):
     for method, row in rows.items():
         counts = recording_summary(row["recording"])
         assert row["recording"].endswith(f"{method}.rrd")
-        # one sample per robot state the analysis used (the logger and the demo saw the same
-        # joint_states stream, give or take the first and last messages)
+        # one sample per robot state the demo saw (the logger listens to the same
+        # stream from before the first state); the logger is a best-effort observer, so on a
+        # loaded machine it may miss some (428 of 485 in a CI run, 401 of 462 here with two
+        # busy-loop processes), never most
         for path in (paths.BASE_ATTITUDE_TOTAL, paths.CAMERA_POINTING):
-            assert counts[path] == pytest.approx(row["samples"], rel=0.1), path
+            assert 0.75 * row["samples"] <= counts[path] <= 1.1 * row["samples"], path
         assert counts[paths.SIGMA_MIN] > 200  # controller status at 100 Hz for > 3 s
         assert any(path.startswith(paths.JOINTS) for path in counts)
 

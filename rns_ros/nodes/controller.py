@@ -278,7 +278,6 @@ class ControllerNode(Node):
         if self._immediate and self._changes_output(command):
             now = time.monotonic()
             if now - self._last_tick >= MIN_TICK_INTERVAL:
-                self.controller.cut_hold(now - self._last_tick)
                 self._timer.reset()  # the next tick is one full period from now
                 self._on_tick()
 
@@ -317,7 +316,10 @@ class ControllerNode(Node):
     def _on_tick(self) -> None:
         if self._theta is None:
             return  # nothing is published until the first joint state
-        self._last_tick = time.monotonic()
+        now = time.monotonic()
+        # the previous output was held for exactly this long, early or late
+        self.controller.end_hold(now - self._last_tick)
+        self._last_tick = now
         state = FreeFloatingState.compute(
             self.robot,
             self.robot.configuration(

@@ -90,12 +90,17 @@ def test_reference_positions_integrate_the_held_velocity(robot):
     assert not np.allclose(second.evaluated_theta, state.theta)
 
 
-def test_cut_hold_keeps_the_reference_on_the_plant_when_commands_come_early(robot):
-    """Commands served at once (rns_controller's immediate reaction) end each hold after 30 %
-    of T. cut_hold puts theta_ref where the held velocity actually took the arm: over 40 early
-    changes the reference stays on the (kinematic) plant, instead of running 0.7 T theta_dot
-    ahead per change, and the base stays put."""
-    period, cut = 0.02, 0.006
+@pytest.mark.parametrize("held_periods", [0.3, 1.3])
+def test_end_hold_keeps_the_reference_on_the_plant_when_outputs_come_early_or_late(
+    robot, held_periods
+):
+    """Outputs that are not T apart: commands served at once (rns_controller's immediate
+    reaction) end a hold after 30 % of T, a busy executor's late timer after 130 %. The plant
+    holds theta_dot until the next output; end_hold puts theta_ref where that took the arm, so
+    over 40 holds the reference stays on the (kinematic) plant instead of running ahead (early)
+    or falling behind (late) by |1 - elapsed/T| T theta_dot per hold, and the base stays put."""
+    period = 0.02
+    held = held_periods * period
     q0 = robot.configuration(THETA_0)
     state = FreeFloatingState.compute(robot, q0)
     simulator = FreeFloatingSimulator(robot, dt=0.001, initial_q=q0)
@@ -110,20 +115,28 @@ def test_cut_hold_keeps_the_reference_on_the_plant_when_commands_come_early(robo
             worst_reference, float(np.abs(step.reference_positions - state.theta).max())
         )
         simulator.set_reference(velocities=step.joint_velocity)
-        for _ in range(round(cut / simulator.dt)):
+        for _ in range(round(held / simulator.dt)):
             simulator.step()
-        controller.cut_hold(cut)
+        controller.end_hold(held)
         state = FreeFloatingState.compute(robot, simulator.q)
         worst_base = max(worst_base, attitude_deviation(base_0, state.base_rotation))
     assert worst_reference < 1e-12
     assert np.degrees(worst_base) < 1e-5
-    # a no-op without a hold in progress; clipped to [0, T]
+
+
+def test_end_hold_is_a_no_op_without_a_hold_and_never_goes_back(robot):
+    state = FreeFloatingState.compute(robot, robot.configuration(THETA_0))
+    controller = ReactionlessController(robot, ControllerSettings(period=0.01))
+    controller.reset(state)
     before = controller.reference_positions.copy()
-    controller.cut_hold(0.001)
+    controller.end_hold(0.001)
     assert np.array_equal(controller.reference_positions, before)
     step = controller.step(state, [0.1, 0.0, 0.0])
-    controller.cut_hold(5.0)
-    assert np.allclose(controller.reference_positions, before + period * step.joint_velocity)
+    controller.end_hold(-1.0)  # a clock that went backwards holds, it does not rewind
+    assert np.array_equal(controller.reference_positions, before)
+    step = controller.step(state, [0.1, 0.0, 0.0])
+    controller.end_hold(0.05)
+    assert np.allclose(controller.reference_positions, before + 0.05 * step.joint_velocity)
 
 
 def test_bad_settings_are_rejected():

@@ -88,6 +88,9 @@ def run_method(
                 "mode": args.mode,
                 "real_time_factor": args.real_time_factor,
                 "publish_clock": sim_time,
+                # off real time, the simulator waits for each control period's output, so the
+                # figures do not depend on how fast this machine is
+                "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
             },
         )
         stack.add(ControllerNode, controller_parameters)

@@ -73,16 +73,19 @@ def test_demo_recordings_load_back_with_the_documented_entities(demo_run):
         assert any(path.startswith(paths.JOINTS) for path in counts)
 
 
-def test_demo_in_dynamic_mode_reaches_the_target(tmp_path):
+@pytest.mark.parametrize("real_time_factor", [1.0, 5.0])  # wall clock; /clock in lockstep
+def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
     """The joint servo tracks the reference positions, so they must follow what the plant was
     actually commanded: ticks are not exactly one period apart (a changed command is served at
-    once, a busy timer fires late). Advancing the reference by the nominal period left the
-    camera 0.6-0.9 deg short of a 30 deg roll; with the actual hold times it is within 0.01."""
+    once, a busy timer fires late), and under /clock the hold lasts simulated time. Advancing
+    the reference by the nominal period left the camera 0.6-0.9 deg short of a 30 deg roll;
+    with the actual hold times it is within 0.01 deg."""
     scenario = tmp_path / "short.yaml"
     scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
     summary = tmp_path / "summary.json"
     argv = ["--scenario", str(scenario), "--summary", str(summary), "--no-record"]
     argv += ["--mode", "dynamic", "--methods", "dls", "--domain-id", DOMAIN]
+    argv += ["--real-time-factor", str(real_time_factor)]
     assert main(argv) == 0
     (row,) = json.loads(summary.read_text())
     assert row["final_camera_error_deg"] < 0.1

@@ -223,6 +223,7 @@ class ControllerNode(Node):
         self._predict = params["predict_state"]
         self._immediate = params["immediate_reaction"]
         self._last_tick = -np.inf  # monotonic time of the last tick [s]
+        self._last_tick_clock: float | None = None  # node-clock time of the last tick [s]
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._theta_rate: np.ndarray | None = None
         self._theta_stamp = None
@@ -317,9 +318,11 @@ class ControllerNode(Node):
         if self._theta is None:
             return  # nothing is published until the first joint state
         now = time.monotonic()
-        # the previous output was held for exactly this long, early or late
-        self.controller.end_hold(now - self._last_tick)
-        self._last_tick = now
+        # the previous output was held this long on the plant's clock (sim time under /clock)
+        clock_now = self.get_clock().now().nanoseconds * 1e-9
+        if self._last_tick_clock is not None:
+            self.controller.end_hold(clock_now - self._last_tick_clock)
+        self._last_tick, self._last_tick_clock = now, clock_now
         state = FreeFloatingState.compute(
             self.robot,
             self.robot.configuration(

@@ -13,6 +13,9 @@ Publishes (all remappable):
                                               angular momentum about the system CoM [kg m^2/s],
                                               both in ``world_frame`` axes
     /clock        rosgraph_msgs/Clock         every step, when ``publish_clock`` is true
+With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simulated time) past
+the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
+before the first command, and once a command has timed out, it runs freely.
 Subscribes:
     joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
                       first point: positions/velocities/accelerations matched by joint name
@@ -62,6 +65,9 @@ from rns_ros.resources import default_model_config
 
 NODE_NAME = "rns_simulator"
 SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4)."
+#: Longest lockstep pause [s] (wall) before one step is taken anyway: a controller whose timer
+#: waits for a /clock tick beyond the pause point is not deadlocked, only slowed.
+LOCKSTEP_MAX_PAUSE = 0.02
 SATELLITE_OBSERVATION_RAD = [math.radians(a) for a in (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)]
 
 PARAMETERS = (
@@ -138,6 +144,16 @@ PARAMETERS = (
         read_only=False,
     ),
     ParameterSpec("publish_clock", False, "Publish /clock (sim time) and stamp messages with it"),
+    ParameterSpec(
+        "lockstep_period",
+        0.0,
+        "Lockstep with a controller: never run more than this much simulated time past the "
+        "newest joint command (set it to the controller's period to sample as in real time at "
+        "any real_time_factor); the wait ends after command_timeout of wall time; 0: off",
+        "[s]",
+        0.0,
+        10.0,
+    ),
     WORLD_FRAME,
     ParameterSpec(
         "servo_natural_frequency",
@@ -205,6 +221,7 @@ class SimulatorNode(Node):
         self._real_time_factor = params["real_time_factor"]
         self._command_timeout = params["command_timeout"]
         self._publish_clock = params["publish_clock"]
+        self._lockstep = params["lockstep_period"]
         self._world_frame = params["world_frame"]
         self._dynamic = params["mode"] == "dynamic"
 
@@ -212,6 +229,9 @@ class SimulatorNode(Node):
         self._stop = threading.Event()
         self._reset_requested = False
         self._last_command = None  # monotonic receipt time of the active command
+        self._command_sim_time = 0.0  # simulated time of its receipt [s]
+        self._command_arrived = threading.Event()
+        self._paused_since: float | None = None  # monotonic start of a lockstep pause
         self._stale_logged = False
         self._reanchor = True
 
@@ -297,7 +317,9 @@ class SimulatorNode(Node):
         with self._lock:
             self.simulator.set_reference(positions, velocities, accelerations)
             self._last_command = time.monotonic()
+            self._command_sim_time = self.simulator.time
             self._stale_logged = False
+            self._command_arrived.set()
 
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected joint command: {reason}", throttle_duration_sec=1.0)
@@ -323,6 +345,9 @@ class SimulatorNode(Node):
         steps = 0
         wall_anchor = sim_anchor = 0.0
         while not self._stop.is_set():
+            if self._await_command():
+                self._reanchor = True  # paused for the controller: do not sprint afterwards
+                continue
             if self._reanchor:
                 wall_anchor, sim_anchor, self._reanchor = (
                     time.monotonic(),
@@ -355,6 +380,29 @@ class SimulatorNode(Node):
                     self._stop.wait(delay)
                 elif delay < -0.5:
                     self._reanchor = True  # far behind (overloaded machine): do not sprint
+
+    def _await_command(self) -> bool:
+        """Lockstep: True (after a short wait) while the next step would run more than
+        ``lockstep_period`` of simulated time past the newest command. A command older than
+        ``command_timeout`` (wall time) is dropped instead, which ends the wait."""
+        if self._lockstep <= 0.0:
+            return False
+        with self._lock:
+            self._expire_stale_command()
+            ahead = self.simulator.time + 0.5 * self.simulator.dt - self._command_sim_time
+            if self._last_command is None or ahead < self._lockstep:
+                self._paused_since = None
+                return False
+            now = time.monotonic()
+            if self._paused_since is None:
+                self._paused_since = now
+            elif now - self._paused_since > LOCKSTEP_MAX_PAUSE:
+                # a controller that waits for a clock tick it has not seen yet must get one
+                self._paused_since = now
+                return False
+            self._command_arrived.clear()
+        self._command_arrived.wait(0.005)
+        return True
 
     def _expire_stale_command(self) -> None:
         if self._last_command is None:

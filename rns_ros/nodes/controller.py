@@ -170,7 +170,8 @@ PARAMETERS = (
         "immediate_reaction",
         True,
         "Serve a changed command at once and restart the period (the hold in progress is cut "
-        "short) instead of at the next tick: latency ~2 ms instead of up to one period",
+        "short) instead of at the next tick: latency ~2 ms instead of up to one period. Wall "
+        "clock only: under use_sim_time ticks stay on the period grid (reproducible lockstep)",
     ),
     ParameterSpec(
         "predict_state",
@@ -221,7 +222,11 @@ class ControllerNode(Node):
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
         self._stopped = True
         self._predict = params["predict_state"]
-        self._immediate = params["immediate_reaction"]
+        # latency is a wall-clock matter; in simulated time, commands served between ticks
+        # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
+        self._immediate = (
+            params["immediate_reaction"] and not self.get_parameter("use_sim_time").value
+        )
         self._last_tick = -np.inf  # monotonic time of the last tick [s]
         self._last_tick_clock: float | None = None  # node-clock time of the last tick [s]
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick

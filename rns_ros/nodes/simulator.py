@@ -15,7 +15,8 @@ Publishes (all remappable):
     /clock        rosgraph_msgs/Clock         every step, when ``publish_clock`` is true
 With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simulated time) past
 the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
-before the first command, and once a command has timed out, it runs freely.
+before the first command it runs in real time, and a controller that stops answering pauses it.
+``command_timeout`` then counts simulated time.
 Subscribes:
     joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
                       first point: positions/velocities/accelerations matched by joint name
@@ -65,9 +66,9 @@ from rns_ros.resources import default_model_config
 
 NODE_NAME = "rns_simulator"
 SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4)."
-#: Longest lockstep pause [s] (wall) before one step is taken anyway: a controller whose timer
-#: waits for a /clock tick beyond the pause point is not deadlocked, only slowed.
-LOCKSTEP_MAX_PAUSE = 0.02
+#: A lockstep pause longer than this [s] (wall time) is reported and ends with one step, so a
+#: controller whose sim-time timer waits for a later /clock is never deadlocked.
+LOCKSTEP_PATIENCE = 2.0
 SATELLITE_OBSERVATION_RAD = [math.radians(a) for a in (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)]
 
 PARAMETERS = (
@@ -137,7 +138,8 @@ PARAMETERS = (
     ParameterSpec(
         "command_timeout",
         0.5,
-        "A command older than this (by receipt time) is dropped and the joints stop",
+        "A command older than this (by receipt time; simulated time in lockstep) is dropped and "
+        "the joints stop",
         "[s]",
         0.01,
         60.0,
@@ -149,7 +151,8 @@ PARAMETERS = (
         0.0,
         "Lockstep with a controller: never run more than this much simulated time past the "
         "newest joint command (set it to the controller's period to sample as in real time at "
-        "any real_time_factor); the wait ends after command_timeout of wall time; 0: off",
+        "any real_time_factor; real time before the first command, paused when they stop); "
+        "command_timeout then counts simulated time; 0: off",
         "[s]",
         0.0,
         10.0,
@@ -231,7 +234,7 @@ class SimulatorNode(Node):
         self._last_command = None  # monotonic receipt time of the active command
         self._command_sim_time = 0.0  # simulated time of its receipt [s]
         self._command_arrived = threading.Event()
-        self._paused_since: float | None = None  # monotonic start of a lockstep pause
+        self._paused_since: float | None = None  # monotonic start of a lockstep pause [s]
         self._stale_logged = False
         self._reanchor = True
 
@@ -316,6 +319,8 @@ class SimulatorNode(Node):
     def _accept(self, positions, velocities, accelerations) -> None:
         with self._lock:
             self.simulator.set_reference(positions, velocities, accelerations)
+            if self._last_command is None and self._lockstep > 0.0:
+                self._reanchor = True  # lockstep starts: leave the real-time pace of the wait
             self._last_command = time.monotonic()
             self._command_sim_time = self.simulator.time
             self._stale_logged = False
@@ -358,46 +363,62 @@ class SimulatorNode(Node):
                 if self._reset_requested:
                     self.simulator.reset()
                     self._last_command, self._reset_requested, self._reanchor = None, False, True
+                    self._command_sim_time = 0.0
                     steps = 0
                 self._expire_stale_command()
                 self.simulator.step()
                 steps += 1
-                publish = steps % self._publish_every == 0
+                # a lockstep pause also publishes the state there: the controller's tick at the
+                # pause samples this instant, not the last grid point (stale by up to a period)
+                publish = steps % self._publish_every == 0 or self._pauses_here()
                 snapshot = self.simulator.snapshot() if publish else None
                 momentum = self.simulator.centroidal_momentum() if publish else None
                 sim_time = self.simulator.time
-            if self._clock_pub is not None:
-                self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
+            # the state first: a sim-time timer woken by this clock tick should find it there
             if snapshot is not None:
                 self._publish_state(snapshot, momentum)
-            if self._real_time_factor > 0.0:
-                delay = (
-                    wall_anchor
-                    + (sim_time - sim_anchor) / self._real_time_factor
-                    - time.monotonic()
-                )
+            if self._clock_pub is not None:
+                self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
+            factor = self._real_time_factor
+            if self._lockstep > 0.0 and self._last_command is None:
+                # no controller yet: real time, so it joins before much simulated time passes
+                factor = 1.0
+            if factor > 0.0:
+                delay = wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
                 if delay > 0.0:
                     self._stop.wait(delay)
                 elif delay < -0.5:
                     self._reanchor = True  # far behind (overloaded machine): do not sprint
 
+    def _pauses_here(self) -> bool:
+        """Lockstep: the simulation has reached ``lockstep_period`` past the newest command."""
+        if self._lockstep <= 0.0 or self._last_command is None:
+            return False
+        ahead = self.simulator.time + 0.5 * self.simulator.dt - self._command_sim_time
+        return ahead >= self._lockstep
+
     def _await_command(self) -> bool:
         """Lockstep: True (after a short wait) while the next step would run more than
-        ``lockstep_period`` of simulated time past the newest command. A command older than
-        ``command_timeout`` (wall time) is dropped instead, which ends the wait."""
+        ``lockstep_period`` of simulated time past the newest command. Before the first command
+        it runs in real time (a controller starts from the published states). A controller that
+        stops answering pauses the simulation rather than letting the robot run on under an old
+        command: after ``LOCKSTEP_PATIENCE`` it is logged and one step is taken."""
         if self._lockstep <= 0.0:
             return False
         with self._lock:
-            self._expire_stale_command()
-            ahead = self.simulator.time + 0.5 * self.simulator.dt - self._command_sim_time
-            if self._last_command is None or ahead < self._lockstep:
+            if not self._pauses_here():
                 self._paused_since = None
                 return False
             now = time.monotonic()
             if self._paused_since is None:
                 self._paused_since = now
-            elif now - self._paused_since > LOCKSTEP_MAX_PAUSE:
-                # a controller that waits for a clock tick it has not seen yet must get one
+            elif now - self._paused_since > LOCKSTEP_PATIENCE:
+                # one step: a controller whose timer waits for a later /clock gets it
+                self.get_logger().warn(
+                    f"lockstep: no joint command for {LOCKSTEP_PATIENCE} s at "
+                    f"t = {self.simulator.time:.3f} s; one step on",
+                    throttle_duration_sec=5.0,
+                )
                 self._paused_since = now
                 return False
             self._command_arrived.clear()
@@ -407,7 +428,13 @@ class SimulatorNode(Node):
     def _expire_stale_command(self) -> None:
         if self._last_command is None:
             return
-        if time.monotonic() - self._last_command > self._command_timeout:
+        # In lockstep a paused simulation does not move, so the age that matters is simulated
+        # time (a controller busy for a while only pauses it); otherwise wall time.
+        if self._lockstep > 0.0:
+            age = self.simulator.time - self._command_sim_time
+        else:
+            age = time.monotonic() - self._last_command
+        if age > self._command_timeout:
             self.simulator.set_reference(velocities=np.zeros(self.robot.n))
             self._last_command = None
             if not self._stale_logged:

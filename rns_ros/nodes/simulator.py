@@ -16,7 +16,8 @@ Publishes (all remappable):
 With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simulated time) past
 the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
 before the first command it runs in real time, and a controller that stops answering pauses it.
-``command_timeout`` then counts simulated time.
+``command_timeout`` then counts simulated time, and the state is also published at each pause
+(off the ``publish_rate`` grid), so the controller's tick there samples that instant.
 Subscribes:
     joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
                       first point: positions/velocities/accelerations matched by joint name

@@ -20,17 +20,21 @@ from rns_ros.viz.readback import recording_summary
 DOMAIN = os.environ.setdefault("ROS_DOMAIN_ID", "43")
 
 
-@pytest.fixture(scope="module")
-def demo_run(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("demo")
+def _short_demo(folder, *options: str) -> tuple:
+    """rns_demo on the short roll scenario in ``folder`` with extra ``options``; returns the
+    scenario file and the summary rows by method."""
     scenario = folder / "short.yaml"
     scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
     summary = folder / "summary.json"
-    argv = ["--scenario", str(scenario), "--summary", str(summary)]
-    argv += ["--output", str(folder / "recordings"), "--domain-id", DOMAIN]
-    assert main(argv) == 0
-    rows = {row["method"]: row for row in json.loads(summary.read_text())}
-    return scenario, rows
+    argv = ["--scenario", str(scenario), "--summary", str(summary), "--domain-id", DOMAIN]
+    assert main([*argv, *options]) == 0
+    return scenario, {row["method"]: row for row in json.loads(summary.read_text())}
+
+
+@pytest.fixture(scope="module")
+def demo_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("demo")
+    return _short_demo(folder, "--output", str(folder / "recordings"))
 
 
 def test_demo_compares_reactionless_and_conventional_over_dds(demo_run):
@@ -80,14 +84,11 @@ def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
     once, a busy timer fires late), and under /clock the hold lasts simulated time. Advancing
     the reference by the nominal period left the camera 0.6-0.9 deg short of a 30 deg roll;
     with the actual hold times it is within 0.01 deg."""
-    scenario = tmp_path / "short.yaml"
-    scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
-    summary = tmp_path / "summary.json"
-    argv = ["--scenario", str(scenario), "--summary", str(summary), "--no-record"]
-    argv += ["--mode", "dynamic", "--methods", "dls", "--domain-id", DOMAIN]
-    argv += ["--real-time-factor", str(real_time_factor)]
-    assert main(argv) == 0
-    (row,) = json.loads(summary.read_text())
+    _, rows = _short_demo(
+        tmp_path, "--no-record", "--mode", "dynamic", "--methods", "dls",
+        "--real-time-factor", str(real_time_factor),
+    )  # fmt: skip
+    row = rows["dls"]
     assert row["final_camera_error_deg"] < 0.1
     assert row["max_base_deviation_deg"] < 5e-3
     assert row["angular_momentum_drift"] < 1e-9
@@ -98,13 +99,8 @@ def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path):
     controller keeps its ticks on the period grid, so sampling is synchronous and the base
     stays within 2e-5 deg (1.6-1.9e-6 measured). Free-running it turned 1.7e-2 deg; with
     commands served between ticks, 4e-4 deg."""
-    scenario = tmp_path / "short.yaml"
-    scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
-    summary = tmp_path / "summary.json"
-    argv = ["--scenario", str(scenario), "--summary", str(summary), "--no-record"]
-    argv += ["--real-time-factor", "0", "--methods", "dls", "--domain-id", DOMAIN]
-    assert main(argv) == 0
-    (row,) = json.loads(summary.read_text())
+    _, rows = _short_demo(tmp_path, "--no-record", "--real-time-factor", "0", "--methods", "dls")
+    row = rows["dls"]
     assert row["max_base_deviation_deg"] < 2e-5
     assert row["final_camera_error_deg"] < 0.05
 

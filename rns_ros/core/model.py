@@ -8,6 +8,8 @@ of thesis section 4.1.2, are named in configuration, never hard-coded.
 
 from __future__ import annotations
 
+import math
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,6 +22,11 @@ from rns_ros.core.validation import as_vector
 #: Joint kinds (Pinocchio short names) that have one position and one velocity coordinate.
 _ONE_DOF_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 _ONE_DOF_JOINTS += ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
+
+#: Relative tolerance of the triangle inequality on principal moments (I1 + I2 >= I3): URDFs
+#: exported from CAD round their moments, and a thin disk (I, I, 2I) sits exactly on the bound.
+TRIANGLE_RTOL = 1e-4
+_INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 
 @dataclass(frozen=True)
@@ -69,6 +76,7 @@ class FreeFloatingModel:
         self.model = model
         model.gravity = pin.Motion.Zero()
         self._check_joints()
+        self._check_bodies()
         self.n = model.nv - 6
         self.joint_names: tuple[str, ...] = tuple(model.names[2:])
         self.camera_frame_id = self._frame_id(spec.camera_frame, "camera_frame")
@@ -106,7 +114,12 @@ class FreeFloatingModel:
     def from_urdf_string(
         cls, xml: str, spec: ModelSpec | None = None, *, name: str = "robot"
     ) -> FreeFloatingModel:
-        """Build the model from URDF text (see :meth:`from_urdf`)."""
+        """Build the model from URDF text (see :meth:`from_urdf`).
+
+        Every link's ``<inertial>`` is checked as written (:func:`check_urdf_inertials`) before
+        Pinocchio reads the file: its parser turns an unreadable number into zero without failing.
+        """
+        check_urdf_inertials(xml, name)
         try:
             model = pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
@@ -125,6 +138,26 @@ class FreeFloatingModel:
                     f"{self.name}: joint '{model.names[index]}' is {kind}; rns_ros supports "
                     "revolute and prismatic joints (continuous joints: give them limits)"
                 )
+
+    def _check_bodies(self) -> None:
+        """Every moving body (a joint's link plus the fixed links merged into it) must have a
+        finite mass > 0 and a finite, symmetric positive definite rotational inertia: a
+        free-flyer's mass matrix is singular otherwise."""
+        model = self.model
+        for index in range(1, model.njoints):
+            body = model.inertias[index]
+            links = [
+                frame.name
+                for frame in model.frames
+                if frame.parentJoint == index and frame.type == pin.FrameType.BODY
+            ]
+            where = f"body of joint '{model.names[index]}' (links {links})"
+            if not (math.isfinite(body.mass) and body.mass > 0.0):
+                raise ModelError(
+                    f"{self.name}: {where} has mass {body.mass} kg; must be finite and > 0 "
+                    "(a moving link needs an <inertial>)"
+                )
+            _check_inertia_matrix(np.array(body.inertia), f"{self.name}: {where}")
 
     def _frame_id(self, frame: str, what: str) -> int:
         if not self.model.existFrame(frame):
@@ -185,3 +218,79 @@ class FreeFloatingModel:
     def joint_angles(self, q: np.ndarray) -> np.ndarray:
         """theta [rad] (n,) from a configuration q (7 + n,)."""
         return np.asarray(q)[7:]
+
+
+# URDF inertial checks ---------------------------------------------------------------------------
+def check_urdf_inertials(xml: str, name: str = "robot") -> None:
+    """Check every ``<link>``'s ``<inertial>`` as the URDF text writes it.
+
+    Links without ``<inertial>`` (frames such as ``camera``) are accepted. For the others: mass
+    [kg] finite and > 0; the six moments ``ixx ixy ixz iyy iyz izz`` [kg m^2] present and finite;
+    the inertia matrix positive definite; its principal moments obey the triangle inequality
+    I1 + I2 >= I3 (relative tolerance :data:`TRIANGLE_RTOL`).
+
+    Raises:
+        ModelError: one line naming the link and the bad value; or the text is not XML.
+    """
+    try:
+        root = ET.fromstring(xml.encode())
+    except ET.ParseError as exc:
+        raise ModelError(f"{name}: URDF could not be parsed: {exc}") from None
+    for link in root.iter("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        where = f"{name}: link '{link.get('name')}'"
+        mass = _number(inertial.find("mass"), "value", f"{where} <mass>")
+        if not mass > 0.0:
+            raise ModelError(f"{where}: mass must be finite and > 0 kg, got {mass}")
+        element = inertial.find("inertia")
+        values = {key: _number(element, key, f"{where} <inertia>") for key in _INERTIA_KEYS}
+        matrix = np.array(
+            [
+                [values["ixx"], values["ixy"], values["ixz"]],
+                [values["ixy"], values["iyy"], values["iyz"]],
+                [values["ixz"], values["iyz"], values["izz"]],
+            ]
+        )
+        _check_inertia_matrix(matrix, where)
+
+
+def _number(element: ET.Element | None, key: str, where: str) -> float:
+    """The finite float in attribute ``key`` of ``element``, else ModelError naming it."""
+    if element is None:
+        raise ModelError(f"{where} is missing")
+    text = element.get(key)
+    if text is None:
+        raise ModelError(f"{where}: attribute {key} is missing")
+    try:
+        value = float(text)
+    except ValueError:
+        raise ModelError(f"{where}: {key}={text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ModelError(f"{where}: {key}={text!r} must be finite")
+    return value
+
+
+def _check_inertia_matrix(matrix: np.ndarray, where: str) -> None:
+    """Rotational inertia [kg m^2] (3, 3): finite, symmetric, positive definite, triangle."""
+    if not np.all(np.isfinite(matrix)):
+        raise ModelError(f"{where}: inertia must be finite, got {matrix.tolist()}")
+    if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=0.0):
+        raise ModelError(f"{where}: inertia must be symmetric, got {matrix.tolist()}")
+    moments = np.linalg.eigvalsh(matrix)  # ascending
+    if not moments[0] > 0.0:
+        raise ModelError(
+            f"{where}: inertia must be positive definite, got principal moments "
+            f"{_fmt(moments)} kg m^2 from {_fmt(matrix)}"
+        )
+    if moments[0] + moments[1] < moments[2] * (1.0 - TRIANGLE_RTOL):
+        raise ModelError(
+            f"{where}: principal moments {_fmt(moments)} kg m^2 break the triangle inequality "
+            f"I1 + I2 >= I3 ({moments[0] + moments[1]:.6g} < {moments[2]:.6g}); no rigid body "
+            "has them"
+        )
+
+
+def _fmt(values: np.ndarray) -> str:
+    return np.array2string(np.asarray(values), precision=6, separator=", ").replace("\n", "")

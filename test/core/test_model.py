@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 from rns_ros.core import ConfigError, FreeFloatingModel, InputError, ModelError, ModelSpec
-from rns_ros.core.config import load_model_config
+from rns_ros.core.config import load_model, load_model_config
 from rns_ros.resources import default_model_config
 
 # Thesis Table 4.1: mass [kg] and principal moments [kg m^2] of links 1-7.
@@ -175,3 +177,80 @@ def test_model_config_rejects_bad_types(tmp_path):
 
 def test_base_link_is_the_urdf_root(robot):
     assert robot.base_link == "base_link"
+
+
+# --- inertial validation (issue 11): what the URDF writes, and what Pinocchio builds from it ----
+def _default_urdf() -> str:
+    urdf, _ = load_model_config(default_model_config())
+    return urdf.read_text()
+
+
+def _with_inertial(link: str, **attributes: str) -> str:
+    """The default URDF with attributes of ``link``'s <mass> (``value``) or <inertia> replaced."""
+    root = ET.fromstring(_default_urdf())
+    inertial = root.find(f"link[@name='{link}']/inertial")
+    for key, value in attributes.items():
+        inertial.find("mass" if key == "value" else "inertia").set(key, value)
+    return ET.tostring(root, encoding="unicode")
+
+
+@pytest.mark.parametrize(
+    ("link", "attributes", "message"),
+    [
+        # Pinocchio would build a base of zero inertia from this one (urdfdom drops the element)
+        ("base_link", {"ixx": "nan"}, r"link 'base_link' <inertia>: ixx='nan' must be finite"),
+        ("link_2", {"iyy": "inf"}, r"link 'link_2' <inertia>: iyy='inf' must be finite"),
+        ("link_1", {"izz": "abc"}, r"link 'link_1' <inertia>: izz='abc' is not a number"),
+        ("link_3", {"ixx": "-3.81"}, r"link 'link_3': inertia must be positive definite"),
+        # diagonal fine, off-diagonal too large: one principal moment < 0
+        ("link_1", {"ixy": "0.1"}, r"link 'link_1': inertia must be positive definite"),
+        ("link_5", {"izz": "1.0"}, r"link 'link_5': principal moments .* triangle inequality"),
+        ("link_7", {"value": "0"}, r"link 'link_7': mass must be finite and > 0 kg, got 0.0"),
+        ("link_7", {"value": "-25"}, r"link 'link_7': mass must be finite and > 0 kg, got -25"),
+        ("link_4", {"value": "nan"}, r"link 'link_4' <mass>: value='nan' must be finite"),
+    ],
+)
+def test_bad_link_inertial_is_a_one_line_model_error_naming_the_link(link, attributes, message):
+    with pytest.raises(ModelError, match=message) as caught:
+        FreeFloatingModel.from_urdf_string(_with_inertial(link, **attributes))
+    assert "\n" not in str(caught.value)
+
+
+def test_missing_inertia_attribute_is_named():
+    root = ET.fromstring(_default_urdf())
+    del root.find("link[@name='link_6']/inertial/inertia").attrib["iyz"]
+    with pytest.raises(ModelError, match=r"link 'link_6' <inertia>: attribute iyz is missing"):
+        FreeFloatingModel.from_urdf_string(ET.tostring(root, encoding="unicode"))
+
+
+def test_thin_disk_on_the_triangle_bound_is_accepted():
+    # I1 + I2 = I3 exactly, and a rounding residue (7e-5 relative) past it: accepted
+    for izz in ("0.426", "0.42603"):
+        FreeFloatingModel.from_urdf_string(_with_inertial("link_5", izz=izz))
+
+
+def test_every_loader_path_validates_inertials(tmp_path):
+    broken = tmp_path / "broken.urdf"
+    broken.write_text(_with_inertial("base_link", ixx="nan"))
+    with pytest.raises(ModelError, match="link 'base_link'"):
+        FreeFloatingModel.from_urdf(broken)
+    config = tmp_path / "model.yaml"
+    config.write_text(f"urdf: {broken.name}\n")
+    with pytest.raises(ModelError, match="link 'base_link'"):
+        load_model(config)
+
+
+def test_moving_link_without_inertial_is_a_massless_body():
+    # link_7 carries the camera: without its <inertial> Pinocchio builds a body of mass 0
+    root = ET.fromstring(_default_urdf())
+    link = root.find("link[@name='link_7']")
+    link.remove(link.find("inertial"))
+    with pytest.raises(ModelError, match=r"body of joint 'joint_7' \(links \['link_7'.*mass 0"):
+        FreeFloatingModel.from_urdf_string(ET.tostring(root, encoding="unicode"))
+
+
+def test_pinocchio_bodies_are_checked_too(robot):
+    model = robot.model.copy()
+    model.inertias[1] = pin.Inertia(2550.0, np.zeros(3), np.zeros((3, 3)))
+    with pytest.raises(ModelError, match=r"joint 'root_joint'.*positive definite"):
+        FreeFloatingModel(model, robot.spec)

@@ -15,3 +15,7 @@ class ConfigError(RnsError, ValueError):
 
 class InputError(RnsError, ValueError):
     """A numeric input (configuration, velocity, matrix) has the wrong shape or is not finite."""
+
+
+class SimulationDivergedError(RnsError, ArithmeticError):
+    """A simulation step produced a non-finite state; the simulator kept the last finite one."""

@@ -14,8 +14,26 @@ Two modes (:class:`SimulationMode`):
       tau = H* (theta_dd_ref + K_d (theta_dot_ref - theta_dot) + K_p (theta_ref - theta)) + c*,
       H* = M_m - M_bm^T M_b^-1 M_bm,   c* = c_m - M_bm^T M_b^-1 c_b.
 
+  The servo respects the URDF joint limits the way a real drive does, without changing anything
+  while they are not reached. Its acceleration is rewritten as a velocity loop,
+
+      a = theta_dd_ref + K_d (theta_dot_d - theta_dot),
+      theta_dot_d = theta_dot_ref + (K_p / K_d) (theta_ref - theta)    [rad/s], (n,),
+
+  and the demanded velocity theta_dot_d is scaled *uniformly* (the whole vector, so its direction,
+  e.g. a reactionless one, is kept; clipping joints one by one would turn the base) until no joint
+  exceeds its velocity limit. With computed torque the joint rates then relax to theta_dot_d at
+  rate K_d (a first-order lag, each step a convex combination while K_d dt <= 1), so they stay
+  within the limits. Then the acceleration a is scaled uniformly (again keeping its direction) so
+  that tau fits the URDF effort limits, and finally tau is clipped per joint (the actuator's hard
+  limit, only active when the bias c* alone exceeds it). URDF limits that are zero, negative or
+  infinite count as absent (unlimited).
+
   Optional viscous joint friction -D theta_dot acts in the plant (default D = 0, so momentum is
   exactly conserved).
+
+A step that would leave a non-finite state (q, v or effort) keeps the previous state and raises
+:class:`rns_ros.core.errors.SimulationDivergedError`.
 
 Integration: classical RK4 in Runge-Kutta-Munthe-Kaas form on the configuration manifold. Stage
 configurations are ``pin.integrate(q, Theta)``; each stage velocity is pulled back to the step's
@@ -31,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from rns_ros.core.errors import ConfigError
+from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.core.fastmath import solve_small
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import Choice, as_vector, positive
@@ -43,6 +61,9 @@ JointVelocityField = Callable[[float, np.ndarray], np.ndarray]
 #: dynamics e_dd + K_d e_d + K_p e = 0 (K_p = omega_n^2, K_d = 2 zeta omega_n).
 DEFAULT_SERVO_NATURAL_FREQUENCY = 50.0
 DEFAULT_SERVO_DAMPING_RATIO = 1.0
+#: Largest share [-] of an effort limit the velocity-product torques c* may take before the servo
+#: slows the arm (the rest is kept to accelerate and brake); see ``_speed_cap``.
+BIAS_SHARE = 0.5
 
 
 class SimulationMode(Choice):
@@ -59,8 +80,9 @@ class ServoGains:
     """Joint servo gains (dynamic mode), each shape (n,).
 
     Attributes:
-        stiffness: K_p [1/s^2] (acceleration per rad of error; computed-torque form).
-        damping: K_d [1/s].
+        stiffness: K_p [1/s^2] (acceleration per rad of error; computed-torque form), >= 0.
+        damping: K_d [1/s], >= 0; > 0 wherever K_p > 0 (the velocity-limited servo needs
+            theta_dot_d = theta_dot_ref + (K_p / K_d) e, see the module docstring).
         friction: viscous joint friction D [N m s/rad] acting in the plant, >= 0.
     """
 
@@ -157,10 +179,31 @@ class FreeFloatingSimulator:
         self.gains = gains or ServoGains.critically_damped(n)
         for name in ("stiffness", "damping", "friction"):
             as_vector(getattr(self.gains, name), n, f"gains.{name}")
+        self._check_servo_gains()
+        stiffness, damping = self.gains.stiffness, self.gains.damping
+        # K_p / K_d [1/s]; 0 where the joint has no servo at all (K_p = K_d = 0)
+        self._position_rate = np.divide(stiffness, damping, out=np.zeros(n), where=damping > 0.0)
+        self.velocity_limits = _limits(robot.velocity_limits)
+        self.effort_limits = _limits(robot.model.effortLimit[6:])
         self._model, self._data = robot.model, robot.data
         self._tau_full = np.zeros(robot.model.nv)
         self._check_friction_stiffness()
         self.reset()
+
+    def _check_servo_gains(self) -> None:
+        """K_p, K_d >= 0, and K_d > 0 wherever K_p > 0 (an undamped servo has no velocity loop)."""
+        for name in ("stiffness", "damping"):
+            values = getattr(self.gains, name)
+            if (values < 0.0).any():
+                raise ConfigError(f"gains.{name} must be >= 0, got {values.tolist()}")
+        undamped = np.flatnonzero((self.gains.stiffness > 0.0) & (self.gains.damping == 0.0))
+        if undamped.size:
+            joint = undamped[0]
+            raise ConfigError(
+                f"servo on {self.robot.joint_names[joint]} has stiffness "
+                f"{self.gains.stiffness[joint]} 1/s^2 but damping 0; damping must be > 0 "
+                "wherever stiffness > 0"
+            )
 
     def _check_friction_stiffness(self) -> None:
         """Reject viscous friction so stiff that an explicit step cannot resolve it.
@@ -233,14 +276,34 @@ class FreeFloatingSimulator:
 
     # --- stepping ------------------------------------------------------------------------------
     def step(self, joint_velocity: JointVelocityField | None = None) -> None:
-        """Advance by dt.
+        """Advance by dt; the state stays finite.
 
         Args:
             joint_velocity: kinematic mode only: a continuous-time law theta_dot = f(t, q)
                 evaluated at every RK4 stage instead of the held reference velocity (for closed
                 loops without sampling, e.g. the reactionless field P_RNS(q) theta_dot_a).
                 None: the current reference is held over the step (zero-order hold).
+
+        Raises:
+            SimulationDivergedError: the step produced a non-finite q, v or effort; time, state and
+                reference are left as they were before the step (the last finite state).
         """
+        before = (self.time, self.q, self._v, self.effort, self.reference)
+        with np.errstate(all="ignore"):  # overflow is reported below, as SimulationDivergedError
+            self._advance(joint_velocity)
+        bad = [
+            name
+            for name, value in (("q", self.q), ("v", self._v), ("effort", self.effort))
+            if value is not None and not np.isfinite(value).all()
+        ]
+        if bad:
+            self.time, self.q, self._v, self.effort, self.reference = before
+            raise SimulationDivergedError(
+                f"{self.mode} simulation diverged in the step from t = {self.time:.6g} s: "
+                f"non-finite {' and '.join(bad)}; kept the last finite state"
+            )
+
+    def _advance(self, joint_velocity: JointVelocityField | None) -> None:
         if joint_velocity is not None:
             if self.mode is not SimulationMode.KINEMATIC:
                 raise ConfigError("a joint-velocity law needs mode 'kinematic'")
@@ -310,19 +373,34 @@ class FreeFloatingSimulator:
         self.effort = np.zeros(self.robot.n)
 
     def _servo_torque(self) -> np.ndarray:
-        """Computed-torque servo on the free-floating joint-space dynamics (see module doc)."""
+        """Limited computed-torque servo on the base-eliminated dynamics (eq. 2.18-2.19), [N m],
+        (n,): see the module docstring for the velocity and effort limits."""
         model, data, q, v = self._model, self._data, self.q, self.v
-        ref, gains = self.reference, self.gains
+        ref = self.reference
         h_star, c_star = base_eliminated_dynamics(
             pin.crba(model, data, q), pin.nonLinearEffects(model, data, q, v)
         )
         theta, theta_dot = q[7:], v[6:]
-        acceleration = (
-            ref.accelerations
-            + gains.damping * (ref.velocities - theta_dot)
-            + gains.stiffness * (ref.positions - theta)
-        )
-        return h_star @ acceleration + c_star
+        demand = ref.velocities + self._position_rate * (ref.positions - theta)  # [rad/s]
+        demand *= _uniform_scale(demand, self._speed_cap(theta_dot, c_star))
+        acceleration = ref.accelerations + self.gains.damping * (demand - theta_dot)
+        effort = h_star @ acceleration
+        effort *= _effort_scale(effort, c_star, self.effort_limits)
+        return np.clip(effort + c_star, -self.effort_limits, self.effort_limits)
+
+    def _speed_cap(self, theta_dot: np.ndarray, bias: np.ndarray) -> np.ndarray:
+        """Velocity limits [rad/s] (n,) for the demand: the URDF limits, lowered uniformly while
+        the velocity-product torques c* take more than BIAS_SHARE of an effort limit.
+
+        c* is quadratic in the joint rates (zero gravity; exactly so at zero momentum), so
+        running a factor k slower divides it by k^2: the cap keeps the rest of each actuator's
+        effort free to accelerate and, above all, to brake.
+        """
+        load = np.max(np.abs(bias) / self.effort_limits)
+        if load <= BIAS_SHARE:
+            return self.velocity_limits
+        speed = np.max(np.abs(theta_dot) / self.velocity_limits)  # fraction of the limits
+        return self.velocity_limits * (speed * np.sqrt(BIAS_SHARE / load))
 
     def _acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         self._tau_full[6:] = tau - self.gains.friction * v[6:]
@@ -344,6 +422,34 @@ class FreeFloatingSimulator:
         self.q = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
         self._v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
         self.effort = tau
+
+
+def _limits(values) -> np.ndarray:
+    """URDF limits (n,) with absent ones (<= 0, non-finite) as +inf."""
+    limits = np.array(values, dtype=float)
+    limits[~(np.isfinite(limits) & (limits > 0.0))] = np.inf
+    return limits
+
+
+def _uniform_scale(vector: np.ndarray, limits: np.ndarray) -> float:
+    """Largest s in [0, 1] with |s vector_i| <= limits_i for every i."""
+    magnitude = np.abs(vector)
+    over = magnitude > limits
+    return float((limits[over] / magnitude[over]).min()) if over.any() else 1.0
+
+
+def _effort_scale(varying: np.ndarray, bias: np.ndarray, limits: np.ndarray) -> float:
+    """Largest s in [0, 1] with |s varying_i + bias_i| <= limits_i for every i (0 if even the
+    bias alone exceeds a limit)."""
+    scale = 1.0
+    for b, c, limit in zip(varying, bias, limits, strict=True):
+        if abs(c) >= limit:
+            return 0.0
+        if b > 0.0:
+            scale = min(scale, (limit - c) / b)
+        elif b < 0.0:
+            scale = min(scale, (-limit - c) / b)
+    return scale
 
 
 def base_eliminated_dynamics(

@@ -2,7 +2,10 @@
 
 Tolerances follow the simulator issue: momentum drift < 1e-9 relative over 20 s of vigorous
 motion at 1 ms in both modes; the CoM stays put with zero momentum; reactionless motion keeps the
-base attitude to < 1e-6 deg over 20 s; halving dt divides the error by ~16.
+base attitude to < 1e-6 deg over 20 s; halving dt divides the error by ~16. The vigorous
+reference stays within the URDF velocity limits (its peak speeds are 60-91 % of them), so the
+dynamic-mode servo runs unsaturated there, exactly as the plain computed-torque law; the limits
+themselves are tested with steps far beyond them.
 """
 
 from __future__ import annotations
@@ -13,12 +16,14 @@ import pytest
 from rns_testing import SATELLITE_OBSERVATION_DEG
 
 from rns_ros.core import ConfigError, FreeFloatingState, InputError
+from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
+from rns_ros.core.errors import SimulationDivergedError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import reactionless_joint_velocity
 from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationMode
 
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
-AMPLITUDE = np.array([0.6, -0.5, 0.8, 0.9, -1.0, 1.2, 1.5])  # rad
+AMPLITUDE = np.array([0.6, -0.5, 0.5, 0.75, -0.8, 0.7, 1.1])  # rad
 FREQUENCY = np.array([0.5, 0.7, 0.9, 0.6, 1.1, 1.3, 0.8])  # rad/s
 MOMENTUM = np.array([0.1, -0.05, 0.02, 0.3, -0.2, 0.5])  # [kg m/s, kg m^2/s] about the CoM
 
@@ -165,14 +170,15 @@ def test_viscous_friction_is_internal_so_momentum_is_kept(robot):
 
 
 def test_viscous_friction_slows_the_joints(robot):
-    """Zero servo gains: the computed-torque feedforward alone spins the joints up to 0.2 rad/s,
-    then holds theta_dd = 0; only friction can slow them afterwards."""
+    """Zero servo gains: the computed-torque feedforward alone spins the joints up to 0.2 rad/s
+    (at 0.2 rad/s^2: at most 63 % of the effort limits, which 0.4 rad/s^2 would exceed), then
+    holds theta_dd = 0; only friction can slow them afterwards."""
 
     def final_speed(friction):
         gains = ServoGains(np.zeros(7), np.zeros(7), np.full(7, friction))
         simulator = _simulator(robot, "dynamic", gains=gains)
-        simulator.set_reference(accelerations=np.full(7, 0.4))
-        for _ in range(500):
+        simulator.set_reference(accelerations=np.full(7, 0.2))
+        for _ in range(1000):
             simulator.step()
         simulator.set_reference(accelerations=np.zeros(7))
         for _ in range(500):
@@ -216,3 +222,78 @@ def test_bad_settings_and_references_are_rejected(robot):
     dynamic = FreeFloatingSimulator(robot, mode=SimulationMode.DYNAMIC)
     with pytest.raises(ConfigError, match="needs mode 'kinematic'"):
         dynamic.step(_generic)
+
+
+def _step_response(simulator, step, duration):
+    """Hold theta_ref = theta_0 + step; return (peak |theta_dot| / limit (n,), peak |tau| [N m]
+    (n,), largest |cos| gap between theta_dot and the step direction, momentum the joints
+    carried [SI])."""
+    robot = simulator.robot
+    simulator.set_reference(positions=THETA_0 + step)
+    speed, effort, off_direction, carried = np.zeros(robot.n), np.zeros(robot.n), 0.0, 0.0
+    direction = step / np.linalg.norm(step)
+    for _ in range(round(duration / simulator.dt)):
+        simulator.step()
+        theta_dot = simulator.v[6:]
+        speed = np.maximum(speed, np.abs(theta_dot) / robot.velocity_limits)
+        effort = np.maximum(effort, np.abs(simulator.effort))
+        norm = np.linalg.norm(theta_dot)
+        if norm > 0.1 * robot.velocity_limits.min():  # direction is meaningless near rest
+            off_direction = max(off_direction, 1.0 - abs(direction @ theta_dot) / norm)
+        centroidal_map = pin.computeCentroidalMap(robot.model, robot.data, simulator.q)
+        carried = max(carried, np.linalg.norm(centroidal_map[:, 6:] @ theta_dot))
+    return speed, effort, off_direction, carried
+
+
+def test_a_step_far_beyond_the_servo_respects_the_joint_limits(robot):
+    """A 1 rad step (unlimited, the servo ran the joints at 45 rad/s, 90x the URDF limit): the
+    demanded velocity is scaled as a whole, so the joints move along the step direction within
+    their velocity limits and the torques within their effort limits, and momentum is kept.
+    Tolerance: the torque is held over each 1 ms step while H* and c* change, so the rates land
+    up to 0.8 % past the limit (0.3 % at 0.5 ms); the command check allows 1 %."""
+    step = np.array([1.0, -0.6, 0.8, 1.0, -0.9, 0.5, 1.0])  # rad
+    simulator = _simulator(robot, "dynamic", momentum=MOMENTUM)
+    speed, effort, off_direction, carried = _step_response(simulator, step, 2.5)
+    assert speed.max() <= 1.0 + VELOCITY_LIMIT_TOLERANCE
+    assert speed.max() > 0.95  # the limit was reached: the test exercised the saturation
+    assert np.all(effort <= simulator.effort_limits * (1.0 + 1e-12))
+    assert off_direction < 1e-3  # per-joint clipping would bend the path (and turn the base)
+    drift = np.abs(simulator.centroidal_momentum() - MOMENTUM).max()
+    assert drift / carried < 1e-9
+
+
+def test_a_100_rad_reference_stays_finite_and_within_the_limits(robot):
+    """The issue's input (unlimited: NaN after 5 ms). At full speed on every joint the
+    velocity-product torques c* would exceed the 200 N m of joint 2 after ~3.4 s; the servo
+    slows the arm before that instead of losing the joints."""
+    simulator = _simulator(robot, "dynamic")
+    speed, effort, _, _ = _step_response(simulator, np.full(robot.n, 100.0), 5.0)
+    assert np.isfinite(simulator.q).all()
+    assert np.isfinite(simulator.v).all()
+    assert speed.max() <= 1.0 + VELOCITY_LIMIT_TOLERANCE
+    assert np.all(effort <= simulator.effort_limits * (1.0 + 1e-12))
+
+
+def test_a_diverging_step_keeps_the_last_finite_state_and_raises(robot, monkeypatch):
+    simulator = _simulator(robot, "dynamic")
+    simulator.set_reference(*vigorous_reference(0.0))
+    for _ in range(10):
+        simulator.step()
+    before = simulator.snapshot()
+    nan = np.full(robot.model.nv, np.nan)
+    monkeypatch.setattr(simulator, "_acceleration", lambda q, v, tau: nan)
+    with pytest.raises(SimulationDivergedError, match=r"t = 0\.01 s: non-finite q and v"):
+        simulator.step()
+    after = simulator.snapshot()
+    assert after.time == before.time
+    assert np.array_equal(after.q, before.q)
+    assert np.array_equal(after.v, before.v)
+    monkeypatch.undo()
+    simulator.step()  # and it goes on from there
+    assert simulator.time == pytest.approx(before.time + simulator.dt)
+
+
+def test_an_undamped_servo_is_rejected(robot):
+    gains = ServoGains(np.full(7, 100.0), np.zeros(7), np.zeros(7))
+    with pytest.raises(ConfigError, match="damping must be > 0 wherever stiffness > 0"):
+        _simulator(robot, "dynamic", gains=gains)

@@ -9,18 +9,22 @@ Subscribes:
                   best effort, depth 1. ``header.frame_id`` is ``world_frame``, the base link or
                   the camera frame (empty or unstamped: ``default_twist_frame``). Only the
                   angular part is achievable; the linear part is reported as unachieved.
-    joint_states  sensor_msgs/JointState (matched by joint name)
-    base_odom     nav_msgs/Odometry (base pose in world; identity until the first message)
-Publishes (nothing until the first joint state):
+    joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
+                  ``state_timeout`` (receipt time) or from more than one publisher stops the arm
+    base_odom     nav_msgs/Odometry (base pose in world; identity until the first message, then
+                  watched like joint_states)
+Publishes (joint commands only once a joint state has arrived):
     joint_references  trajectory_msgs/JointTrajectory, one point: positions = integrated
                       reference at the start of the period, velocities = held theta_dot
                       (``output_interface: trajectory``), or
     joint_velocities  std_msgs/Float64MultiArray, theta_dot [rad/s] in the order of the ``joints``
                       parameter (``output_interface: velocity``; the ros2_control
                       forward_command_controller convention: remap to <controller>/commands)
-    ~/status          diagnostic_msgs/DiagnosticArray every period: state, sigma_min, the three
-                      determinants, lambda^2, speed scale, unachieved twist, predicted coupling
-                      momentum
+    ~/status          diagnostic_msgs/DiagnosticArray every period from start-up: state,
+                      sigma_min, the three determinants, lambda^2, speed scale, unachieved twist,
+                      predicted coupling momentum (telemetry)
+    /diagnostics      diagnostic_msgs/DiagnosticArray at 1 Hz (wall clock): the newest status,
+                      hardware_id = robot name (what diagnostic_updater users aggregate)
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -56,6 +61,7 @@ from rns_ros.core.teleop import (
     ControllerState,
     GateOutput,
     TwistCommand,
+    resolve_twist_frame,
     twist_frame_ids,
     validate_twist,
 )
@@ -80,6 +86,17 @@ MAX_PREDICTION_AGE = 0.1
 #: Shortest interval between two ticks when commands are served at once [s]: a command flood
 #: cannot make the controller compute faster than this; a change within it waits for the tick.
 MIN_TICK_INTERVAL = 1e-3
+#: Period of the /diagnostics publication and of the check of who publishes our inputs [s].
+DIAGNOSTICS_PERIOD = 1.0
+#: Status level of each state (diagnostic_msgs/DiagnosticStatus).
+STATE_LEVELS = {
+    ControllerState.OK: DiagnosticStatus.OK,
+    ControllerState.IDLE: DiagnosticStatus.OK,
+    ControllerState.RAMPING: DiagnosticStatus.OK,
+    ControllerState.INVALID_COMMAND: DiagnosticStatus.ERROR,
+    ControllerState.STALE_STATE: DiagnosticStatus.ERROR,
+    ControllerState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
+}
 
 PARAMETERS = (
     MODEL_CONFIG,
@@ -142,7 +159,8 @@ PARAMETERS = (
     ParameterSpec(
         "max_angular_speed",
         1.0,
-        "Commands with a larger |angular| are rejected",
+        "Commands with a larger |angular| are scaled down to it as a whole vector (axis kept, "
+        "status SPEED_LIMITED); NaN/Inf are rejected",
         "[rad/s]",
         1e-3,
         10.0,
@@ -167,6 +185,36 @@ PARAMETERS = (
         read_only=False,
     ),
     ParameterSpec(
+        "start_acceleration",
+        1.0,
+        "Angular acceleration of the command when starting from rest (first command, after a "
+        "stop, a stale or jumping state, or a restart)",
+        "[rad/s^2]",
+        1e-3,
+        1000.0,
+        read_only=False,
+    ),
+    ParameterSpec(
+        "state_timeout",
+        0.1,
+        "joint_states (and base_odom once it has arrived) older than this by receipt time stop "
+        "the arm: zero velocity, STALE_STATE error; a fresh state resumes with a ramp",
+        "[s]",
+        0.005,
+        10.0,
+        read_only=False,
+    ),
+    ParameterSpec(
+        "state_jump_tolerance",
+        0.05,
+        "A joint angle this far from its prediction (previous sample moved on at its rate) is a "
+        "discontinuity (reset, new source): the reference restarts there, the command ramps up",
+        "[rad]",
+        1e-4,
+        10.0,
+        read_only=False,
+    ),
+    ParameterSpec(
         "immediate_reaction",
         True,
         "Serve a changed command at once and restart the period (the hold in progress is cut "
@@ -183,8 +231,8 @@ PARAMETERS = (
     ParameterSpec(
         "default_twist_frame",
         "camera",
-        "Axes of unstamped commands and of an empty header.frame_id",
-        choices=("world", "base", "camera"),
+        "Axes of unstamped commands and of an empty header.frame_id: world (or the world_frame "
+        "name), base (or the URDF base link name), camera (or the camera frame name)",
     ),
     ParameterSpec(
         "output_interface",
@@ -209,14 +257,10 @@ class ControllerNode(Node):
         self.robot = load_model(params["model_config"] or default_model_config())
         self._period = 1.0 / params["rate"]
         self.controller = ReactionlessController(self.robot, self._settings(params))
-        self._gate = CommandGate(
-            params["command_timeout"],
-            params["stop_deceleration"],
-            TwistFrame.parse(params["default_twist_frame"]),
-        )
         self._frames = twist_frame_ids(
             self.robot, params["world_frame"], params["default_twist_frame"]
         )
+        self._gate = self._command_gate(params)
         self._theta: np.ndarray | None = None
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
@@ -232,8 +276,19 @@ class ControllerNode(Node):
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._theta_rate: np.ndarray | None = None
         self._theta_stamp = None
+        # input watchdogs: monotonic receipt times [s], a discontinuity seen in joint_states,
+        # and what the graph says about who publishes our inputs (checked every second)
+        self._state_received = -np.inf
+        self._odom_received: float | None = None
+        self._jump: str | None = None
+        self._state_publishers: list[str] = []
+        self._advisories: list[str] = []
+        self._warned_types: set[str] = set()
+        self._last_state = ControllerState.WAITING_FOR_STATE
+        self._last_status: DiagnosticStatus | None = None
 
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self._command_type = TwistStamped if params["twist_stamped"] else Twist
         if params["twist_stamped"]:
             self.create_subscription(TwistStamped, "cmd_twist", self._on_stamped, command_qos)
         else:
@@ -241,6 +296,9 @@ class ControllerNode(Node):
         # Only the newest state matters; best effort also matches reliable publishers.
         self.create_subscription(JointState, "joint_states", self._on_joint_state, command_qos)
         self.create_subscription(Odometry, "base_odom", self._on_odom, command_qos)
+        self._topics = {
+            name: self.resolve_topic_name(name) for name in ("cmd_twist", "joint_states")
+        }
 
         self._trajectory = params["output_interface"] == "trajectory"
         output_qos = QoSProfile(depth=1)
@@ -251,11 +309,20 @@ class ControllerNode(Node):
             self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
             self._output = self.create_publisher(Float64MultiArray, "joint_velocities", output_qos)
         self._status = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
+        )
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._timer = self.create_timer(self._period, self._on_tick)
+        # wall clock: diagnostics and the graph check go on while sim time is paused
+        self.create_timer(
+            DIAGNOSTICS_PERIOD,
+            self._on_diagnostics,
+            clock=Clock(clock_type=ClockType.STEADY_TIME),
+        )
         self.get_logger().info(
             f"{params['method']} reactionless control of {self.robot.name} at {params['rate']} Hz "
-            f"({params['hold_correction']} hold); waiting for joint_states"
+            f"({params['hold_correction']} hold); waiting for {self._topics['joint_states']}"
         )
 
     # --- inputs ---------------------------------------------------------------------------------
@@ -280,6 +347,13 @@ class ControllerNode(Node):
             self._gate.reject(str(exc))
             self.get_logger().error(f"rejected cmd_twist: {exc}", throttle_duration_sec=1.0)
             return
+        if command.requested_speed is not None:
+            self.get_logger().warn(
+                f"cmd_twist |angular| {command.requested_speed:.4g} rad/s is over "
+                f"max_angular_speed {self._params['max_angular_speed']:.4g} rad/s: scaled to it "
+                "(axis kept)",
+                throttle_duration_sec=1.0,
+            )
         self._gate.accept(command)
         if self._immediate and self._changes_output(command):
             now = time.monotonic()
@@ -302,12 +376,36 @@ class ControllerNode(Node):
         except InputError as exc:
             self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
             return
-        if command.positions is not None:
-            self._theta = command.positions
-            self._theta_rate = command.velocities
-            self._theta_stamp = Time.from_msg(
-                msg.header.stamp, clock_type=self.get_clock().clock_type
-            )
+        if command.positions is None:
+            return
+        stamp = Time.from_msg(msg.header.stamp, clock_type=self.get_clock().clock_type)
+        if self._theta is not None and self._jump is None:
+            self._jump = self._discontinuity(command.positions, stamp)
+        self._theta = command.positions
+        self._theta_rate = command.velocities
+        self._theta_stamp = stamp
+        self._state_received = time.monotonic()
+
+    def _discontinuity(self, theta: np.ndarray, stamp: Time) -> str | None:
+        """Why ``theta`` cannot follow from the previous sample, or None.
+
+        The previous sample moved on by the stamp difference (clipped to [0, MAX_PREDICTION_AGE])
+        at its rates predicts this one within far less than ``state_jump_tolerance`` while the arm
+        moves smoothly; a reset, a re-homed robot or a second source does not.
+        """
+        dt = (stamp - self._theta_stamp).nanoseconds * 1e-9
+        predicted = self._theta
+        if self._theta_rate is not None:
+            predicted = predicted + min(max(dt, 0.0), MAX_PREDICTION_AGE) * self._theta_rate
+        error = np.abs(theta - predicted)
+        joint = int(np.argmax(error))
+        if error[joint] <= self._params["state_jump_tolerance"]:
+            return None
+        return (
+            f"joint_states jumped: {self.robot.joint_names[joint]} {theta[joint]:.4g} rad where "
+            f"{predicted[joint]:.4g} rad was predicted (state_jump_tolerance "
+            f"{self._params['state_jump_tolerance']} rad)"
+        )
 
     def _on_odom(self, msg: Odometry) -> None:
         pose = msg.pose.pose
@@ -317,24 +415,42 @@ class ControllerNode(Node):
         norm = np.linalg.norm(orientation)
         if np.all(np.isfinite(position)) and np.isfinite(norm) and norm > 0.5:
             self._base_position, self._base_orientation = position, orientation / norm
+            self._odom_received = time.monotonic()
 
     # --- control period -------------------------------------------------------------------------
     def _on_tick(self) -> None:
-        if self._theta is None:
-            return  # nothing is published until the first joint state
         now = time.monotonic()
+        if self._theta is None:
+            self._publish_status(
+                ControllerState.WAITING_FOR_STATE,
+                f"waiting for {self._topics['joint_states']}",
+                {"method": self.controller.settings.method.value},
+            )
+            return
         # the previous output was held this long on the plant's clock (sim time under /clock)
         clock_now = self.get_clock().now().nanoseconds * 1e-9
         if self._last_tick_clock is not None:
             self.controller.end_hold(clock_now - self._last_tick_clock)
         self._last_tick, self._last_tick_clock = now, clock_now
+        fault = self._input_fault(now)
+        if fault is not None:
+            self._hold_still(*fault)
+            return
         state = FreeFloatingState.compute(
             self.robot,
             self.robot.configuration(
                 self._predicted_theta(), self._base_position, self._base_orientation
             ),
         )
-        gate = self._gate.update(time.monotonic(), self._period)
+        if self._jump is not None:
+            self.get_logger().warn(
+                f"{self._jump}: reference restarted at the measured angles, command ramps up "
+                "from rest"
+            )
+            self._jump = None
+            self._gate.stop()
+            self._stopped = True
+        gate = self._gate.update(now, self._period)
         if self._stopped or gate.stopped:
             self.controller.resync(state)  # restart the reference where the arm is
         elif np.abs(self.controller.reference_positions - state.theta).max() > RESYNC_TOLERANCE:
@@ -345,8 +461,50 @@ class ControllerNode(Node):
         step = self.controller.step(state, omega)
         self._stopped = gate.stopped
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
+        if not (np.all(np.isfinite(velocities)) and np.all(np.isfinite(step.reference_positions))):
+            self._hold_still(
+                ControllerState.INVALID_COMMAND, "the law produced a non-finite joint velocity"
+            )
+            return
         self._publish_output(step.reference_positions, velocities)
-        self._publish_status(step, gate, self._state(step, gate))
+        state_now = self._state(step, gate, state)
+        self._publish_status(state_now, gate.detail, self._step_values(step, gate))
+
+    def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:
+        """(state, detail) when the measured state cannot be trusted: stale or two sources."""
+        if len(self._state_publishers) > 1:
+            return (
+                ControllerState.CONFLICTING_STATE,
+                f"{len(self._state_publishers)} publishers on {self._topics['joint_states']} "
+                f"({', '.join(self._state_publishers)}): remap to exactly one source",
+            )
+        timeout = self._params["state_timeout"]
+        age = now - self._state_received
+        if age > timeout:
+            return (
+                ControllerState.STALE_STATE,
+                f"joint_states {age:.3f} s old (state_timeout {timeout} s)",
+            )
+        if self._odom_received is not None and now - self._odom_received > timeout:
+            return (
+                ControllerState.STALE_STATE,
+                f"base_odom {now - self._odom_received:.3f} s old (state_timeout {timeout} s)",
+            )
+        return None
+
+    def _hold_still(self, state: ControllerState, detail: str) -> None:
+        """Publish zero velocity where the reference stands, report ``state``; the next good
+        tick restarts the reference at the measured angles and ramps the command up."""
+        if self._last_state is not state:
+            self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
+        self._gate.stop()
+        self._stopped = True
+        self._served = None
+        positions = self.controller.reference_positions
+        if positions is None or not np.all(np.isfinite(positions)):
+            positions = self._theta
+        self._publish_output(positions, np.zeros(self.robot.n))
+        self._publish_status(state, detail, {"method": self.controller.settings.method.value})
 
     def _predicted_theta(self) -> np.ndarray:
         """The measured angles moved on by their age at the measured rates: joint_states lag by
@@ -358,14 +516,28 @@ class ControllerNode(Node):
             return self._theta  # clocks disagree or the state is stale: do not extrapolate
         return self._theta + age * self._theta_rate
 
-    def _state(self, step: ControllerStep, gate: GateOutput) -> ControllerState:
-        if gate.state is not ControllerState.OK:
+    def _state(
+        self, step: ControllerStep, gate: GateOutput, state: FreeFloatingState
+    ) -> ControllerState:
+        if gate.state not in (ControllerState.OK, ControllerState.RAMPING):
             return gate.state
         if step.output.position_limited:
+            if self._last_state is not ControllerState.JOINT_LIMIT:
+                self.get_logger().warn(self._limit_text(state))  # once per episode
             return ControllerState.JOINT_LIMIT
         if step.output.sigma_min < self.controller.settings.gains.epsilon:
             return ControllerState.SINGULAR_REGION
-        return ControllerState.OK
+        return gate.state
+
+    def _limit_text(self, state: FreeFloatingState) -> str:
+        lower, upper = self.robot.lower_limits, self.robot.upper_limits
+        margin = np.minimum(state.theta - lower, upper - state.theta)
+        joint = int(np.argmin(margin))
+        return (
+            f"JOINT_LIMIT: {self.robot.joint_names[joint]} at {state.theta[joint]:.4g} rad is "
+            f"{margin[joint]:.3g} rad from its limit [{lower[joint]:.4g}, {upper[joint]:.4g}]; "
+            "the motion is slowed or stopped (choose another direction)"
+        )
 
     def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
         if self._trajectory:
@@ -381,17 +553,10 @@ class ControllerNode(Node):
             msg = Float64MultiArray(data=data.tolist())
         self._output.publish(msg)
 
-    def _publish_status(
-        self, step: ControllerStep, gate: GateOutput, state: ControllerState
-    ) -> None:
+    def _step_values(self, step: ControllerStep, gate: GateOutput) -> dict:
         out = step.output
-        level = {
-            ControllerState.OK: DiagnosticStatus.OK,
-            ControllerState.INVALID_COMMAND: DiagnosticStatus.ERROR,
-        }.get(state, DiagnosticStatus.WARN)
         unachieved = out.angular_residual if not gate.stopped else np.zeros(3)
-        values = {
-            "state": state.value,
+        return {
             "method": self.controller.settings.method.value,
             "frame": gate.frame.value,
             "sigma_min": out.sigma_min,
@@ -404,16 +569,72 @@ class ControllerNode(Node):
             "unachieved_linear": gate.linear,
             "coupling_momentum": out.coupling_momentum if not gate.stopped else np.zeros(3),
         }
+
+    def _publish_status(self, state: ControllerState, detail: str, values: dict) -> None:
+        level = STATE_LEVELS.get(state, DiagnosticStatus.WARN)
+        message = f"{state.value}: {detail}" if detail else state.value
+        if self._advisories:
+            level = max(level, DiagnosticStatus.WARN, key=_level_rank)
+            message = "; ".join([message, *self._advisories])
+        self._last_state = state
         status = DiagnosticStatus(
             level=level,
             name=f"{self.get_name()}: reactionless control",
-            message=f"{state.value}: {gate.detail}" if gate.detail else state.value,
+            message=message,
             hardware_id=self.robot.name,
-            values=[KeyValue(key=key, value=_text(value)) for key, value in values.items()],
+            values=[
+                KeyValue(key=key, value=_text(value))
+                for key, value in {"state": state.value, **values}.items()
+            ],
         )
+        self._last_status = status
         msg = DiagnosticArray(status=[status])
         msg.header.stamp = self.get_clock().now().to_msg()
         self._status.publish(msg)
+
+    # --- once a second: who publishes our inputs, /diagnostics --------------------------------
+    def _on_diagnostics(self) -> None:
+        self._check_publishers()
+        if self._last_status is None:
+            return
+        msg = DiagnosticArray(status=[self._last_status])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(msg)
+
+    def _check_publishers(self) -> None:
+        """Read the graph: more than one joint_states source is a fault (two robots' states
+        interleaved make the law reverse at every message); more than one command source, or a
+        command publisher of the other message type (its messages never arrive), is reported."""
+        expected = _type_name(self._command_type)
+        commands, others = [], []
+        for info in self.get_publishers_info_by_topic(self._topics["cmd_twist"]):
+            (commands if info.topic_type == expected else others).append(info)
+        advisories = []
+        if len(commands) > 1:
+            advisories.append(
+                f"{len(commands)} publishers on {self._topics['cmd_twist']} "
+                f"({', '.join(_node_names(commands))}): their commands interleave"
+            )
+        for info in others:
+            if info.topic_type not in self._warned_types:
+                self._warned_types.add(info.topic_type)
+                other = "false" if self._command_type is TwistStamped else "true"
+                self.get_logger().warn(
+                    f"{_node_names([info])[0]} publishes {info.topic_type} on "
+                    f"{self._topics['cmd_twist']}, but this controller takes {expected}: those "
+                    f"commands are dropped; restart with -p twist_stamped:={other} (or make the "
+                    "teleop publish the other type)"
+                )
+            advisories.append(
+                f"{_node_names([info])[0]} publishes {info.topic_type}, ignored: set "
+                f"twist_stamped:={'false' if self._command_type is TwistStamped else 'true'}"
+            )
+        self._advisories = advisories
+        self._state_publishers = _node_names(
+            info
+            for info in self.get_publishers_info_by_topic(self._topics["joint_states"])
+            if info.topic_type == _type_name(JointState)
+        )
 
     # --- parameters, shutdown ---------------------------------------------------------------------
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -426,13 +647,22 @@ class ControllerNode(Node):
                 if parameter.name in SPECS:
                     SPECS[parameter.name].check(parameter.value)
             settings = self._settings(updated)
-            gate = CommandGate(updated["command_timeout"], updated["stop_deceleration"])
+            gate = self._command_gate(updated)
         except RnsError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         self._params = updated
         self.controller.configure(settings)
         self._gate.timeout, self._gate.deceleration = gate.timeout, gate.deceleration
+        self._gate.acceleration = gate.acceleration
         return SetParametersResult(successful=True)
+
+    def _command_gate(self, params: dict) -> CommandGate:
+        return CommandGate(
+            params["command_timeout"],
+            params["stop_deceleration"],
+            resolve_twist_frame(params["default_twist_frame"], self._frames, "default_twist_frame"),
+            acceleration=params["start_acceleration"],
+        )
 
     def _settings(self, params: dict) -> ControllerSettings:
         return ControllerSettings(
@@ -458,6 +688,23 @@ class ControllerNode(Node):
             except Exception as exc:  # the context may already be shut down (Ctrl-C)
                 self.get_logger().warn(f"could not publish the final zero velocity: {exc}")
         super().destroy_node()
+
+
+def _type_name(msg_type) -> str:
+    """'geometry_msgs/msg/TwistStamped' for the class TwistStamped (the graph's spelling)."""
+    module = msg_type.__module__.split(".")
+    return f"{module[0]}/msg/{msg_type.__name__}"
+
+
+def _node_names(infos) -> list[str]:
+    return [
+        f"{info.node_namespace.rstrip('/')}/{info.node_name}" if info.node_name else "?"
+        for info in infos
+    ]
+
+
+def _level_rank(level) -> int:
+    return level[0] if isinstance(level, bytes) else int(level)
 
 
 def _text(value) -> str:

@@ -119,13 +119,15 @@ def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
     # the operator lets go: the output ramps down and stops within timeout + ramp
     operator.active = False
     released = time.monotonic()
-    assert ros.spin_until(lambda: _latest_state(streams) == "STALE_COMMAND", timeout=3.0)
+    assert ros.spin_until(lambda: _latest_state(streams) == "IDLE", timeout=3.0)
     stopped_after = time.monotonic() - released
     assert stopped_after < 0.5 + 0.1 + 0.3  # timeout 0.5 s, ramp 0.1 rad/s / 1 rad/s^2
     seen = [_state(m)["state"] for m in streams["status"].messages]
     assert "DECELERATING" in seen
     ros.spin_for(0.1)
     assert np.all(np.array(streams["references"].messages[-1].points[0].velocities) == 0.0)
+    idle = streams["status"].messages[-1].status[0]
+    assert idle.level == idle.OK  # idle is normal, not a warning
 
 
 def test_nan_twist_is_invalid_and_nothing_moves(ros, stack):
@@ -144,40 +146,54 @@ def test_nan_twist_is_invalid_and_nothing_moves(ros, stack):
     assert np.ptp(positions, axis=0).max() < 1e-12
 
 
-def test_unknown_frame_and_excessive_speed_are_rejected(ros, stack):
+def test_unknown_frame_is_rejected_and_excessive_speed_is_scaled_to_the_limit(ros, stack):
     probe, streams = stack.probe, stack.streams
     operator = Operator(probe)
     operator.angular, operator.frame, operator.active = (0.1, 0.0, 0.0), "map", True
     assert ros.spin_until(lambda: _latest_state(streams) == "INVALID_COMMAND", timeout=10.0)
     assert "'map' is not one of" in streams["status"].messages[-1].status[0].message
-    operator.angular, operator.frame = (5.0, 0.0, 0.0), "camera"
+    # 5 rad/s about camera y: MoveIt-Servo-like, the axis is kept at max_angular_speed (1 rad/s)
+    operator.angular, operator.frame = (0.0, 5.0, 0.0), "camera"
+    assert ros.spin_until(lambda: _latest_state(streams) == "SPEED_LIMITED", timeout=5.0)
     ros.spin_for(0.3)
-    assert "max_angular_speed" in streams["status"].messages[-1].status[0].message
+    status = streams["status"].messages[-1].status[0]
+    assert status.level == status.WARN
+    assert "scaled to the limit 1" in status.message
+    velocities = np.array(streams["references"].messages[-1].points[0].velocities)
+    assert np.abs(velocities).max() > 0.05  # the arm moves instead of stopping
+    # achieved: omega_ref - unachieved is the limited command, about camera y
     operator.angular = (0.0, 0.05, 0.0)
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=3.0)
     assert _state(streams["status"].messages[-1])["frame"] == "camera"
 
 
-def test_nothing_is_published_before_the_first_joint_state(ros):
+def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros):
+    """Before any joint state: WAITING_FOR_STATE (WARN) on ~/status and /diagnostics, no
+    joint command. Then joint states (names shuffled) start it; a plain Twist is accepted."""
     controller = _node(ros, ControllerNode, twist_stamped=False, default_twist_frame="world")
     probe = ros.probe()
     references = Recorder(probe, JointTrajectory, "joint_references")
     status = Recorder(probe, DiagnosticArray, "rns_controller/status")
-    ros.spin_for(0.5)
+    diagnostics = Recorder(probe, DiagnosticArray, "/diagnostics")
+    assert ros.spin_until(lambda: diagnostics.messages, timeout=3.0)
     assert references.messages == []
-    assert status.messages == []
-    # one joint state (names shuffled) starts the controller; a plain Twist is accepted
+    assert status.messages
+    waiting = status.messages[-1].status[0]
+    assert _state(status.messages[-1])["state"] == "WAITING_FOR_STATE"
+    assert waiting.level == waiting.WARN
+    assert "waiting for /joint_states" in waiting.message
+    entry = diagnostics.messages[-1].status[0]
+    assert entry.hardware_id == controller.robot.name
+    assert entry.name == "rns_controller: reactionless control"
     names = list(controller.robot.joint_names)[::-1]
-    probe.create_publisher(JointState, "joint_states", 10).publish(
-        JointState(name=names, position=[0.3] * 7)
-    )
+    state_pub = probe.create_publisher(JointState, "joint_states", 10)
+    probe.create_timer(0.01, lambda: state_pub.publish(JointState(name=names, position=[0.3] * 7)))
     operator = Operator(probe, stamped=False)
     operator.angular, operator.active = (0.0, 0.0, 0.05), True
-    assert ros.spin_until(lambda: status.messages and _state(status.messages[-1])["state"] == "OK")
+    assert ros.spin_until(lambda: _state(status.messages[-1])["state"] == "OK")
     assert _state(status.messages[-1])["frame"] == "world"
     point = references.messages[-1].points[0]
     assert np.allclose(point.positions, 0.3, atol=0.05)
-    # the reactionless output carries no coupling momentum at the reported configuration
     assert float(_state(status.messages[-1])["sigma_min"]) > 0.0
 
 
@@ -220,7 +236,7 @@ def test_shipped_teleop_twist_files_fit_the_controller():
     rates below max_angular_speed, no linear axes on the joystick."""
     defaults = yaml.safe_load((REPO / "config" / "controller.yaml").read_text())
     limit = defaults["/**"]["ros__parameters"]["max_angular_speed"]
-    accepted = {"world", "base_link", "camera"}
+    accepted = {"world", "base", "base_link", "camera"}
     joy = yaml.safe_load((REPO / "config" / "teleop_twist_joy.yaml").read_text())
     joy = joy["/**"]["ros__parameters"]
     assert joy["publish_stamped_twist"] is True
@@ -408,7 +424,7 @@ def test_ctrl_c_publishes_zero_velocity(ros):
     references = Recorder(probe, JointTrajectory, "joint_references")
     state_pub = probe.create_publisher(JointState, "joint_states", 10)
     names = [f"joint_{i}" for i in range(1, 8)]
-    probe.create_timer(0.05, lambda: state_pub.publish(JointState(name=names, position=[0.4] * 7)))
+    probe.create_timer(0.02, lambda: state_pub.publish(JointState(name=names, position=[0.4] * 7)))
     operator = Operator(probe)
     operator.angular, operator.active = (0.1, 0.0, 0.0), True
     process = subprocess.Popen(
@@ -438,3 +454,202 @@ def test_ctrl_c_publishes_zero_velocity(ros):
         if process.poll() is None:
             process.kill()
         process.wait(timeout=5)
+
+
+def _speeds(references) -> np.ndarray:
+    """max |theta_dot| of each joint reference [rad/s], shape (messages,)."""
+    return np.array([np.abs(m.points[0].velocities).max() for m in references])
+
+
+def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros, stack):
+    """Issue 11, defect 2: the simulator dies while twists stream. Within state_timeout
+    (+ one period) the controller publishes zero and reports STALE_STATE (ERROR); it resumes only
+    with a fresh state, ramping up from rest."""
+    probe, streams = stack.probe, stack.streams
+    joints = Recorder(probe, JointState, "joint_states")
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.2, 0.0, 0.0), True
+    assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
+    ros.spin_for(0.3)
+    moving = _speeds(streams["references"].messages[-5:]).min()
+    assert moving > 0.05
+    ros.detach(stack.simulator)
+    stack.simulator.destroy_node()  # its loop thread stops: no more joint_states
+    killed = time.monotonic()
+    last_state = len(joints.messages)
+    count = len(streams["references"].messages)
+
+    def stopped():
+        after = streams["references"].messages[count:]
+        return bool(after) and _speeds(after[-1:])[0] == 0.0
+
+    assert ros.spin_until(stopped, timeout=2.0)
+    # the controller's view: receipt of the last joint_states -> first zero reference
+    zero_at = time.monotonic()
+    assert len(joints.messages) == last_state
+    print(f"state loss -> zero command within {zero_at - killed:.3f} s (state_timeout 0.1 s)")
+    assert zero_at - killed < 0.1 + 0.01 + 0.1  # timeout + one period + executor slack
+    ros.spin_for(0.5)
+    assert np.all(_speeds(streams["references"].messages[-40:]) == 0.0)
+    status = streams["status"].messages[-1].status[0]
+    assert _state(streams["status"].messages[-1])["state"] == "STALE_STATE"
+    assert status.level == status.ERROR
+    assert "joint_states" in status.message
+
+    # a robot comes back (fresh simulator): the command ramps up from rest
+    _node(ros, SimulatorNode)
+    resumed = len(streams["references"].messages)
+    assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
+    seen = [_state(m)["state"] for m in streams["status"].messages[-200:]]
+    assert "RAMPING" in seen
+    speeds = _speeds(streams["references"].messages[resumed:])
+    first = speeds[np.flatnonzero(speeds > 0.0)[0]]
+    assert first < 0.25 * moving, f"resumed at {first:.3f} rad/s, not ramped (full {moving:.3f})"
+
+
+def test_a_jump_in_the_measured_state_restarts_the_reference_and_ramps(ros):
+    """Issue 11, defect 3 (controller side): joint_states jump by 0.1 rad (a reset, a re-homed
+    robot). The reference restarts at the new angles at once and the command ramps from rest,
+    instead of the servo being sent back to the old angles."""
+    _node(ros, ControllerNode, wrist_gain=0.0)
+    probe = ros.probe()
+    references = Recorder(probe, JointTrajectory, "joint_references")
+    status = Recorder(probe, DiagnosticArray, "rns_controller/status")
+    angles = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0])
+    measured = {"theta": angles.copy()}
+    state_pub = probe.create_publisher(JointState, "joint_states", 10)
+
+    def publish_state():
+        msg = JointState(name=JOINTS, position=measured["theta"].tolist())
+        msg.header.stamp = probe.get_clock().now().to_msg()
+        state_pub.publish(msg)
+
+    probe.create_timer(0.01, publish_state)
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.1, 0.0, 0.0), True
+    assert ros.spin_until(
+        lambda: status.messages and _state(status.messages[-1])["state"] == "OK", timeout=10.0
+    )
+    ros.spin_for(0.3)
+    # a static measurement while the reference integrates: it stands ahead of the angles
+    ahead = np.abs(np.array(references.messages[-1].points[0].positions) - angles).max()
+    assert ahead > 0.005
+    jumped = angles + np.array([0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.0])
+    count = len(references.messages)
+    measured["theta"] = jumped
+    assert ros.spin_until(lambda: len(references.messages) > count + 3, timeout=2.0)
+    after = references.messages[count:]
+    # within two ticks the reference stands at the measured angles again
+    restart = next(
+        k
+        for k, m in enumerate(after)
+        if np.abs(np.array(m.points[0].positions) - jumped).max() < 1e-3
+    )
+    assert restart <= 2
+    assert _speeds(after[restart : restart + 1])[0] < 0.5 * _speeds(references.messages[:count])[-1]
+    states = [_state(m)["state"] for m in status.messages[-20:]]
+    assert "RAMPING" in states
+
+
+def test_base_is_a_frame_id_and_the_base_link_a_default_frame(ros):
+    """header.frame_id 'base' and -p default_twist_frame:=base_link both mean the base axes."""
+    _node(ros, SimulatorNode)
+    controller = _node(ros, ControllerNode, default_twist_frame="base_link")
+    assert controller._frames[""] is controller._frames["base"]
+    probe = ros.probe()
+    status = Recorder(probe, DiagnosticArray, "rns_controller/status")
+    operator = Operator(probe)
+    operator.angular, operator.frame, operator.active = (0.0, 0.0, 0.05), "base", True
+    assert ros.spin_until(
+        lambda: status.messages and _state(status.messages[-1])["state"] == "OK", timeout=10.0
+    )
+    assert _state(status.messages[-1])["frame"] == "base"
+
+
+PLAIN_TWIST_PUBLISHER = """
+import rclpy, time
+from geometry_msgs.msg import Twist
+rclpy.init()
+node = rclpy.create_node("plain_teleop")
+publisher = node.create_publisher(Twist, "cmd_twist", 10)
+end = time.monotonic() + 20.0
+while time.monotonic() < end:
+    publisher.publish(Twist())
+    time.sleep(0.05)
+"""
+
+
+def test_a_plain_twist_publisher_and_two_command_sources_are_reported(ros, stack):
+    """A plain Twist publisher on a TwistStamped cmd_twist (teleop_twist_keyboard < 2.4: its
+    messages never arrive) and a second TwistStamped publisher: both are reported in the status
+    (WARN), the first with the fix. (The Twist publisher runs in its own process: one DDS
+    participant cannot hold one topic with two types.)"""
+    probe, streams = stack.probe, stack.streams
+    operator = Operator(probe)
+    operator.active = True
+    second = Operator(ros.add(rclpy_node(ros, "second_operator")))
+    second.active = True
+    process = subprocess.Popen([sys.executable, "-c", PLAIN_TWIST_PUBLISHER], env=os.environ.copy())
+
+    def reported():
+        if not streams["status"].messages:
+            return False
+        message = streams["status"].messages[-1].status[0].message
+        return "twist_stamped:=false" in message and "2 publishers on /cmd_twist" in message
+
+    try:
+        assert ros.spin_until(reported, timeout=15.0)
+    finally:
+        process.kill()
+        process.wait(timeout=5)
+    status = streams["status"].messages[-1].status[0]
+    assert status.level == status.WARN
+    assert "/plain_teleop" in status.message
+
+
+def test_two_joint_state_sources_stop_the_arm(ros, stack):
+    """A second joint_states publisher (e.g. a forgotten bag replay): ERROR, zero output."""
+    probe, streams = stack.probe, stack.streams
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.1, 0.0, 0.0), True
+    assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
+    other = ros.add(rclpy_node(ros, "replay"))
+    replay = other.create_publisher(JointState, "joint_states", 10)
+    other.create_timer(0.01, lambda: replay.publish(JointState(name=JOINTS, position=[0.3] * 7)))
+    assert ros.spin_until(lambda: _latest_state(streams) == "CONFLICTING_STATE", timeout=5.0)
+    ros.spin_for(0.2)
+    status = streams["status"].messages[-1].status[0]
+    assert status.level == status.ERROR
+    assert "/replay" in status.message
+    assert np.all(_speeds(streams["references"].messages[-10:]) == 0.0)
+
+
+def test_a_restarted_controller_ramps_up_instead_of_stepping(ros, stack):
+    """Issue 11, defect 6: a controller that starts while the operator already streams 0.2 rad/s
+    ramps at start_acceleration (1 rad/s^2: 0.2 s) instead of stepping to full speed."""
+    probe, streams = stack.probe, stack.streams
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.2, 0.0, 0.0), True
+    assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
+    ros.spin_for(0.2)
+    full = _speeds(streams["references"].messages[-3:]).max()
+    ros.detach(stack.controller)
+    stack.controller.destroy_node()
+    ros.spin_for(0.3)
+    count = len(streams["references"].messages)
+    _node(ros, ControllerNode)
+    assert ros.spin_until(
+        lambda: (_speeds(streams["references"].messages[count:]) > 0.95 * full).any(),
+        timeout=10.0,
+    )
+    speeds = _speeds(streams["references"].messages[count:])
+    moving = speeds[speeds > 0.0]
+    assert moving[0] < 0.2 * full
+    rise = np.flatnonzero(moving > 0.95 * full)[0]
+    assert rise >= 10  # >= 0.1 s of ramp at 100 Hz (0.2 s nominal)
+
+
+def rclpy_node(ros, name):
+    import rclpy
+
+    return rclpy.create_node(name, context=ros.context)

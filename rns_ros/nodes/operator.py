@@ -5,9 +5,17 @@ omega(t) = angle * s_dot(t) * axis in the scenario's frame (``header.frame_id`` 
 ``base_frame`` or ``camera_frame``), then zeros for ``zero_duration``, then nothing (a controller
 then stops on its own timeout). Time is the node clock (sim time with ``use_sim_time``); the
 profile starts once ``cmd_twist`` has a subscriber (``wait_for_subscriber``) plus ``start_delay``.
+
+Stopped while it plays (Ctrl-C, SIGTERM, ``destroy_node``), it publishes :data:`FINAL_ZEROS` zero
+twists :data:`FINAL_ZERO_GAP` apart before it goes: the controller stops at once instead of
+holding the last rate for its ``command_timeout`` and then ramping down. Commands are best effort
+(no acknowledgement to wait for), so a few copies stand in for one. Stopped before the profile
+starts or after it finished, it sends nothing (nothing of it is moving the arm).
 """
 
 from __future__ import annotations
+
+import time
 
 from geometry_msgs.msg import TwistStamped
 from rclpy.duration import Duration
@@ -22,6 +30,9 @@ from rns_ros.nodes.runner import run_node
 from rns_ros.resources import scenario_path
 
 NODE_NAME = "rns_operator"
+#: Zero twists published when the node is stopped mid-profile, this far apart [s].
+FINAL_ZEROS = 3
+FINAL_ZERO_GAP = 0.02
 SUMMARY = "Scripted operator: plays a scenario file (config/scenarios/*.yaml) as TwistStamped."
 
 PARAMETERS = (
@@ -66,6 +77,8 @@ class OperatorNode(Node):
         self._wait = params["wait_for_subscriber"]
         self._start: Time | None = None
         self.finished = False
+        # True while the last thing published was part of the profile (motion or its zeros).
+        self._playing = False
         # Commands: best effort, depth 1 - a late twist is worth nothing (same QoS as the
         # controller's subscription).
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -101,14 +114,33 @@ class OperatorNode(Node):
         if t > end:
             if not self.finished:
                 self.finished = True
+                self._playing = False
                 self.get_logger().info(f"scenario {self.scenario.name!r} finished")
             return
-        omega = self.scenario.angular_velocity(t)
+        self._playing = True
+        self._publish(self.scenario.angular_velocity(t), now)
+
+    def _publish(self, omega, stamp: Time) -> None:
+        """One TwistStamped with angular velocity ``omega`` [rad/s], shape (3,)."""
         msg = TwistStamped()
-        msg.header.stamp = now.to_msg()
+        msg.header.stamp = stamp.to_msg()
         msg.header.frame_id = self._frame_id
         msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z = (float(w) for w in omega)
         self._publisher.publish(msg)
+
+    def destroy_node(self) -> None:
+        """Stop the camera when the profile is playing: zero twists first (module docstring),
+        then tear down. ``run_node`` calls this on Ctrl-C while the Context still runs."""
+        if self._playing and self.context.ok():
+            self._playing = False
+            try:
+                for i in range(FINAL_ZEROS):
+                    if i:
+                        time.sleep(FINAL_ZERO_GAP)
+                    self._publish((0.0, 0.0, 0.0), self.get_clock().now())
+            except Exception as exc:  # the Context may be going down (a second signal)
+                self.get_logger().warn(f"could not publish the final zero twist: {exc}")
+        super().destroy_node()
 
 
 def main(args=None) -> int:

@@ -9,7 +9,8 @@ from geometry_msgs.msg import TwistStamped
 from rclpy.parameter import Parameter
 
 from rns_ros.core import ConfigError
-from rns_ros.nodes.operator import PARAMETERS, OperatorNode
+from rns_ros.harness import ProcessStack
+from rns_ros.nodes.operator import FINAL_ZEROS, PARAMETERS, OperatorNode
 from rns_ros.resources import config_dir
 
 SCENARIO = {
@@ -46,6 +47,72 @@ def test_operator_publishes_the_profile_then_zeros(ros, tmp_path):
     count = len(twists)
     ros.spin_for(0.2)
     assert len(twists) == count  # then silence
+
+
+#: A slow roll that is still playing when the tests below stop the operator.
+LONG_SCENARIO = {**SCENARIO, "time_scaling": "constant", "duration": 30.0, "segments": None}
+
+
+def _long_scenario(tmp_path):
+    path = tmp_path / "long.yaml"
+    path.write_text(yaml.safe_dump({k: v for k, v in LONG_SCENARIO.items() if v is not None}))
+    return path
+
+
+def _angular(msg: TwistStamped) -> tuple[float, float, float]:
+    return (msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z)
+
+
+def test_operator_destroyed_mid_scenario_sends_zero_twists(ros, tmp_path):
+    """Without them the controller would hold the last rate for its command_timeout, then ramp."""
+    twists = ros.record(TwistStamped, "cmd_twist")
+    operator = ros.add(
+        OperatorNode, {"scenario": str(_long_scenario(tmp_path)), "start_delay": 0.0}
+    )
+    assert ros.spin_until(lambda: len(twists) >= 5, timeout=10.0)
+    assert any(_angular(twists.latest()))  # moving: 1 deg/s about camera y
+    ros.detach(operator)
+    count = len(twists)
+    operator.destroy_node()
+    ros.spin_for(0.3)
+    after = twists.messages[count:]
+    zeros = [m for m in after if not any(_angular(m))]
+    assert after, "nothing after destroy_node"
+    assert not any(_angular(after[-1])), [_angular(m) for m in after]
+    assert 1 <= len(zeros) <= FINAL_ZEROS
+    assert {m.header.frame_id for m in zeros} == {"camera"}
+
+
+def test_operator_destroyed_before_its_profile_sends_nothing(ros, tmp_path):
+    twists = ros.record(TwistStamped, "cmd_twist")
+    operator = ros.add(
+        OperatorNode, {"scenario": str(_long_scenario(tmp_path)), "start_delay": 60.0}
+    )
+    assert ros.spin_until(lambda: operator.started, timeout=10.0)
+    ros.detach(operator)
+    operator.destroy_node()
+    ros.spin_for(0.3)
+    assert len(twists) == 0
+
+
+def test_ctrl_c_on_the_installed_operator_sends_a_zero_twist(ros, tmp_path):
+    """.venv/bin/rns_operator (run_node: SIGINT only sets a flag, destroy_node runs while the
+    Context is alive), interrupted mid-scenario like a terminal user would."""
+    twists = ros.record(TwistStamped, "cmd_twist")
+    with ProcessStack(ros.domain_id) as stack:
+        process = stack.start(
+            "rns_operator", {"scenario": str(_long_scenario(tmp_path)), "start_delay": 0.0}
+        )
+        assert ros.spin_until(lambda: len(twists) >= 5, timeout=30.0), stack.output(process)
+        assert any(_angular(twists.latest()))
+        count = len(twists)
+        codes = stack.stop()  # SIGINT
+        ros.spin_for(0.3)
+        output = stack.output(process)
+    assert codes == [0], output
+    after = twists.messages[count:]
+    assert after, f"nothing after Ctrl-C; output:\n{output}"
+    assert not any(_angular(after[-1])), output
 
 
 def test_operator_waits_for_a_subscriber(ros):

@@ -15,7 +15,14 @@ axes. Keys (all validated; unknown keys are rejected by name):
     segments: [[duration_s, fraction], ...]   piecewise only: constant rate in each segment,
                                         durations summing to ``duration``, fractions of the
                                         angle summing to 1 (a fraction may be 0: a pause)
-    controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain}  (overrides, optional)
+    controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain, max_angular_speed}
+                                        (controller overrides, optional)
+
+The peak commanded speed is known before anything runs (:meth:`Scenario.peak_angular_speed`):
+|angle| * max s_dot, i.e. 15/8 |angle| / duration for quintic, |angle| / duration for constant,
+max |fraction| * |angle| / segment duration for piecewise. :func:`check_speed_limit` compares it
+with the controller's ``max_angular_speed``: a controller rejects (or clips) faster commands, so
+such a scenario would not play as written.
 """
 
 from __future__ import annotations
@@ -31,7 +38,7 @@ from rns_ros.core.control import ControlGains, Method
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.timing import quintic
-from rns_ros.core.validation import Choice, as_vector
+from rns_ros.core.validation import Choice, as_vector, positive
 
 _KEYS = {
     "name",
@@ -53,7 +60,12 @@ CONTROLLER_OVERRIDES = {
     "epsilon": float,
     "lambda2_max": float,
     "sc_gain": float,
+    "max_angular_speed": float,
 }
+#: Overrides that are controller-node settings rather than :class:`ControlGains` fields.
+_NOT_GAINS = {"method", "max_angular_speed"}
+#: Peak of the quintic's s_dot times its duration: max s_dot = 15 / (8 T) at t = T / 2 [-].
+QUINTIC_PEAK_RATE = 15.0 / 8.0
 
 
 class TimeScaling(Choice):
@@ -103,6 +115,19 @@ class Scenario:
         inside = 0.0 <= t < self.duration
         return min(max(t / self.duration, 0.0), 1.0), (1.0 / self.duration if inside else 0.0)
 
+    def peak_angular_speed(self) -> float:
+        """Largest commanded |omega(t)| over the profile [rad/s], from the time scaling
+        analytically: quintic 15/8 * |angle| / duration (at t = duration / 2), constant
+        |angle| / duration, piecewise max over segments of |fraction| * |angle| / segment
+        duration."""
+        if self.time_scaling is TimeScaling.QUINTIC:
+            peak_rate = QUINTIC_PEAK_RATE / self.duration
+        elif self.time_scaling is TimeScaling.PIECEWISE:
+            peak_rate = max(abs(fraction) / duration for duration, fraction in self.segments)
+        else:
+            peak_rate = 1.0 / self.duration
+        return abs(self.angle) * peak_rate
+
     def angular_velocity(self, t: float) -> np.ndarray:
         """Commanded camera angular velocity at t, ``frame`` axes [rad/s], shape (3,)."""
         return self.angle * self.progress(t)[1] * self.axis
@@ -120,12 +145,46 @@ class Scenario:
     def gains(self, base: ControlGains | None = None) -> ControlGains:
         """``base`` gains (thesis values by default) with this scenario's overrides applied."""
         base = base or ControlGains()
-        values = {key: self.controller[key] for key in self.controller if key != "method"}
+        values = {key: value for key, value in self.controller.items() if key not in _NOT_GAINS}
         return ControlGains(**{**base.__dict__, **values})
 
     def method(self, default: Method | str = Method.DLS) -> Method:
         """The scenario's method override, else ``default``."""
         return Method.parse(str(self.controller.get("method", default)))
+
+
+def check_speed_limit(scenario: Scenario, max_angular_speed: float) -> float:
+    """Check that ``scenario`` never commands more than the controller's limit.
+
+    Args:
+        scenario: the scenario; its own ``controller.max_angular_speed`` override, when given,
+            replaces ``max_angular_speed`` (the scenario's controller runs with it).
+        max_angular_speed: the controller's ``max_angular_speed`` otherwise [rad/s], > 0.
+
+    Returns:
+        The limit that applies [rad/s].
+
+    Raises:
+        ConfigError: the peak speed (:meth:`Scenario.peak_angular_speed`) exceeds the limit;
+            the message names the scenario, its peak, the limit and the shortest duration that
+            would fit.
+    """
+    limit = positive(
+        scenario.controller.get("max_angular_speed", max_angular_speed),
+        "max_angular_speed",
+        "[rad/s]",
+    )
+    peak = scenario.peak_angular_speed()
+    if peak > limit:
+        shortest = scenario.duration * peak / limit
+        raise ConfigError(
+            f"scenario {scenario.name!r}: peak angular speed {peak:.4g} rad/s "
+            f"({scenario.time_scaling.value}, {np.rad2deg(scenario.angle):.4g} deg in "
+            f"{scenario.duration:.4g} s) exceeds the controller's max_angular_speed "
+            f"{limit:.4g} rad/s; make 'duration' at least {shortest:.4g} s or override "
+            "controller.max_angular_speed"
+        )
+    return limit
 
 
 def _piecewise(segments, t: float) -> tuple[float, float]:
@@ -200,6 +259,8 @@ def load_scenario(path: str | Path) -> Scenario:
     check_keys(controller, set(CONTROLLER_OVERRIDES), f"{where}: controller")
     try:
         controller = {key: CONTROLLER_OVERRIDES[key](value) for key, value in controller.items()}
+        if "max_angular_speed" in controller:
+            positive(controller["max_angular_speed"], "controller.max_angular_speed", "[rad/s]")
         scenario = Scenario(
             name=str(content.get("name", path.stem)),
             initial_theta=theta,

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from rns_ros.core import ConfigError
-from rns_ros.core.scenario import TimeScaling, load_scenario
+from rns_ros.core.scenario import TimeScaling, check_speed_limit, load_scenario
 from rns_ros.resources import config_dir, scenario_path
 
 BASE = {
@@ -51,6 +51,10 @@ def test_shipped_scenarios_load(path):
         ({"time_scaling": "piecewise", "segments": [[1, 0.5], [2, 0.5]]}, "sum to 3.0 s"),
         ({"time_scaling": "piecewise", "segments": [[2, 0.5], [2, 0.6]]}, "fractions sum"),
         ({"time_scaling": "piecewise", "segments": [[4, "x"]]}, "pairs"),
+        (
+            {"controller": {"max_angular_speed": 0.0}},
+            "max_angular_speed must be a finite number > 0",
+        ),
     ],
 )
 def test_bad_scenarios_name_the_key(tmp_path, changes, message):
@@ -91,3 +95,55 @@ def test_scenario_path_resolves_names_and_lists_the_shipped_ones(tmp_path):
     assert scenario_path(path) == path
     with pytest.raises(ConfigError, match="algorithmic_singularity"):
         scenario_path("nowhere")
+
+
+@pytest.mark.parametrize(
+    ("scaling", "segments", "expected"),
+    [
+        ("quintic", None, 15 / 8 * np.pi / 2 / 4.0),  # 90 deg in 4 s: 0.589 rad/s at t = 2 s
+        ("constant", None, np.pi / 2 / 4.0),
+        ("piecewise", [[1.0, 0.25], [1.5, 0.0], [1.5, 0.75]], 0.75 * np.pi / 2 / 1.5),
+    ],
+)
+def test_peak_angular_speed_is_the_largest_commanded_speed(tmp_path, scaling, segments, expected):
+    scenario = load_scenario(_write(tmp_path, time_scaling=scaling, segments=segments))
+    assert scenario.peak_angular_speed() == pytest.approx(expected, rel=1e-12)
+    sampled = max(np.linalg.norm(scenario.angular_velocity(t)) for t in np.linspace(0.0, 4.0, 4001))
+    assert sampled == pytest.approx(expected, rel=1e-6)  # reached (t = 2 s is on the grid) ...
+    assert sampled <= expected * (1 + 1e-12)  # ... and never exceeded
+
+
+def test_negative_angles_peak_at_their_magnitude(tmp_path):
+    scenario = load_scenario(_write(tmp_path, angle_deg=-90.0))
+    assert scenario.peak_angular_speed() == pytest.approx(15 / 8 * np.pi / 2 / 4.0)
+
+
+@pytest.mark.parametrize("path", sorted((config_dir() / "scenarios").glob("*.yaml")))
+def test_shipped_scenarios_stay_within_the_default_controller_limit(path):
+    scenario = load_scenario(path)
+    assert check_speed_limit(scenario, 1.0) == 1.0
+    assert scenario.peak_angular_speed() < 1.0
+
+
+def test_a_scenario_faster_than_the_controller_is_a_config_error(tmp_path):
+    # 180 deg in 2 s, quintic: 15/8 * pi / 2 = 2.945 rad/s
+    scenario = load_scenario(_write(tmp_path, name="quick_flip", angle_deg=180.0, duration=2.0))
+    with pytest.raises(ConfigError) as error:
+        check_speed_limit(scenario, 1.0)
+    message = str(error.value)
+    assert "'quick_flip'" in message
+    assert "peak angular speed 2.945 rad/s" in message
+    assert "max_angular_speed 1 rad/s" in message
+    assert "at least 5.89 s" in message  # 2 s * 2.945 / 1.0: exactly at the limit
+    slow = load_scenario(_write(tmp_path, angle_deg=180.0, duration=5.9))
+    assert check_speed_limit(slow, 1.0) == 1.0
+
+
+def test_the_scenario_override_of_max_angular_speed_is_the_limit(tmp_path):
+    fast = _write(tmp_path, angle_deg=180.0, duration=2.0, controller={"max_angular_speed": 3.0})
+    scenario = load_scenario(fast)
+    assert check_speed_limit(scenario, 1.0) == 3.0
+    assert scenario.gains().wrist_gain == 100.0  # not a gain: gains() ignores it
+    strict = load_scenario(_write(tmp_path, controller={"max_angular_speed": 0.5}))
+    with pytest.raises(ConfigError, match=r"max_angular_speed 0\.5 rad/s"):
+        check_speed_limit(strict, 1.0)  # 0.589 rad/s > 0.5

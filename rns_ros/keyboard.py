@@ -21,14 +21,22 @@ Terminals send no key-release events, only the characters of a press and then au
 ``key_hold`` seconds pass without another repeat of it; ``key_hold`` must exceed the initial
 auto-repeat delay or the command would drop to zero between the press and the first repeat. A
 terminal repeats only the newest key, so holding two keys at once drives one axis, not two.
+
+Keys of two or three axes pressed within ``key_hold`` combine. The speeds bound the whole vector:
+a combination longer than ``max_angular_speed`` (``max_linear_speed``) is scaled down uniformly
+(:func:`limit_norm`, direction kept), so two keys at full speed send |omega| = max_angular_speed,
+not sqrt(2) times it (which a controller with the same limit would refuse).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import NamedTuple
+
+import numpy as np
 
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
@@ -246,12 +254,17 @@ class KeyboardTeleop:
         }
 
     def command(self, now: float) -> TeleopCommand:
-        """The command at monotonic time ``now`` [s]: held axes at the current speeds."""
+        """The command at monotonic time ``now`` [s]: held axes at the current speeds, each
+        vector scaled down to its maximum speed when combined keys would exceed it."""
         values = [0.0] * 6
         for axis, sign in self.held_axes(now).items():
             speed = self.speeds.angular if axis < 3 else self.speeds.linear
             values[axis] = sign * speed
-        return TeleopCommand(tuple(values[:3]), tuple(values[3:]), self.frame)
+        return TeleopCommand(
+            limit_norm(values[:3], self.max_speeds.angular),
+            limit_norm(values[3:], self.max_speeds.linear),
+            self.frame,
+        )
 
     def tick(self, now: float) -> TeleopCommand | None:
         """What to publish at a rate tick at ``now`` [s]: the command while a key is held, then
@@ -278,6 +291,81 @@ class KeyboardTeleop:
     def sending(self) -> bool:
         """True while :meth:`tick` returns commands (motion or trailing zeros)."""
         return self._zeros_since is not None
+
+
+def limit_norm(vector: Sequence[float], limit: float) -> tuple[float, ...]:
+    """``vector`` scaled uniformly so that its Euclidean norm is at most ``limit``.
+
+    Args:
+        vector: components, any length (a twist's angular [rad/s] or linear [m/s] part).
+        limit: largest allowed norm, same unit, >= 0.
+
+    Returns:
+        ``vector`` unchanged when its norm is within ``limit``, else ``vector * limit / norm``
+        (same direction), rounded down if needed so that the norm never exceeds ``limit`` by
+        an ulp (a controller with the same limit compares norms).
+
+    Raises:
+        ConfigError: ``limit`` negative or not finite.
+    """
+    if not (math.isfinite(limit) and limit >= 0.0):
+        raise ConfigError(f"speed limit must be a finite number >= 0, got {limit!r}")
+    values = tuple(float(v) for v in vector)
+    norm = math.hypot(*values)
+    if norm <= limit:
+        return values
+    scale = limit / norm
+    scaled = tuple(v * scale for v in values)
+    # as a receiver may compute the norm: hypot, or numpy's (rns_controller's check)
+    while math.hypot(*scaled) > limit or float(np.linalg.norm(scaled)) > limit:
+        scale = math.nextafter(scale, 0.0)
+        scaled = tuple(v * scale for v in values)
+    return scaled
+
+
+def key_event_tap_angle(
+    speed: float,
+    command_timeout: float,
+    stop_deceleration: float,
+    start_acceleration: float = math.inf,
+) -> float:
+    """Angle one isolated command turns the camera under rns_controller's command gate [rad].
+
+    A key-event teleop (upstream ``teleop_twist_keyboard``) publishes one twist per key press
+    or auto-repeat and nothing in between; the controller applies the newest command until it
+    is ``command_timeout`` (T) old, then ramps it to zero at ``stop_deceleration`` (a_stop).
+    A controller that also ramps up from rest at ``start_acceleration`` (a_start) reaches
+    v_peak = min(v, a_start T) by then. One tap at |omega| = v (``speed``) thus turns
+
+        v_peak T - v_peak^2 / (2 a_start) + v_peak^2 / (2 a_stop)
+
+    which is v T + v^2 / (2 a_stop) without a start ramp (a_start = inf, the default).
+    rns_teleop_keyboard republishes at its rate and ends with zeros: this does not apply to it.
+
+    Args:
+        speed: |omega| of the command [rad/s], >= 0.
+        command_timeout: the controller's ``command_timeout`` [s], > 0.
+        stop_deceleration: the controller's ``stop_deceleration`` [rad/s^2], > 0.
+        start_acceleration: its ramp-up from rest [rad/s^2], > 0; inf: none.
+
+    Raises:
+        ConfigError: a negative speed or a non-positive timeout, deceleration or acceleration.
+    """
+    if not (math.isfinite(speed) and speed >= 0.0):
+        raise ConfigError(f"speed must be a finite number >= 0 [rad/s], got {speed!r}")
+    for name, value, unit in (
+        ("command_timeout", command_timeout, "[s]"),
+        ("stop_deceleration", stop_deceleration, "[rad/s^2]"),
+    ):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ConfigError(f"{name} must be a finite number > 0 {unit}, got {value!r}")
+    if not start_acceleration > 0.0:  # inf allowed: no ramp; NaN fails here too
+        raise ConfigError(
+            f"start_acceleration must be > 0 [rad/s^2] (inf: none), got {start_acceleration!r}"
+        )
+    peak = min(speed, start_acceleration * command_timeout)
+    ramp_up = peak**2 / (2.0 * start_acceleration)  # 0 for inf
+    return peak * command_timeout - ramp_up + peak**2 / (2.0 * stop_deceleration)
 
 
 # --- terminal input -------------------------------------------------------------------------------

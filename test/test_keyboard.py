@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
+import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
@@ -17,6 +21,7 @@ from rns_ros.keyboard import (
     KeyboardTeleop,
     Speeds,
     TeleopCommand,
+    limit_norm,
     render_panel,
     split_keys,
     status_line,
@@ -148,6 +153,55 @@ def test_two_axes_pressed_within_key_hold_combine():
     keys.press("a", 0.1)
     assert keys.command(0.2).angular == (0.1, 0.0, 0.1)
     assert keys.command(HOLD + 0.05).angular == (0.0, 0.0, 0.1)  # q no longer repeats
+
+
+def test_combined_keys_at_full_speed_stay_within_the_maximum_as_a_vector():
+    """Two axes at 1 rad/s each used to give |omega| = 1.41 rad/s, which a controller with
+    max_angular_speed 1 rad/s rejects; now the pair is scaled to 1 rad/s along the diagonal."""
+    keys = teleop(angular_speed=1.0, linear_speed=0.5)
+    keys.press("q", 0.0)
+    keys.press("a", 0.1)
+    keys.press("i", 0.15)
+    keys.press("u", 0.2)
+    command = keys.command(0.3)
+    assert np.linalg.norm(command.angular) <= 1.0  # max_angular_speed, exactly as checked
+    assert np.linalg.norm(command.angular) == pytest.approx(1.0)
+    assert command.angular == pytest.approx((math.sqrt(0.5), 0.0, math.sqrt(0.5)))
+    assert np.linalg.norm(command.linear) <= 0.5  # max_linear_speed
+    assert command.linear == pytest.approx((0.5 * math.sqrt(0.5), 0.0, 0.5 * math.sqrt(0.5)))
+    keys.press("w", 0.25)  # all three angular axes
+    assert keys.tick(0.3).angular == pytest.approx((1 / math.sqrt(3),) * 3)
+
+
+def test_combined_keys_below_the_maximum_are_not_scaled():
+    keys = teleop(angular_speed=0.5)
+    keys.press("q", 0.0)
+    keys.press("s", 0.1)
+    assert keys.command(0.2).angular == (0.5, -0.5, 0.0)  # |omega| 0.71 < 1
+
+
+@given(
+    # speeds, not denormals: a squared 1e-200 underflows in numpy's norm
+    st.lists(st.floats(-1e3, 1e3).filter(lambda x: x == 0.0 or abs(x) > 1e-100), max_size=6),
+    st.one_of(st.just(0.0), st.floats(1e-6, 100.0)),
+)
+def test_limit_norm_keeps_the_direction_and_never_exceeds_the_limit(vector, limit):
+    result = np.array(limit_norm(vector, limit))
+    norm = math.hypot(*vector)
+    if norm <= limit:
+        assert np.array_equal(result, vector)
+    else:
+        assert np.linalg.norm(result) <= limit
+        assert math.hypot(*result) <= limit
+        assert math.hypot(*result) == pytest.approx(limit, rel=1e-12)
+        if limit > 0.0:
+            assert result == pytest.approx(np.asarray(vector) * limit / norm, rel=1e-12)
+
+
+@pytest.mark.parametrize("limit", [-1.0, math.nan, math.inf])
+def test_limit_norm_rejects_a_bad_limit(limit):
+    with pytest.raises(ConfigError, match="speed limit"):
+        limit_norm((1.0, 0.0, 0.0), limit)
 
 
 def test_repeats_are_not_urgent():

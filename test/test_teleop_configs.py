@@ -4,7 +4,6 @@ limit, and the documented one-tap arithmetic checked against the controller's co
 
 from __future__ import annotations
 
-import inspect
 import math
 from pathlib import Path
 
@@ -41,21 +40,17 @@ def _parameters(name: str) -> dict:
 KEY_TELEOP = _parameters("controller_key_teleop.yaml")
 KEYBOARD = _parameters("teleop_twist_keyboard.yaml")
 DEFAULTS = {name: SPECS[name].default for name in ("command_timeout", "stop_deceleration")}
-#: The controller's ramp-up from rest, when it has one [rad/s^2] (inf: none).
-START_ACCELERATION = (
-    SPECS["start_acceleration"].default if "start_acceleration" in SPECS else math.inf
-)
+#: The controller's ramp-up from rest [rad/s^2].
+START_ACCELERATION = SPECS["start_acceleration"].default
 
 
 def _gate(settings: dict) -> CommandGate:
     """The gate as rns_controller builds it from these settings."""
-    if "acceleration" in inspect.signature(CommandGate).parameters:
-        return CommandGate(
-            settings["command_timeout"],
-            settings["stop_deceleration"],
-            acceleration=settings.get("start_acceleration", START_ACCELERATION),
-        )
-    return CommandGate(settings["command_timeout"], settings["stop_deceleration"])
+    return CommandGate(
+        settings["command_timeout"],
+        settings["stop_deceleration"],
+        acceleration=settings.get("start_acceleration", START_ACCELERATION),
+    )
 
 
 def test_key_teleop_controller_file_overrides_only_timeout_and_stop_within_range():
@@ -103,11 +98,13 @@ def _gate_run(speed: float, settings: dict, key_times, end: float) -> np.ndarray
 @pytest.mark.parametrize(
     ("speed", "settings", "start_acceleration", "documented_deg"),
     [
-        (KEYBOARD["turn"], KEY_TELEOP, math.inf, 8.9),  # the shipped files
-        (0.81, DEFAULTS, math.inf, 42.0),  # the issue: defaults, turn after two 'c' presses
+        # before the controller's start ramp: the issue (defaults, turn after two 'c' presses)
+        (0.81, DEFAULTS, math.inf, 42.0),
         (UPSTREAM_DEFAULT_TURN, DEFAULTS, math.inf, 57.3),  # the upstream start before 2.4.1
-        (KEYBOARD["turn"], KEY_TELEOP, 1.0, 7.7),  # shipped files, ramp-up from rest 1 rad/s^2
-        (0.81, DEFAULTS, 1.0, 14.3),
+        (0.81, DEFAULTS, START_ACCELERATION, 14.3),
+        (KEYBOARD["turn"], KEY_TELEOP, START_ACCELERATION, 7.7),  # the shipped files
+        (KEYBOARD["turn"], KEY_TELEOP, math.inf, 8.9),
+        (0.1, KEY_TELEOP, START_ACCELERATION, 4.1),  # "for finer steps"
     ],
 )
 def test_documented_tap_angles(speed, settings, start_acceleration, documented_deg):
@@ -120,6 +117,22 @@ def test_documented_tap_angles(speed, settings, start_acceleration, documented_d
     assert text in DOC
 
 
+def test_the_shipped_tap_angle_is_quoted_consistently():
+    angle = key_event_tap_angle(
+        KEYBOARD["turn"],
+        KEY_TELEOP["command_timeout"],
+        KEY_TELEOP["stop_deceleration"],
+        START_ACCELERATION,
+    )
+    text = f"{math.degrees(angle):.1f} deg"
+    for path in (
+        "README.md",
+        "config/teleop_twist_keyboard.yaml",
+        "config/controller_key_teleop.yaml",
+    ):
+        assert text in (REPO / path).read_text(), path
+
+
 @pytest.mark.parametrize(
     ("speed", "settings"),
     [(KEYBOARD["turn"], KEY_TELEOP), (0.81, DEFAULTS), (UPSTREAM_DEFAULT_TURN, DEFAULTS)],
@@ -127,9 +140,7 @@ def test_documented_tap_angles(speed, settings, start_acceleration, documented_d
 def test_tap_angle_is_what_the_controller_gate_turns(speed, settings):
     """One message at t = 0 through rns_controller's own gate, integrated per period."""
     timeout, deceleration = settings["command_timeout"], settings["stop_deceleration"]
-    gate = _gate(settings)
-    start_acceleration = getattr(gate, "acceleration", math.inf)
-    angle = key_event_tap_angle(speed, timeout, deceleration, start_acceleration)
+    angle = key_event_tap_angle(speed, timeout, deceleration, START_ACCELERATION)
     gated = _gate_run(speed, settings, [0.0], end=timeout + speed / deceleration + 0.5)
     assert gated.sum() * PERIOD == pytest.approx(angle, abs=2 * speed * PERIOD)
     assert gated[-1] == 0.0

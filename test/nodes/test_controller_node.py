@@ -653,3 +653,37 @@ def rclpy_node(ros, name):
     import rclpy
 
     return rclpy.create_node(name, context=ros.context)
+
+
+def test_a_joint_limit_stop_is_logged_once_naming_the_joint(ros):
+    """teleop_twist_keyboard users saw the camera stop at a position limit with nothing logged:
+    entering JOINT_LIMIT logs one warning naming the joint, not one per tick."""
+    from rcl_interfaces.msg import Log
+
+    controller = _node(ros, ControllerNode, wrist_gain=0.0)
+    probe = ros.probe()
+    status = Recorder(probe, DiagnosticArray, "rns_controller/status")
+    logs = Recorder(probe, Log, "/rosout", qos=100)
+    theta = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0])
+    # joint_7 at its upper limit 2 pi: physically the same configuration as theta_7 = 0
+    theta[6] = controller.robot.upper_limits[6] - 1e-4
+    state_pub = probe.create_publisher(JointState, "joint_states", 10)
+    probe.create_timer(0.01, lambda: state_pub.publish(JointState(name=JOINTS, position=theta)))
+    operator = Operator(probe)
+    operator.active = True
+
+    def limited():
+        return status.messages and _state(status.messages[-1])["state"] == "JOINT_LIMIT"
+
+    for sign in (1.0, -1.0):  # one direction about world z drives joint_7 into its limit
+        operator.angular = (0.0, 0.0, 0.1 * sign)
+        if ros.spin_until(limited, timeout=1.5):
+            break
+    assert limited()
+    ros.spin_for(0.5)  # fifty more ticks at the limit
+    assert _state(status.messages[-1])["state"] == "JOINT_LIMIT"
+    warnings = [
+        m.msg for m in logs.messages if m.name == "rns_controller" and "JOINT_LIMIT" in m.msg
+    ]
+    assert len(warnings) == 1, warnings
+    assert "joint_7" in warnings[0]

@@ -111,3 +111,32 @@ def check_velocity_limits(
             f"velocity {velocities[joint]:.4g} rad/s on {model_joints[joint]} exceeds its limit "
             f"{velocity_limits[joint]:.4g} rad/s"
         )
+
+
+def check_reference_positions(
+    positions: np.ndarray,
+    current: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    max_error: float,
+    model_joints: Sequence[str],
+) -> None:
+    """Raise :class:`InputError` naming the first joint whose reference position [rad] is outside
+    its URDF limits [lower, upper] or farther than ``max_error`` [rad] from its current angle
+    (all arrays shape (n,), model order)."""
+    outside = np.flatnonzero((positions < lower) | (positions > upper))
+    if outside.size:
+        joint = outside[0]
+        raise InputError(
+            f"position {positions[joint]:.4g} rad on {model_joints[joint]} is outside its limits "
+            f"[{lower[joint]:.4g}, {upper[joint]:.4g}] rad"
+        )
+    far = np.flatnonzero(np.abs(positions - current) > max_error)
+    if far.size:
+        joint = far[0]
+        raise InputError(
+            f"position {positions[joint]:.4g} rad on {model_joints[joint]} is "
+            f"{abs(positions[joint] - current[joint]):.3g} rad from its current angle "
+            f"{current[joint]:.4g} rad; allowed [{current[joint] - max_error:.4g}, "
+            f"{current[joint] + max_error:.4g}] rad (max_reference_error {max_error} rad)"
+        )

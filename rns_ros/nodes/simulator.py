@@ -27,7 +27,16 @@ Subscribes:
 Also publishes, once, ``robot_description`` (std_msgs/String, transient local, depth 1): the URDF
 text of the simulated model, for robot_state_publisher / rviz users (latched: late joiners get it).
 Service:
-    ~/reset       std_srvs/Trigger            back to the initial state
+    ~/reset       std_srvs/Trigger            back to the initial state, at rest; clears a fault
+
+Safety: a JointTrajectory whose positions lie outside the URDF position limits or farther than
+``max_reference_error`` from the current joint angles is rejected (logged, no motion). For
+``reset_hold`` of simulated time after ``~/reset`` joint commands are ignored, so every controller
+sees the reset state before it commands again (a stale one would pull the arm back). In dynamic
+mode the servo keeps the URDF velocity and effort limits (see :mod:`rns_ros.core.simulation`).
+If a step diverges anyway (:class:`SimulationDivergedError`) the node logs one error and stops
+stepping: it keeps publishing the last finite state with zero velocities (joint and base) and
+zero efforts until ``~/reset``; no non-finite value is ever published.
 """
 
 from __future__ import annotations
@@ -50,8 +59,12 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.core import FreeFloatingModel, load_model_config
-from rns_ros.core.commands import check_velocity_limits, match_named_command
-from rns_ros.core.errors import ConfigError, InputError
+from rns_ros.core.commands import (
+    check_reference_positions,
+    check_velocity_limits,
+    match_named_command,
+)
+from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.nodes.parameters import (
     JOINTS,
@@ -178,6 +191,24 @@ PARAMETERS = (
         0.0,
         1e4,
     ),
+    ParameterSpec(
+        "max_reference_error",
+        0.25,
+        "A JointTrajectory position farther than this from the current joint angle is rejected "
+        "(rns_controller resyncs beyond 0.2 rad; its references track within ~1e-2 rad)",
+        "[rad]",
+        0.01,
+        10.0,
+    ),
+    ParameterSpec(
+        "reset_hold",
+        0.2,
+        "After ~/reset, joint commands are ignored for this long (simulated time) and the arm "
+        "rests at the reset state, so controllers see the new state before commanding",
+        "[s]",
+        0.0,
+        10.0,
+    ),
 )
 SPECS = specs_by_name(PARAMETERS)
 
@@ -228,6 +259,9 @@ class SimulatorNode(Node):
         self._lockstep = params["lockstep_period"]
         self._world_frame = params["world_frame"]
         self._dynamic = params["mode"] == "dynamic"
+        self._max_reference_error = params["max_reference_error"]
+        self._reset_hold = params["reset_hold"]
+        self._publish_period = 1.0 / params["publish_rate"]  # [s], wall time while faulted
 
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -238,6 +272,9 @@ class SimulatorNode(Node):
         self._paused_since: float | None = None  # monotonic start of a lockstep pause [s]
         self._stale_logged = False
         self._reanchor = True
+        self._hold_until = -math.inf  # simulated time [s] before which commands are ignored
+        self._hold_logged = False
+        self._fault = False  # a step diverged: frozen at the last finite state until ~/reset
 
         # State streams: reliable, shallow; consumers want the latest state.
         state_qos = QoSProfile(depth=10)
@@ -280,6 +317,8 @@ class SimulatorNode(Node):
 
     # --- commands (executor thread) -----------------------------------------------------------
     def _on_trajectory(self, msg: JointTrajectory) -> None:
+        if self._ignoring_commands():
+            return
         if not msg.points:
             self._reject("JointTrajectory has no points")
             return
@@ -295,12 +334,25 @@ class SimulatorNode(Node):
             )
             if not self._dynamic and command.velocities is None:
                 raise InputError("kinematic mode needs velocities in the trajectory point")
+            if command.positions is not None:
+                with self._lock:
+                    theta = self.simulator.q[7:].copy()
+                check_reference_positions(
+                    command.positions,
+                    theta,
+                    self.robot.lower_limits,
+                    self.robot.upper_limits,
+                    self._max_reference_error,
+                    self.robot.joint_names,
+                )
         except InputError as exc:
             self._reject(str(exc))
             return
         self._accept(command.positions, command.velocities, command.accelerations)
 
     def _on_velocities(self, msg: Float64MultiArray) -> None:
+        if self._ignoring_commands():
+            return
         try:
             velocities = np.asarray(msg.data, dtype=float)
             if velocities.shape != (self.robot.n,):
@@ -317,8 +369,27 @@ class SimulatorNode(Node):
             return
         self._accept(None, velocities, None)
 
+    def _ignoring_commands(self) -> bool:
+        """True (logged) while faulted or within ``reset_hold`` after a reset, whatever the
+        command says: a controller must first see the state it commands from."""
+        with self._lock:
+            if self._fault:
+                self._reject("the simulation diverged and is stopped; call ~/reset")
+                return True
+            if self._reset_requested or self.simulator.time < self._hold_until:
+                if not self._hold_logged:
+                    self.get_logger().warn(
+                        f"ignoring joint commands for reset_hold = {self._reset_hold} s after "
+                        "~/reset (simulated time): controllers must see the reset state first"
+                    )
+                    self._hold_logged = True
+                return True
+        return False
+
     def _accept(self, positions, velocities, accelerations) -> None:
         with self._lock:
+            if self._fault or self._reset_requested or self.simulator.time < self._hold_until:
+                return  # changed since the check: the command is stale now
             self.simulator.set_reference(positions, velocities, accelerations)
             if self._last_command is None and self._lockstep > 0.0:
                 self._reanchor = True  # lockstep starts: leave the real-time pace of the wait
@@ -332,7 +403,7 @@ class SimulatorNode(Node):
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         with self._lock:
-            self._reset_requested = True
+            self._reset_requested, self._hold_logged = True, False
         response.success = True
         response.message = "simulation reset to its initial state"
         return response
@@ -351,6 +422,11 @@ class SimulatorNode(Node):
         steps = 0
         wall_anchor = sim_anchor = 0.0
         while not self._stop.is_set():
+            if self._fault and not self._reset_requested:
+                self._publish_held_state()
+                self._stop.wait(self._publish_period)
+                self._reanchor = True
+                continue
             if self._await_command():
                 self._reanchor = True  # paused for the controller: do not sprint afterwards
                 continue
@@ -365,9 +441,18 @@ class SimulatorNode(Node):
                     self.simulator.reset()
                     self._last_command, self._reset_requested, self._reanchor = None, False, True
                     self._command_sim_time = 0.0
+                    self._hold_until = self.simulator.time + self._reset_hold
+                    self._fault = False
                     steps = 0
                 self._expire_stale_command()
-                self.simulator.step()
+                try:
+                    self.simulator.step()
+                except SimulationDivergedError as exc:
+                    self._fault = True
+                    self.get_logger().error(
+                        f"{exc}. Stopped: publishing that state with zero velocities until ~/reset"
+                    )
+                    continue
                 steps += 1
                 # a lockstep pause also publishes the state there: the controller's tick at the
                 # pause samples this instant, not the last grid point (stale by up to a period)
@@ -444,12 +529,30 @@ class SimulatorNode(Node):
                 )
                 self._stale_logged = True
 
+    def _publish_held_state(self) -> None:
+        """Faulted: the last finite state, at rest (zero velocities and efforts), and its
+        momentum (the conserved value the system had)."""
+        with self._lock:
+            state = self.simulator.snapshot()
+            momentum = self.simulator.centroidal_momentum()
+        n = self.robot.n
+        held = SimulationState(state.time, state.q, np.zeros(6 + n), np.zeros(n))
+        self._publish_state(held, momentum)
+
     def _stamp(self, state: SimulationState) -> TimeMsg:
         if self._publish_clock:
             return stamp_from_seconds(state.time)
         return self.get_clock().now().to_msg()
 
     def _publish_state(self, state: SimulationState, momentum: np.ndarray) -> None:
+        values = (state.q, state.v, state.effort, momentum)
+        if not all(np.isfinite(value).all() for value in values):
+            # the core never keeps a non-finite state; this guards the topics regardless
+            self.get_logger().error(
+                f"non-finite state at t = {state.time:.6g} s not published",
+                throttle_duration_sec=1.0,
+            )
+            return
         stamp = self._stamp(state)
         joints = JointState()
         joints.header.stamp = stamp

@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 import yaml
 from geometry_msgs.msg import WrenchStamped
@@ -21,8 +22,10 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.core import ConfigError, FreeFloatingModel, FreeFloatingState
+from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
+from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import base_twist_from_momentum
-from rns_ros.nodes.simulator import PARAMETERS, SimulatorNode
+from rns_ros.nodes.simulator import PARAMETERS, SATELLITE_OBSERVATION_RAD, SimulatorNode
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -98,11 +101,11 @@ def test_streams_agree_with_the_core_while_the_arm_moves(ros):
     assert odom.messages[-1].child_frame_id == "base_link"
 
 
-def _rosout_errors(probe):
+def _rosout_errors(probe, level=Log.ERROR):
     errors = []
     qos = QoSProfile(depth=100)
     probe.create_subscription(
-        Log, "/rosout", lambda m: errors.append(m.msg) if m.level >= Log.ERROR else None, qos
+        Log, "/rosout", lambda m: errors.append(m.msg) if m.level >= level else None, qos
     )
     return errors
 
@@ -254,7 +257,9 @@ def test_dynamic_mode_tracks_references_and_publishes_efforts(ros):
 
     def moving():
         command.publish(_trajectory([0.2] * 7))
-        return len(joints.messages) > 40
+        # the 200 N m effort limits (H*_22 ~ 360 kg m^2) allow ~0.5 rad/s^2: the servo, built
+        # for 50 rad/s, settles in ~2.7 s of simulated time
+        return len(joints.messages) > 350
 
     assert ros.spin_until(moving, timeout=20.0)
     last = joints.messages[-1]
@@ -306,3 +311,141 @@ def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
             context=ros.context,
             parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
         )
+
+
+def _sim_seconds(msg) -> float:
+    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+
+
+def _after_reset(messages):
+    """The messages from the first whose simulated stamp went back (the reset) on; [] if none."""
+    for k in range(1, len(messages)):
+        if _sim_seconds(messages[k]) < _sim_seconds(messages[k - 1]):
+            return messages[k:]
+    return []
+
+
+@pytest.mark.parametrize(
+    ("offset", "reason"),
+    [
+        # the issue's input (it diverged to NaN within 16 ms)
+        (100.0, "position 98.43 rad on joint_1 is outside its limits [-6.283, 6.283] rad"),
+        # a 1 rad step inside the position limits (it ran the joints at 18.5 rad/s)
+        (1.0, "on joint_1 is 1 rad from its current angle -1.571 rad; allowed [-1.821, -1.321]"),
+    ],
+    ids=["100-rad", "1-rad-step"],
+)
+def test_implausible_position_references_are_rejected_in_dynamic_mode(ros, offset, reason):
+    _simulator(ros, mode="dynamic", real_time_factor=0.0)
+    probe = ros.probe()
+    errors = _rosout_errors(probe)
+    joints = Recorder(probe, JointState, "joint_states")
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+    message = _trajectory([], positions=np.add(SATELLITE_OBSERVATION_RAD, offset))
+
+    def keep_sending():
+        command.publish(message)
+        return any(reason in error for error in errors) and len(joints.messages) > 20
+
+    assert ros.spin_until(keep_sending, timeout=20.0), errors
+    positions = np.array([m.position for m in joints.messages])
+    assert np.isfinite(positions).all()
+    assert np.abs(positions - SATELLITE_OBSERVATION_RAD).max() < 1e-12  # no motion at all
+
+
+def test_dynamic_reset_with_a_stale_controller_keeps_the_arm_still(ros):
+    """Issue 11, defect 3: a controller still streaming the pre-reset angles must not jerk the
+    arm back. The reset state is held for reset_hold, then the stale references are rejected
+    (too far); the joints stay within their velocity limits and the base does not turn."""
+    # real time: a stale controller's references lag the state by milliseconds, not seconds
+    node = _simulator(ros, mode="dynamic", publish_clock=True)
+    probe = ros.probe()
+    errors = _rosout_errors(probe, level=Log.WARN)
+    joints = Recorder(probe, JointState, "joint_states")
+    odom = Recorder(probe, Odometry, "base_odom")
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+    client = probe.create_client(Trigger, "/rns_simulator/reset")
+    initial = np.array(SATELLITE_OBSERVATION_RAD)
+
+    def moved():
+        command.publish(_trajectory([0.4] * 7))
+        return joints.messages and np.abs(joints.messages[-1].position - initial).min() > 0.4
+
+    assert ros.spin_until(moved, timeout=20.0)
+    stale = _trajectory([0.0] * 7, positions=joints.messages[-1].position)
+    for _ in range(10):  # the arm settles on the stale controller's reference
+        command.publish(stale)
+        ros.spin_for(0.01)
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(Trigger.Request())
+
+    def streaming_stale_after_reset():
+        command.publish(stale)
+        return (
+            future.done()
+            and _after_reset(joints.messages)
+            and (
+                _sim_seconds(joints.messages[-1]) > 1.0  # simulated seconds after the reset
+            )
+        )
+
+    assert ros.spin_until(streaming_stale_after_reset, timeout=30.0)
+    assert future.result().success
+    after = _after_reset(joints.messages)
+    speeds = np.abs([m.velocity for m in after]) / node.robot.velocity_limits
+    print(f"peak joint speed after the reset: {speeds.max():.3g} x the URDF limit")
+    assert speeds.max() <= 1.0 + VELOCITY_LIMIT_TOLERANCE
+    assert np.allclose([m.position for m in after], initial, atol=1e-9)  # at rest, reset state
+    for msg in _after_reset(odom.messages):
+        o = msg.pose.pose.orientation
+        rotation = pin.Quaternion(o.w, o.x, o.y, o.z).toRotationMatrix()
+        assert attitude_deviation(np.eye(3), rotation) < 1e-12  # rad
+    assert any("ignoring joint commands for reset_hold = 0.2 s" in e for e in errors), errors
+    assert any("from its current angle" in e for e in errors), errors
+
+
+def test_a_diverged_step_stops_the_simulation_until_reset(ros):
+    """A step that turns non-finite (forced here: NaN accelerations once) is reported once; the
+    node then publishes the last finite state at rest, never a NaN, until ~/reset."""
+    node = _simulator(ros, mode="dynamic", real_time_factor=0.0, publish_clock=True)
+    probe = ros.probe()
+    errors = _rosout_errors(probe)
+    joints = Recorder(probe, JointState, "joint_states")
+    client = probe.create_client(Trigger, "/rns_simulator/reset")
+    assert ros.spin_until(lambda: len(joints.messages) > 5)
+    simulator = node.simulator
+    healthy = simulator._acceleration
+    poisoned = []
+
+    def nan_once(q, v, tau):
+        if poisoned:
+            return healthy(q, v, tau)
+        poisoned.append(True)
+        return np.full(v.shape, np.nan)
+
+    simulator._acceleration = nan_once
+    assert ros.spin_until(lambda: node._fault, timeout=5.0)
+    simulator._acceleration = healthy
+    start = len(joints.messages)
+    assert ros.spin_until(lambda: len(joints.messages) > start + 20, timeout=5.0)
+    held = joints.messages[-15:]  # (earlier ones may have been published before the fault)
+    assert np.isfinite([m.position for m in joints.messages]).all()
+    assert np.isfinite([m.velocity for m in joints.messages]).all()
+    assert np.array_equal([m.position for m in held], [held[0].position] * len(held))
+    assert not np.any([m.velocity for m in held])
+    assert len({_sim_seconds(m) for m in held}) == 1  # simulated time stopped
+    diverged = [e for e in errors if "diverged" in e]
+    assert len(diverged) == 1, errors
+    assert "non-finite q and v" in diverged[0]
+
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(Trigger.Request())
+    assert ros.spin_until(future.done, timeout=5.0)
+
+    def running_again():
+        after = _after_reset(joints.messages)
+        return after and _sim_seconds(after[-1]) > 0.2
+
+    assert ros.spin_until(running_again, timeout=10.0)
+    assert not node._fault
+    assert np.allclose(joints.messages[-1].position, SATELLITE_OBSERVATION_RAD, atol=1e-9)

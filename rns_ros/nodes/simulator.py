@@ -32,8 +32,10 @@ Service:
 Safety: a JointTrajectory whose positions lie outside the URDF position limits or farther than
 ``max_reference_error`` from the current joint angles is rejected (logged, no motion). For
 ``reset_hold`` of simulated time after ``~/reset`` joint commands are ignored, so every controller
-sees the reset state before it commands again (a stale one would pull the arm back). In dynamic
-mode the servo keeps the URDF velocity and effort limits (see :mod:`rns_ros.core.simulation`).
+sees the reset state before it commands again (a stale one would pull the arm back); a
+JointTrajectory that starts at the reset state ends the hold early (a resynchronized
+controller). In dynamic mode the servo keeps the URDF velocity and effort limits (see
+:mod:`rns_ros.core.simulation`).
 If a step diverges anyway (:class:`SimulationDivergedError`) the node logs one error and stops
 stepping: it keeps publishing the last finite state with zero velocities (joint and base) and
 zero efforts until ``~/reset``; no non-finite value is ever published.
@@ -83,6 +85,9 @@ SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed
 #: A lockstep pause longer than this [s] (wall time) is reported and ends with one step, so a
 #: controller whose sim-time timer waits for a later /clock is never deadlocked.
 LOCKSTEP_PATIENCE = 2.0
+#: After ~/reset, a JointTrajectory starting this close to the reset angles [rad] ends the
+#: reset hold (a resynchronized controller); the hold otherwise lasts ``reset_hold``.
+RESET_MATCH_TOLERANCE = 0.01
 SATELLITE_OBSERVATION_RAD = [math.radians(a) for a in (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)]
 
 PARAMETERS = (
@@ -317,8 +322,6 @@ class SimulatorNode(Node):
 
     # --- commands (executor thread) -----------------------------------------------------------
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        if self._ignoring_commands():
-            return
         if not msg.points:
             self._reject("JointTrajectory has no points")
             return
@@ -346,7 +349,10 @@ class SimulatorNode(Node):
                     self.robot.joint_names,
                 )
         except InputError as exc:
-            self._reject(str(exc))
+            if not self._ignoring_commands():
+                self._reject(str(exc))
+            return
+        if self._ignoring_commands(command.positions):
             return
         self._accept(command.positions, command.velocities, command.accelerations)
 
@@ -369,18 +375,28 @@ class SimulatorNode(Node):
             return
         self._accept(None, velocities, None)
 
-    def _ignoring_commands(self) -> bool:
-        """True (logged) while faulted or within ``reset_hold`` after a reset, whatever the
-        command says: a controller must first see the state it commands from."""
+    def _ignoring_commands(self, positions: np.ndarray | None = None) -> bool:
+        """True (logged) while faulted or within ``reset_hold`` after a reset. A reference whose
+        ``positions`` start at the reset state (within ``RESET_MATCH_TOLERANCE``) ends the hold:
+        it comes from a controller that has seen the reset state and resynchronized, and
+        holding it off would only let that controller's reference run ahead of the arm."""
         with self._lock:
             if self._fault:
                 self._reject("the simulation diverged and is stopped; call ~/reset")
                 return True
             if self._reset_requested or self.simulator.time < self._hold_until:
+                if (
+                    not self._reset_requested
+                    and positions is not None
+                    and np.abs(positions - self.simulator.q[7:]).max() <= RESET_MATCH_TOLERANCE
+                ):
+                    self._hold_until = -math.inf
+                    return False
                 if not self._hold_logged:
                     self.get_logger().warn(
                         f"ignoring joint commands for reset_hold = {self._reset_hold} s after "
-                        "~/reset (simulated time): controllers must see the reset state first"
+                        "~/reset (simulated time), or until a reference starts at the reset "
+                        "state: controllers must see the reset state first"
                     )
                     self._hold_logged = True
                 return True

@@ -449,3 +449,35 @@ def test_a_diverged_step_stops_the_simulation_until_reset(ros):
     assert ros.spin_until(running_again, timeout=10.0)
     assert not node._fault
     assert np.allclose(joints.messages[-1].position, SATELLITE_OBSERVATION_RAD, atol=1e-9)
+
+
+def test_a_reference_that_starts_at_the_reset_state_ends_the_reset_hold(ros):
+    """A controller that saw the reset and resynchronized sends references starting at the
+    reset angles: those end the hold at once. Waiting out reset_hold instead would let its
+    integrated reference run ahead of the still arm, and the servo's catch-up is not
+    reactionless (base 1.7e-4 deg after a reset in the controller's end-to-end test, against
+    3e-5 deg with this rule)."""
+    _simulator(ros, mode="kinematic", publish_clock=True, reset_hold=5.0)
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states")
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+    client = probe.create_client(Trigger, "/rns_simulator/reset")
+    initial = np.array(SATELLITE_OBSERVATION_RAD)
+    assert ros.spin_until(lambda: len(joints.messages) > 3)
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(Trigger.Request())
+    assert ros.spin_until(lambda: future.done() and _after_reset(joints.messages), timeout=5.0)
+    velocities = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1]
+    far = _trajectory(velocities, positions=initial + 0.05)  # a stale reference: ignored
+    for _ in range(20):
+        command.publish(far)
+        ros.spin_for(0.01)
+    assert np.allclose(joints.messages[-1].position, initial, atol=1e-12)
+    resynced = _trajectory(velocities, positions=initial)
+
+    def moving():
+        command.publish(resynced)
+        return joints.messages[-1].position[6] > initial[6] + 0.005
+
+    assert ros.spin_until(moving, timeout=2.0)  # long before reset_hold = 5 s
+    assert _sim_seconds(joints.messages[-1]) < 1.0

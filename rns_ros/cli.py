@@ -1,21 +1,158 @@
-"""Command-line pieces shared by the non-node executables (``rns_demo``, ``rns_observer``)."""
+"""Command-line pieces shared by the executables: ROS-argument checks, one-line errors, start-up.
+
+Start-up contract of every console script (README "Start-up errors"): a bad argument, parameter,
+params file or configuration is one line ``<executable>: <problem>`` on stderr and exit code 2;
+Ctrl-C at any time during start-up is exit code 0 without a traceback.
+
+This module is imported by ``rns_ros/__init__.py`` before anything heavy (numpy, Pinocchio,
+rclpy: about 0.4 s of imports), so it imports nothing beyond the standard library at module level.
+"""
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
+import signal
+import sys
+import threading
+from collections.abc import Callable
 
 #: ROS 2 domain IDs accepted here (the range that maps to valid UDP ports on every platform).
 DOMAIN_ID_RANGE = (0, 101)
 
 
+#: The console scripts of setup.py (test/test_startup.py keeps the two in sync).
+EXECUTABLES = frozenset(
+    {
+        "rns_demo",
+        "rns_simulator",
+        "rns_controller",
+        "rns_rerun_logger",
+        "rns_operator",
+        "rns_teleop_keyboard",
+        "rns_observer",
+        "rns_param",
+        "rns_topic",
+    }
+)
+
+# Signals that arrived before an executable's main() took over (see install_startup_handler).
+_startup_signals: list[int] = []
+
+
+def _record_startup_signal(signum: int, _frame) -> None:
+    # Raised where Python's own handler would raise KeyboardInterrupt (between bytecodes of the
+    # imports), so it unwinds the same way, but ends the console script quietly with code 0. The
+    # record serves a main() that runs anyway (the exit swallowed by an "ignored" callback).
+    _startup_signals.append(signum)
+    raise SystemExit(0)
+
+
+def install_startup_handler() -> None:
+    """In an rns_ros executable, make Ctrl-C during the imports exit code 0, not a traceback.
+
+    Called when the ``rns_ros`` package is imported, i.e. before numpy, Pinocchio and rclpy load.
+    A no-op unless the process is one of :data:`EXECUTABLES` (so importing rns_ros as a library
+    changes no signal handling) and runs in the main thread with Python's default SIGINT handler.
+    Each main() takes the signal over first thing (:func:`run_main`, ``run_node``); one that does
+    not still ends quietly with code 0 on Ctrl-C (SystemExit instead of KeyboardInterrupt).
+    """
+    program = os.path.basename(sys.argv[0]) if getattr(sys, "argv", None) else ""
+    if program.removesuffix(".exe") not in EXECUTABLES:
+        return
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _record_startup_signal)
+
+
+def startup_interrupted() -> bool:
+    """True when Ctrl-C arrived during the imports (the executable should exit 0 at once)."""
+    return bool(_startup_signals)
+
+
+def restore_default_interrupt() -> None:
+    """Give Ctrl-C back to Python (KeyboardInterrupt) once main() is ready to catch it."""
+    if signal.getsignal(signal.SIGINT) is _record_startup_signal:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def one_line(error: BaseException | str) -> str:
+    """The text of ``error`` on one line, without rcl's C source locations.
+
+    rcl messages look like ``Couldn't parse params file ... at line 1, at /project/src/parse.c:841,
+    at /project/src/rcl/arguments.c:415``: the locations help nobody who typed a bad argument.
+    """
+    text = re.sub(r",?\s*at /\S+\.(?:c|cc|cpp|h|hpp):\d+", "", str(error))
+    return " ".join(text.split())
+
+
+def describe_ros_error(error: BaseException) -> str:
+    """One line for what rcl / rclpy raise on bad ROS arguments, params files or environment."""
+    if type(error).__name__ == "UnknownROSArgsError":  # its text is only the list of arguments
+        return (
+            f"unknown ROS arguments {error}; after --ros-args use -p NAME:=VALUE, "
+            "--params-file FILE, -r FROM:=TO, --log-level LEVEL, -e ENCLAVE"
+        )
+    text = one_line(error)
+    # rcl's own prefix; "invalid ROS arguments" is what the harness and the observer say too
+    return re.sub(r"^Failed to parse ROS arguments: ", "invalid ROS arguments: ", text)
+
+
+def check_ros_args(ros_args: list[str]) -> None:
+    """Parse ``--ros-args ...`` the way rcl will, without initialising anything.
+
+    Raises:
+        ConfigError: a trailing ``-p``, an unreadable ``--params-file``, an unknown flag, ...
+            (one line, from rcl's own message).
+    """
+    if not ros_args:
+        return
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    from rclpy.utilities import remove_ros_args
+
+    from rns_ros.core.errors import ConfigError
+
+    try:
+        remove_ros_args(["rns_ros", *ros_args])
+    except (_rclpy.RCLError, _rclpy.UnknownROSArgsError) as exc:
+        raise ConfigError(describe_ros_error(exc)) from None
+
+
 def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
-    """(own arguments, ROS arguments): ``--ros-args ... [--]`` is cut out, as rcl reads it."""
+    """(own arguments, ROS arguments): ``--ros-args ... [--]`` is cut out, as rcl reads it.
+
+    Raises:
+        ConfigError: the ROS arguments are not what rcl accepts (:func:`check_ros_args`).
+    """
     if "--ros-args" not in argv:
         return list(argv), []
     start = argv.index("--ros-args")
     end = argv.index("--", start) if "--" in argv[start:] else len(argv)
+    check_ros_args(argv[start:end])
     return argv[:start] + argv[end + 1 :], argv[start:end]
+
+
+def run_main(program: str, body: Callable[[], int]) -> int:
+    """Run an argparse executable's ``body`` under the start-up contract; return its exit code.
+
+    Ctrl-C during the imports or at any time later: exit code 0, no traceback. An
+    :class:`~rns_ros.core.errors.RnsError` that ``body`` lets through (bad option, scenario,
+    model, ROS arguments): one line ``<program>: <problem>`` on stderr, exit code 2.
+    """
+    if startup_interrupted():
+        return 0
+    restore_default_interrupt()
+    from rns_ros.core.errors import RnsError
+
+    try:
+        return body()
+    except RnsError as exc:
+        print(f"{program}: {one_line(exc)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 0
 
 
 def add_domain_id_argument(parser: argparse.ArgumentParser, fallback: int, what: str) -> None:

@@ -44,7 +44,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.analysis import run_figures
-from rns_ros.cli import add_domain_id_argument, split_ros_args
+from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
 from rns_ros.core import ConfigError, RnsError, load_model
 from rns_ros.core.scenario import load_scenario
 from rns_ros.core.state import FreeFloatingState
@@ -249,13 +249,18 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit code 2 with one line on stderr for bad options or configuration; 0 after Ctrl-C."""
+    return run_main("rns_observer", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
     args = parse_args(argv)
     try:
         if args.scenario is not None:
             scenario_path(args.scenario)  # fail before waiting, not after
         report = observe(args)
     except RnsError as exc:
-        print(f"rns_observer: {exc}", file=sys.stderr)
+        print(f"rns_observer: {one_line(exc)}", file=sys.stderr)
         return 2
     text = json.dumps(report, indent=2) + "\n"
     if args.json is None:

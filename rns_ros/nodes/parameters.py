@@ -9,6 +9,7 @@ range. The same table is mirrored in ``config/<node>.yaml`` and a test keeps the
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -152,6 +153,34 @@ def declare_parameters(node: Node, specs: Sequence[ParameterSpec]) -> dict[str, 
             ) from None
         values[spec.name] = spec.check(parameter.value)
     return values
+
+
+def warn_unknown_parameters(node: Node) -> list[str]:
+    """Warn about parameter overrides for ``node`` that name none of its parameters.
+
+    Call once the node has declared everything. An override (``-p NAME:=VALUE``, or a
+    ``--params-file`` entry for this node or ``/**``) of an undeclared name is ignored by rclpy
+    without a word; here each one is logged as a warning naming the closest declared name.
+    rclpy's own parameters (``use_sim_time``, ...) are declared, so never reported;
+    ``qos_overrides.*`` apply to publishers and subscriptions, not to this list.
+
+    Returns:
+        The unknown names, sorted.
+    """
+    # rclpy (Jazzy) has no public getter for the overrides (rclcpp's get_parameter_overrides());
+    # Node.__init__ keeps rcl's overrides for this node in this dict, name -> Parameter.
+    overrides = getattr(node, "_parameter_overrides", None) or {}
+    declared = list(node.list_parameters([], 0).names)
+    unknown = sorted(
+        name
+        for name in overrides
+        if not node.has_parameter(name) and not name.startswith("qos_overrides.")
+    )
+    for name in unknown:
+        close = difflib.get_close_matches(name, declared, n=1)
+        hint = f"did you mean '{close[0]}'?" if close else f"valid names: {sorted(declared)}"
+        node.get_logger().warning(f"unknown parameter '{name}' is ignored; {hint}")
+    return unknown
 
 
 def _range_text(spec: ParameterSpec) -> str:

@@ -8,14 +8,29 @@ import threading
 from collections.abc import Callable, Sequence
 
 import rclpy
+from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
+from rns_ros.cli import describe_ros_error, one_line, startup_interrupted
 from rns_ros.core.errors import RnsError
-from rns_ros.nodes.parameters import ParameterSpec
+from rns_ros.nodes.parameters import ParameterSpec, warn_unknown_parameters
+
+#: What rcl / rclpy raise at start-up on a user's mistake rather than a bug: unparsable ROS
+#: arguments or params file (RCLInvalidROSArgsError is an RCLError), an unknown --ros-args flag,
+#: a bad ROS_DOMAIN_ID, a built-in parameter (use_sim_time) of the wrong type, a bad node name.
+ROS_STARTUP_ERRORS = (
+    _rclpy.RCLError,
+    _rclpy.UnknownROSArgsError,
+    _rclpy.RMWError,
+    _rclpy.RCUtilsError,
+    ParameterException,
+    NameValidationException,
+)
 
 
 def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]) -> str:
@@ -48,26 +63,40 @@ def run_node(
 ) -> int:
     """Create the node, spin it until Ctrl-C or shutdown, tear down cleanly; return an exit code.
 
-    Bad parameters (:class:`RnsError`) are reported in one line and give exit code 2.
+    Exit codes: 0 after Ctrl-C / SIGTERM (also during start-up) or shutdown; 2 with one line
+    ``<executable>: <problem>`` on stderr for a start-up failure: bad parameters, model or
+    configuration (:class:`RnsError`), or ROS arguments / params file / environment that rcl
+    rejects (:data:`ROS_STARTUP_ERRORS`). Parameter overrides that name no parameter of the node
+    are logged as warnings naming the closest valid name.
     """
-    argv = list(sys.argv if args is None else args)
-    if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
-        print(parameter_help(executable, summary, specs))
-        return 0
     # rclpy's own SIGINT handler would shut the Context down before destroy_node() runs, and a
     # node could no longer publish its final zero command. Ctrl-C and SIGTERM only set a flag
     # that the spin loop reads: an exception raised from a signal handler can land inside
     # rclpy's C++ argument conversion, which turns it into a RuntimeError (exit code 1 seen in
-    # CI). The Context is shut down last, in `finally`.
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    # CI). The handlers go in first, so Ctrl-C during rclpy.init or the node's construction is a
+    # clean exit too. The Context is shut down last, in `finally`.
     stop = threading.Event()
     previous = {
         signum: signal.signal(signum, lambda _signum, _frame: stop.set())
         for signum in (signal.SIGINT, signal.SIGTERM)
     }
+    if startup_interrupted():  # Ctrl-C while the imports ran (rns_ros.cli)
+        stop.set()
     node = executor = None
     try:
-        node = factory()
+        try:
+            argv = list(sys.argv if args is None else args)
+            if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
+                print(parameter_help(executable, summary, specs))
+                return 0
+            if stop.is_set():
+                return 0
+            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+            node = factory()
+        except ROS_STARTUP_ERRORS as exc:
+            print(f"{executable}: {describe_ros_error(exc)}", file=sys.stderr)
+            return 2
+        warn_unknown_parameters(node)
         # The events executor: rclpy's wait-set executors cost ~0.6 ms of CPU per wake-up here,
         # and the multi-threaded one kept the controller at 90 % of a core with output stalls of
         # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.
@@ -77,7 +106,7 @@ def run_node(
             # bounded waits: the stop flag is read at least every 0.1 s
             executor.spin_once(timeout_sec=0.1)
     except RnsError as exc:
-        print(f"{executable}: {exc}", file=sys.stderr)
+        print(f"{executable}: {one_line(exc)}", file=sys.stderr)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -81,8 +81,8 @@ class SinkSettings:
         web_port: HTTP port of the web viewer (``serve``).
 
     Raises:
-        ConfigError: unknown kind, a URL of the wrong form, a port outside [1, 65535], or an
-            ``rrd_path`` whose folder does not exist.
+        ConfigError: unknown kind, a URL of the wrong form, a port outside [1, 65535], or (for
+            ``save``) an ``rrd_path`` that is a directory or whose folder does not exist.
     """
 
     kind: SinkKind | str = SinkKind.AUTO
@@ -105,10 +105,8 @@ class SinkSettings:
                 f"connect_url must look like rerun+http://HOST:PORT/proxy (schemes "
                 f"{list(CONNECT_SCHEMES)}), got {url!r}"
             )
-        if self.kind is SinkKind.SAVE and not path.absolute().parent.is_dir():
-            raise ConfigError(
-                f"rrd_path {str(path)!r}: folder {str(path.absolute().parent)!r} does not exist"
-            )
+        if self.kind is SinkKind.SAVE:
+            _check_rrd_path(path)
 
 
 def has_display(env: Mapping[str, str] | None = None) -> bool:
@@ -202,11 +200,22 @@ def open_sink(
     return _save(rec, settings, blueprint)
 
 
-def _save(rec, settings: SinkSettings, blueprint) -> OpenSink:
-    path = Path(settings.rrd_path).absolute()
+def _check_rrd_path(path: Path) -> None:
+    """ConfigError unless ``path`` can be a recording file: its folder exists, it is no folder."""
+    path = path.absolute()
+    if path.is_dir():
+        raise ConfigError(f"rrd_path {str(path)!r} is a directory; give a file name like run.rrd")
     if not path.parent.is_dir():
         raise ConfigError(f"rrd_path {str(path)!r}: folder {str(path.parent)!r} does not exist")
-    rec.save(path, default_blueprint=blueprint)
+
+
+def _save(rec, settings: SinkSettings, blueprint) -> OpenSink:
+    path = Path(settings.rrd_path).absolute()
+    _check_rrd_path(path)  # again: ``auto`` falls back to save without the settings check
+    try:
+        rec.save(path, default_blueprint=blueprint)
+    except RuntimeError as exc:  # rerun's "Failed to create file: Permission denied ..."
+        raise ConfigError(f"rrd_path {str(path)!r} cannot be written: {exc}") from None
     return OpenSink(
         SinkKind.SAVE, f"recording to {path}; open it with: rerun {path}", rrd_path=path
     )

@@ -4,6 +4,7 @@ node code, while the Context still works, so destroy_node() can publish a final 
 from __future__ import annotations
 
 import os
+import re
 import signal
 import threading
 
@@ -12,6 +13,7 @@ import rclpy
 from rclpy.node import Node
 from std_msgs.msg import String
 
+from rns_ros.nodes.parameters import ParameterSpec, declare_parameters, warn_unknown_parameters
 from rns_ros.nodes.runner import run_node
 
 
@@ -69,3 +71,61 @@ def test_a_signal_ends_the_spin_with_exit_code_0_and_a_live_context_for_the_last
     assert nodes[0].final == [True]  # destroy_node ran before the Context was shut down
     assert signal.getsignal(signum) is before  # our handler is gone again
     assert not rclpy.ok()
+
+
+# --- start-up failures (issue 11): one line and exit code 2, never a traceback -----------------
+class _Quiet(Node):
+    def __init__(self) -> None:
+        super().__init__("rns_runner_test")
+        declare_parameters(self, (ParameterSpec("rate", 50.0, "Rate", "[Hz]", 1.0, 1000.0),))
+
+
+@pytest.mark.parametrize(
+    ("ros_args", "message"),
+    [
+        (["-p"], r"^rns_runner_test: invalid ROS arguments: Couldn't parse trailing -p"),
+        (["--bogus"], r"^rns_runner_test: unknown ROS arguments \['--bogus'\]"),
+        # raised inside Node.__init__ (rclpy declares use_sim_time itself)
+        (["-p", "use_sim_time:=maybe"], r"^rns_runner_test: .*'use_sim_time' to 'maybe'"),
+        (["-p", "rate:=0.0"], r"^rns_runner_test: parameter 'rate' out of range"),
+    ],
+)
+def test_bad_ros_arguments_give_one_line_and_exit_code_2(capsys, ros_args, message):
+    before = signal.getsignal(signal.SIGINT)
+    code = run_node(
+        _Quiet,
+        executable="rns_runner_test",
+        summary="",
+        specs=(),
+        args=["t", "--ros-args", *ros_args],
+    )
+    err = capsys.readouterr().err
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1, err
+    assert re.search(message, err), err
+    assert signal.getsignal(signal.SIGINT) is before
+    assert not rclpy.ok()
+
+
+def test_unknown_overrides_are_warned_about_with_the_closest_name():
+    args = ["t", "--ros-args", "-p", "ratee:=3.0", "-p", "use_sim_time:=true", "-p", "zzz:=1"]
+    args += ["-p", "qos_overrides./x.publisher.depth:=3"]
+    context = rclpy.Context()
+    rclpy.init(args=args, context=context)
+    try:
+        node = Node("rns_runner_test", context=context)
+        declare_parameters(node, (ParameterSpec("rate", 50.0, "Rate", "[Hz]", 1.0, 1000.0),))
+        logged: list[str] = []
+
+        class _Logger:
+            def warning(self, text: str) -> None:
+                logged.append(text)
+
+        node.get_logger = _Logger  # type: ignore[method-assign]
+        assert warn_unknown_parameters(node) == ["ratee", "zzz"]
+        assert logged[0] == "unknown parameter 'ratee' is ignored; did you mean 'rate'?"
+        assert logged[1].startswith("unknown parameter 'zzz' is ignored; valid names: [")
+        assert "'rate'" in logged[1]
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)

@@ -155,6 +155,31 @@ def run_main(program: str, body: Callable[[], int]) -> int:
         return 0
 
 
+#: Largest domain ID Fast DDS can map to UDP ports (7400 + 250 d + offsets <= 65535); above it,
+#: creating a node ends the process with exit code 1 and an RTPS error, from C++.
+DDS_MAX_DOMAIN_ID = 232
+
+
+def check_domain_id_environment(env: dict[str, str] | None = None) -> None:
+    """Raise ConfigError for an integer ``ROS_DOMAIN_ID`` above :data:`DDS_MAX_DOMAIN_ID`.
+
+    A non-integer one is left to rcl (its own one-line error at ``rclpy.init``).
+    """
+    text = (os.environ if env is None else env).get("ROS_DOMAIN_ID", "").strip()
+    try:
+        value = int(text)
+    except ValueError:
+        return
+    if not 0 <= value <= DDS_MAX_DOMAIN_ID:
+        from rns_ros.core.errors import ConfigError
+
+        low, high = DOMAIN_ID_RANGE
+        raise ConfigError(
+            f"ROS_DOMAIN_ID={text} is out of range: DDS takes [0, {DDS_MAX_DOMAIN_ID}] "
+            f"([{low}, {high}] on every platform)"
+        )
+
+
 def add_domain_id_argument(parser: argparse.ArgumentParser, fallback: int, what: str) -> None:
     """``--domain-id``: default ``ROS_DOMAIN_ID`` of the environment, else ``fallback``.
 

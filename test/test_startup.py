@@ -118,8 +118,18 @@ def test_garbage_params_file_is_one_line_and_exit_2(executable, tmp_path):
             {},
         ),
         ("rns_operator", [], r"ROS_DOMAIN_ID is not an integral number", {"ROS_DOMAIN_ID": "x"}),
+        # Fast DDS would end the process from C++ (exit code 1, RTPS errors) at node creation
+        ("rns_controller", [], r"ROS_DOMAIN_ID=300 is out of range", {"ROS_DOMAIN_ID": "300"}),
     ],
-    ids=["trailing-p", "demo-trailing-p", "unknown-flag", "foreign-yaml", "sim-time", "domain"],
+    ids=[
+        "trailing-p",
+        "demo-trailing-p",
+        "unknown-flag",
+        "foreign-yaml",
+        "sim-time",
+        "domain",
+        "domain-300",
+    ],
 )
 def test_bad_ros_arguments_are_one_line_and_exit_2(executable, args, pattern, env, tmp_path):
     (tmp_path / "p.yaml").write_text("a: 1\n")

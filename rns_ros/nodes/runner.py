@@ -16,7 +16,12 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
-from rns_ros.cli import describe_ros_error, one_line, startup_interrupted
+from rns_ros.cli import (
+    check_domain_id_environment,
+    describe_ros_error,
+    one_line,
+    startup_interrupted,
+)
 from rns_ros.core.errors import RnsError
 from rns_ros.nodes.parameters import ParameterSpec, warn_unknown_parameters
 
@@ -91,6 +96,7 @@ def run_node(
                 return 0
             if stop.is_set():
                 return 0
+            check_domain_id_environment()
             rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
             node = factory()
         except ROS_STARTUP_ERRORS as exc:

@@ -27,10 +27,11 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
 from rns_ros.analysis import RunFigures, run_figures
-from rns_ros.cli import add_domain_id_argument, split_ros_args
+from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
 from rns_ros.core import RnsError, load_model
-from rns_ros.core.scenario import load_scenario
+from rns_ros.core.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.harness import Harness, TopicLog
+from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.operator import OperatorNode
 from rns_ros.nodes.simulator import SimulatorNode
@@ -51,6 +52,33 @@ class DemoRow:
     figures: RunFigures
     wall_time_s: float
     recording: str | None
+
+
+def check_scenarios(files: list[Path]) -> list[Scenario]:
+    """Load every scenario file and check it against the controller's ``max_angular_speed``
+    (its default, or the scenario's own override) before any node starts.
+
+    Raises:
+        ConfigError: a file is invalid, or a scenario's peak angular speed exceeds the limit
+            (names the scenario, its peak speed [rad/s] and the limit [rad/s]).
+    """
+    default_limit = CONTROLLER_SPECS["max_angular_speed"].default
+    scenarios = [load_scenario(file) for file in files]
+    for scenario in scenarios:
+        check_speed_limit(scenario, default_limit)
+    return scenarios
+
+
+def non_finite_figures(rows: list[DemoRow]) -> list[str]:
+    """One text per run with a NaN or infinite figure ("dls: camera err = nan, ..."); empty
+    when every figure is finite."""
+    problems = []
+    for row in rows:
+        values = {**asdict(row.figures), "wall_time_s": row.wall_time_s}
+        bad = [f"{name} = {value}" for name, value in values.items() if not np.isfinite(value)]
+        if bad:
+            problems.append(f"{row.method}: " + ", ".join(bad))
+    return problems
 
 
 def run_method(
@@ -230,11 +258,16 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit code 2 with one line on stderr for bad options or configuration; 0 after Ctrl-C."""
+    return run_main("rns_demo", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
     args = parse_args(argv)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     try:
         scenario_file = scenario_path(args.scenario)
-        scenario = load_scenario(scenario_file)
+        (scenario,) = check_scenarios([scenario_file])
         print(f"scenario: {scenario_file} ({scenario.description})")
         print(
             f"model: {default_model_config()}; {args.mode} simulation, controller at "
@@ -247,10 +280,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"running {method} ...", flush=True)
             rows.append(run_method(method, args, scenario_file))
     except RnsError as exc:
-        print(f"rns_demo: {exc}", file=sys.stderr)
+        print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return 2
     print()
     print(format_table(rows))
+    problems = non_finite_figures(rows)
+    if problems:
+        # a run that produced NaN / inf figures failed, whatever the table shows
+        print(f"rns_demo: non-finite figures: {'; '.join(problems)}", file=sys.stderr)
+        return 1
     print(f"\nETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.")
     recordings = [row.recording for row in rows if row.recording]
     if recordings:

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 
 import pytest
 import yaml
 from rns_testing import SHORT_ROLL_SCENARIO
 
+from rns_ros import demo
+from rns_ros.analysis import RunFigures
 from rns_ros.core import load_model
 from rns_ros.core.closed_loop import run_scenario
 from rns_ros.core.scenario import load_scenario
-from rns_ros.demo import main
+from rns_ros.demo import DemoRow, main
 from rns_ros.resources import default_model_config
 from rns_ros.viz import paths
 from rns_ros.viz.readback import recording_summary
@@ -123,3 +126,67 @@ def test_demo_rejects_bad_arguments(argv, message, capsys):
 def test_demo_reports_an_unknown_scenario(capsys):
     assert main(["--scenario", "nowhere", "--no-record"]) == 2
     assert "neither a file nor one of" in capsys.readouterr().err
+
+
+def _no_dds(*_args, **_kwargs):
+    raise AssertionError("a DDS stack was started")
+
+
+def test_demo_refuses_a_scenario_faster_than_the_controller_before_any_run(
+    tmp_path, monkeypatch, capsys
+):
+    """Such a scenario used to run: the controller rejected every command and the table came
+    out with NaN / inf figures, exit code 0."""
+    monkeypatch.setattr(demo, "Harness", _no_dds)
+    fast = {**SHORT_ROLL_SCENARIO, "name": "quick_roll", "angle_deg": 180.0, "duration": 2.0}
+    scenario = tmp_path / "fast.yaml"
+    scenario.write_text(yaml.safe_dump(fast))
+    assert main(["--scenario", str(scenario), "--no-record", "--domain-id", DOMAIN]) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1, captured.err
+    # 180 deg in 2 s, quintic: 15/8 * pi / 2 s = 2.945 rad/s against the default 1 rad/s
+    assert "'quick_roll'" in lines[0]
+    assert "2.945 rad/s" in lines[0]
+    assert "max_angular_speed 1 rad/s" in lines[0]
+    assert "running" not in captured.out
+
+
+def _figures(**changes) -> RunFigures:
+    values = {
+        "max_base_deviation_deg": 1e-3,
+        "final_camera_error_deg": 0.05,
+        "rms_tracking_error": 1e-3,
+        "max_wrist_drift_m": 0.5,
+        "max_joint_speed": 0.3,
+        "angular_momentum_drift": 1e-13,
+        "samples": 400,
+    }
+    return RunFigures(**{**values, **changes})
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_demo_fails_on_non_finite_figures(tmp_path, monkeypatch, capsys, bad):
+    def fake_run(method, _args, _file):
+        changes = {"final_camera_error_deg": bad} if method == "sc" else {}
+        return DemoRow(method, _figures(**changes), 1.0, None)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    summary = tmp_path / "summary.json"
+    argv = ["--no-record", "--summary", str(summary), "--domain-id", DOMAIN]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert f"sc: final_camera_error_deg = {bad}" in err
+    assert "dls" not in err
+    assert not summary.exists()  # NaN is not JSON: no summary that looks like a result
+
+
+def test_demo_with_finite_figures_exits_0(tmp_path, monkeypatch):
+    monkeypatch.setattr(demo, "run_method", lambda m, _a, _f: DemoRow(m, _figures(), 1.0, None))
+    summary = tmp_path / "summary.json"
+    assert main(["--no-record", "--summary", str(summary), "--domain-id", DOMAIN]) == 0
+    assert [row["method"] for row in json.loads(summary.read_text())] == [
+        "dls",
+        "sc",
+        "conventional",
+    ]

@@ -48,6 +48,12 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
+from rns_ros.cli import (
+    check_domain_id_environment,
+    describe_ros_error,
+    one_line,
+    startup_interrupted,
+)
 from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import RnsError
 from rns_ros.keyboard import (
@@ -59,8 +65,13 @@ from rns_ros.keyboard import (
     split_keys,
     status_line,
 )
-from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
-from rns_ros.nodes.runner import parameter_help
+from rns_ros.nodes.parameters import (
+    WORLD_FRAME,
+    ParameterSpec,
+    declare_parameters,
+    warn_unknown_parameters,
+)
+from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help
 
 NODE_NAME = "rns_teleop_keyboard"
 SUMMARY = (
@@ -83,14 +94,20 @@ PARAMETERS = (
     ParameterSpec(
         "max_angular_speed",
         1.0,
-        "Upper bound of the angular speed keys (the controller rejects faster commands)",
+        "Upper bound of the angular speed keys and of |angular| when keys combine (scaled "
+        "down uniformly, direction kept); keep it <= the controller's max_angular_speed",
         "[rad/s]",
         0.001,
         10.0,
     ),
     ParameterSpec("linear_speed", 0.05, "Initial linear speed of a held key", "[m/s]", 0.001, 1.0),
     ParameterSpec(
-        "max_linear_speed", 0.5, "Upper bound of the linear speed keys", "[m/s]", 0.001, 10.0
+        "max_linear_speed",
+        0.5,
+        "Upper bound of the linear speed keys and of |linear| when keys combine",
+        "[m/s]",
+        0.001,
+        10.0,
     ),
     ParameterSpec(
         "speed_step", 1.25, "Factor of one speed-up (+) or slow-down (-) key", "[-]", 1.01, 10.0
@@ -340,20 +357,35 @@ def main(args: Sequence[str] | None = None) -> int:
     """Run the teleop in this terminal; exit code 0 (quit, Ctrl-C, SIGTERM), 1 (terminal lost)
     or 2 (bad parameters, stdin not a terminal)."""
     argv = list(sys.argv if args is None else args)
-    if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
-        print(parameter_help(NODE_NAME, SUMMARY, PARAMETERS))
-        return 0
-    # Our own handlers (no rclpy one): the Context must outlive the final zero twists.
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
+            print(parameter_help(NODE_NAME, SUMMARY, PARAMETERS))
+            return 0
+    except ROS_STARTUP_ERRORS as exc:
+        print(f"{NODE_NAME}: {describe_ros_error(exc)}", file=sys.stderr)
+        return 2
+    # Our own handlers (no rclpy one), before rclpy.init: the Context must outlive the final zero
+    # twists, and Ctrl-C during start-up (imports included, see rns_ros.cli) is a clean exit 0.
     _signals.clear()
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, _on_signal)
+    if startup_interrupted():
+        return 0
     node = executor = spinner = None
     stop_spinning = threading.Event()
     code = 0
     panel_started = False
     try:
-        for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-            signal.signal(signum, _on_signal)
-        node = TeleopKeyboardNode()
+        try:
+            check_domain_id_environment()
+            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+            node = TeleopKeyboardNode()
+        except ROS_STARTUP_ERRORS as exc:
+            print(f"{NODE_NAME}: {describe_ros_error(exc)}", file=sys.stderr)
+            return 2
+        warn_unknown_parameters(node)
+        if _signals and signal.SIGHUP not in _signals:
+            return 0  # Ctrl-C / SIGTERM while starting: nothing was sent yet
         stdin = sys.stdin.fileno() if sys.stdin is not None else -1
         if stdin < 0 or not os.isatty(stdin):
             print(
@@ -372,7 +404,7 @@ def main(args: Sequence[str] | None = None) -> int:
         with RawTerminal(stdin, sys.stdout.fileno()) as terminal:
             run_panel(node, terminal, _signals)
     except RnsError as exc:
-        print(f"{NODE_NAME}: {exc}", file=sys.stderr)
+        print(f"{NODE_NAME}: {one_line(exc)}", file=sys.stderr)
         return 2
     except TerminalLost:
         code = EXIT_TERMINAL_LOST

@@ -45,7 +45,8 @@ def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]
         "",
         summary,
         "",
-        "parameters (defaults mirror config/*.yaml):",
+        "parameters (defaults mirror config/*.yaml; [run time]: can be changed while the node "
+        "runs, e.g. rns_param set /NODE NAME VALUE; the others are read at start-up):",
     ]
     for spec in specs:
         limits = ""
@@ -53,7 +54,8 @@ def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]
             limits = f" one of {list(spec.choices)}"
         elif spec.low is not None:
             limits = f" in [{spec.low}, {spec.high}]"
-        lines.append(f"  {spec.name} = {spec.default!r}{limits} {spec.unit}".rstrip())
+        when = "" if spec.read_only else " [run time]"
+        lines.append(f"  {spec.name} = {spec.default!r}{limits} {spec.unit}".rstrip() + when)
         lines.append(f"      {spec.description}")
     return "\n".join(lines)
 

@@ -129,3 +129,18 @@ def test_unknown_overrides_are_warned_about_with_the_closest_name():
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)
+
+
+def test_help_marks_the_parameters_that_change_at_run_time():
+    """--help says which parameters the node applies while running: exactly the specs that are
+    not read-only, and the controller applies each of them (its set-parameters callback)."""
+    from rns_ros.nodes import controller, simulator
+    from rns_ros.nodes.runner import parameter_help
+
+    for module in (controller, simulator):
+        text = parameter_help(module.NODE_NAME, module.SUMMARY, module.PARAMETERS)
+        marked = {line.split()[0] for line in text.splitlines() if line.endswith("[run time]")}
+        assert marked == {spec.name for spec in module.PARAMETERS if not spec.read_only}
+    assert {"method", "state_timeout", "max_angular_speed"} <= {
+        spec.name for spec in controller.PARAMETERS if not spec.read_only
+    }

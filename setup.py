@@ -16,6 +16,8 @@ CONSOLE_SCRIPTS = [
     "rns_operator = rns_ros.nodes.operator:main",
     "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",
     "rns_observer = rns_ros.observer:main",
+    "rns_param = rns_ros.rostools:param_main",
+    "rns_topic = rns_ros.rostools:topic_main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -315,15 +315,21 @@ def _parse_yaml_value(text: str):
     return ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=text)
 
 
-def _param_parser() -> argparse.ArgumentParser:
+def _timeout_parser(what: str) -> argparse.ArgumentParser:
+    """The ``--timeout SEC`` option every subcommand shares (a parent parser)."""
     common = _Parser(add_help=False)
     common.add_argument(
         "--timeout",
         type=_timeout,
         default=DEFAULT_TIMEOUT,
         metavar="SEC",
-        help=f"wait this long for the node and each reply (default {DEFAULT_TIMEOUT:g})",
+        help=f"{what} (default {DEFAULT_TIMEOUT:g})",
     )
+    return common
+
+
+def _param_parser() -> argparse.ArgumentParser:
+    common = _timeout_parser("wait this long for the node and each reply")
     parser = _Parser(
         prog="rns_param",
         description="Inspect and change parameters of running ROS 2 nodes, like `ros2 param` "
@@ -610,14 +616,7 @@ def _subscription_qos(session: _Session, topic: str):
 
 
 def _topic_parser() -> argparse.ArgumentParser:
-    common = _Parser(add_help=False)
-    common.add_argument(
-        "--timeout",
-        type=_timeout,
-        default=DEFAULT_TIMEOUT,
-        metavar="SEC",
-        help=f"wait this long for TOPIC (list: any node) to appear (default {DEFAULT_TIMEOUT:g})",
-    )
+    common = _timeout_parser("wait this long for TOPIC (list: any node) to appear")
     parser = _Parser(
         prog="rns_topic",
         description="List, print and time ROS 2 topics, like `ros2 topic` (which is not on "

@@ -60,6 +60,22 @@ def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]
     return "\n".join(lines)
 
 
+def start_node(executable: str, factory: Callable[[], Node], argv: Sequence[str]) -> Node | None:
+    """rclpy.init (without rclpy's signal handlers) and ``factory()``; None after printing one
+    line ``<executable>: <problem>`` when rcl rejects the ROS arguments, params file or
+    environment (:data:`ROS_STARTUP_ERRORS`). Overrides naming no parameter of the node are
+    logged with the closest valid name. :class:`RnsError` from the factory propagates."""
+    try:
+        check_domain_id_environment()
+        rclpy.init(args=list(argv), signal_handler_options=SignalHandlerOptions.NO)
+        node = factory()
+    except ROS_STARTUP_ERRORS as exc:
+        print(f"{executable}: {describe_ros_error(exc)}", file=sys.stderr)
+        return None
+    warn_unknown_parameters(node)
+    return node
+
+
 def run_node(
     factory: Callable[[], Node],
     *,
@@ -98,13 +114,12 @@ def run_node(
                 return 0
             if stop.is_set():
                 return 0
-            check_domain_id_environment()
-            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-            node = factory()
         except ROS_STARTUP_ERRORS as exc:
             print(f"{executable}: {describe_ros_error(exc)}", file=sys.stderr)
             return 2
-        warn_unknown_parameters(node)
+        node = start_node(executable, factory, argv)
+        if node is None:
+            return 2
         # The events executor: rclpy's wait-set executors cost ~0.6 ms of CPU per wake-up here,
         # and the multi-threaded one kept the controller at 90 % of a core with output stalls of
         # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.

@@ -45,11 +45,9 @@ from geometry_msgs.msg import TwistStamped
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from rns_ros.cli import (
-    check_domain_id_environment,
     describe_ros_error,
     one_line,
     startup_interrupted,
@@ -69,9 +67,8 @@ from rns_ros.nodes.parameters import (
     WORLD_FRAME,
     ParameterSpec,
     declare_parameters,
-    warn_unknown_parameters,
 )
-from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help
+from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, start_node
 
 NODE_NAME = "rns_teleop_keyboard"
 SUMMARY = (
@@ -376,14 +373,9 @@ def main(args: Sequence[str] | None = None) -> int:
     code = 0
     panel_started = False
     try:
-        try:
-            check_domain_id_environment()
-            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-            node = TeleopKeyboardNode()
-        except ROS_STARTUP_ERRORS as exc:
-            print(f"{NODE_NAME}: {describe_ros_error(exc)}", file=sys.stderr)
+        node = start_node(NODE_NAME, TeleopKeyboardNode, argv)
+        if node is None:
             return 2
-        warn_unknown_parameters(node)
         if _signals and signal.SIGHUP not in _signals:
             return 0  # Ctrl-C / SIGTERM while starting: nothing was sent yet
         stdin = sys.stdin.fileno() if sys.stdin is not None else -1

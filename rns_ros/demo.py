@@ -5,9 +5,9 @@ launch-free stack runs in this process (:class:`rns_ros.harness.Harness`, its ow
 localhost only): ``rns_simulator`` starting from the scenario's joint angles, ``rns_controller``
 with that method, ``rns_operator`` playing the scenario file, and ``rns_rerun_logger`` recording
 one ``.rrd`` per run (or a live viewer with ``--viewer``). The recorded topics give a comparison
-table (:mod:`rns_ros.analysis`): max base attitude deviation, camera orientation error at the end,
-RMS angular-velocity tracking error, max wrist drift, max joint speed, angular momentum drift,
-wall time. ``--summary PATH`` writes it as JSON.
+table (:mod:`rns_ros.analysis.recorded_run`): max base attitude deviation, camera orientation
+error at the end, RMS angular-velocity tracking error, max wrist drift, max joint speed,
+angular momentum drift, wall time. ``--summary PATH`` writes it as JSON.
 """
 
 from __future__ import annotations
@@ -26,10 +26,10 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
-from rns_ros.analysis import RunFigures, run_figures
+from rns_ros.analysis.recorded_run import RunFigures, run_figures
 from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
+from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import RnsError, load_model
-from rns_ros.core.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.harness import Harness, TopicLog
 from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller import ControllerNode

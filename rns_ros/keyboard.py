@@ -38,7 +38,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
 
 #: Order of :attr:`KeyboardTeleop.frame` cycling with the frame key.

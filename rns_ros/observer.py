@@ -8,8 +8,8 @@ localhost), records what the robot side publishes (``joint_states``, ``base_odom
 ``momentum``) and what the operator side sends (``cmd_twist``, ``joint_references``), and writes
 a JSON report: per topic the message count, receive rate and serialized payload bytes, how long
 the robot took to appear, and, with ``--scenario``, the run's figures
-(:func:`rns_ros.analysis.run_figures`) plus the camera rotation between the first and the last
-robot state. See docs/two_hosts.md.
+(:func:`rns_ros.analysis.recorded_run.run_figures`) plus the camera rotation between the first
+and the last robot state. See docs/two_hosts.md.
 
 Without ``--scenario`` it records for ``--duration`` seconds after the robot appears. With it, it
 records until the operator has sent commands and then fallen silent for ``--idle`` seconds (the
@@ -43,10 +43,10 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from rns_ros.analysis import run_figures
+from rns_ros.analysis.recorded_run import run_figures
 from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
+from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError, RnsError, load_model
-from rns_ros.core.scenario import load_scenario
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.demo import robot_arrays
 from rns_ros.harness import RECORD_QOS, TopicLog, ros_environment

@@ -73,6 +73,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
+from rns_ros.control.controller import ControllerSettings, ReactionlessController
+from rns_ros.control.inspection import reactionless_camera_control, wrist_offset
 from rns_ros.core import (
     FreeFloatingState,
     damped_least_squares_inverse,
@@ -80,12 +82,10 @@ from rns_ros.core import (
     reactionless_joint_velocity,
     singularity_consistent_inverse,
 )
-from rns_ros.core.control import reactionless_camera_control, wrist_offset
-from rns_ros.core.controller import ControllerSettings, ReactionlessController
 from rns_ros.core.fastmath import has_fast_solve
-from rns_ros.core.simulation import FreeFloatingSimulator
 from rns_ros.harness import Harness, ProcessStack
 from rns_ros.resources import default_model_config
+from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 SATELLITE_OBSERVATION_RAD = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0])
 

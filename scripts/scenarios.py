@@ -7,7 +7,7 @@ For each scenario in config/scenarios/ and each variant (dls, dls naive hold, sc
 conventional, dls in dynamic mode) prints: max base attitude deviation [deg], final camera
 orientation error [deg], max rotation-axis error [deg], achieved rotation [deg], max wrist drift
 [m], min sigma_min of J-bar, max DLS damping, speed-scale range, min det(J-bar J-bar^T) and when,
-max servo error [rad]. Numbers, not tests: test/core/test_closed_loop.py asserts the physics.
+max servo error [rad]. Numbers, not tests: test/analysis/test_closed_loop.py asserts the physics.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ import json
 import time
 from dataclasses import asdict
 
+from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.control.scenario import load_scenario
 from rns_ros.core import load_model
-from rns_ros.core.closed_loop import run_scenario
-from rns_ros.core.scenario import load_scenario
 from rns_ros.resources import config_dir, default_model_config
 
 VARIANTS = {

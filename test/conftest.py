@@ -16,7 +16,7 @@ def robot() -> FreeFloatingModel:
 @pytest.fixture(scope="session")
 def scenario():
     """Load a shipped scenario by name: ``scenario("satellite_observation")``."""
-    from rns_ros.core.scenario import load_scenario
+    from rns_ros.control.scenario import load_scenario
     from rns_ros.resources import config_dir
 
     return lambda name: load_scenario(config_dir() / "scenarios" / f"{name}.yaml")

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 #: Initial configuration of the thesis satellite-observation scenario (section 4.2.2) [deg].
 SATELLITE_OBSERVATION_DEG = (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)
 #: A short satellite-observation run for DDS tests: 30 deg roll about world x in 3 s, no wrist
-#: term (scenario file contents; see rns_ros/core/scenario.py).
+#: term (scenario file contents; see rns_ros/control/scenario.py).
 SHORT_ROLL_SCENARIO = {
     "name": "short_observation",
     "description": "30 deg roll about world x in 3 s",

@@ -11,10 +11,10 @@ import yaml
 from rns_testing import SHORT_ROLL_SCENARIO
 
 from rns_ros import demo
-from rns_ros.analysis import RunFigures
+from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.analysis.recorded_run import RunFigures
+from rns_ros.control.scenario import load_scenario
 from rns_ros.core import load_model
-from rns_ros.core.closed_loop import run_scenario
-from rns_ros.core.scenario import load_scenario
 from rns_ros.demo import DemoRow, main
 from rns_ros.resources import default_model_config
 from rns_ros.viz import paths

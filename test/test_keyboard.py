@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
 from rns_ros.keyboard import (
     KEY_HELP,

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import yaml
 
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.teleop import CommandGate, TwistCommand
 from rns_ros.core.errors import ConfigError
-from rns_ros.core.teleop import CommandGate, TwistCommand
 from rns_ros.keyboard import key_event_tap_angle
 from rns_ros.nodes.controller import SPECS
 

@@ -1,10 +1,9 @@
-"""ROS-free math core of rns_ros: model, state, momentum/RNS, inverses, subchains, integration.
-
-Never imports rclpy or rerun. See docs/symbols.md for the thesis symbol <-> name table.
+"""ROS-free math core of rns_ros (the ground floor): model, state, momentum/RNS, inverses,
+subchains, integration. It imports nothing of rns_ros above it, and never rclpy or rerun.
+See docs/symbols.md for the thesis symbol <-> name table.
 """
 
 from rns_ros.core.config import load_model, load_model_config
-from rns_ros.core.control import ControlGains, ControlOutput, Method, reactionless_camera_control
 from rns_ros.core.errors import ConfigError, InputError, ModelError, RnsError
 from rns_ros.core.inverses import (
     DampedInverse,
@@ -26,15 +25,12 @@ from rns_ros.core.subchains import SubchainDecomposition, subchain_decomposition
 
 __all__ = [
     "ConfigError",
-    "ControlGains",
-    "ControlOutput",
     "DampedInverse",
     "Determinants",
     "FrameKinematics",
     "FreeFloatingModel",
     "FreeFloatingState",
     "InputError",
-    "Method",
     "ModelError",
     "ModelSpec",
     "RnsError",
@@ -47,7 +43,6 @@ __all__ = [
     "load_model",
     "load_model_config",
     "pseudoinverse",
-    "reactionless_camera_control",
     "reactionless_joint_velocity",
     "singularity_consistent_inverse",
     "spatial_momentum",

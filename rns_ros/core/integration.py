@@ -1,6 +1,6 @@
 """Free-floating velocity and attitude helpers shared by the simulator, demo and tests.
 
-The fixed-step integrator itself lives in :mod:`rns_ros.core.simulation`.
+The fixed-step integrator itself lives in :mod:`rns_ros.sim.free_floating`.
 """
 
 from __future__ import annotations

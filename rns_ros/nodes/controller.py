@@ -1,7 +1,7 @@
 """rns_controller: operator twist in, reactionless joint references out (thesis section 4.2-4.3).
 
-The law is :class:`rns_ros.core.controller.ReactionlessController`; command safety is
-:class:`rns_ros.core.teleop.CommandGate`. This node only converts messages and runs them once per
+The law is :class:`rns_ros.control.controller.ReactionlessController`; command safety is
+:class:`rns_ros.control.teleop.CommandGate`. This node only converts messages and runs them once per
 control period from an executor timer.
 
 Subscribes:
@@ -45,18 +45,15 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from rns_ros.core import FreeFloatingState, load_model
-from rns_ros.core.commands import match_named_command
-from rns_ros.core.control import ControlGains
-from rns_ros.core.controller import (
+from rns_ros.control.controller import (
     ControllerSettings,
     ControllerStep,
     ReactionlessController,
     TwistFrame,
     angular_velocity_in_world,
 )
-from rns_ros.core.errors import InputError, RnsError
-from rns_ros.core.teleop import (
+from rns_ros.control.inspection import ControlGains
+from rns_ros.control.teleop import (
     CommandGate,
     ControllerState,
     GateOutput,
@@ -65,6 +62,9 @@ from rns_ros.core.teleop import (
     twist_frame_ids,
     validate_twist,
 )
+from rns_ros.core import FreeFloatingState, load_model
+from rns_ros.core.commands import match_named_command
+from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes.parameters import (
     JOINTS,
     MODEL_CONFIG,

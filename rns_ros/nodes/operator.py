@@ -23,8 +23,8 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 
-from rns_ros.core.controller import TwistFrame
-from rns_ros.core.scenario import Scenario, load_scenario
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.scenario import Scenario, load_scenario
 from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import scenario_path
@@ -61,7 +61,7 @@ PARAMETERS = (
 
 
 class OperatorNode(Node):
-    """Plays one :class:`~rns_ros.core.scenario.Scenario` (see the module docstring)."""
+    """Plays one :class:`~rns_ros.control.scenario.Scenario` (see the module docstring)."""
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)

@@ -35,11 +35,11 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.teleop import twist_frame_ids
 from rns_ros.core import FreeFloatingModel, load_model_config
 from rns_ros.core.commands import match_named_command
-from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import InputError
-from rns_ros.core.teleop import twist_frame_ids
 from rns_ros.nodes.parameters import (
     MODEL_CONFIG,
     WORLD_FRAME,

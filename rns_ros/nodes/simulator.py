@@ -1,6 +1,6 @@
 """rns_simulator: the free-floating satellite + arm, integrated at a fixed step, as a ROS 2 node.
 
-Physics is :class:`rns_ros.core.simulation.FreeFloatingSimulator`; this node only converts
+Physics is :class:`rns_ros.sim.free_floating.FreeFloatingSimulator`; this node only converts
 messages. It steps from its own monotonic-clock thread (absolute deadlines, so no drift), not from
 an executor timer.
 
@@ -35,7 +35,7 @@ Safety: a JointTrajectory whose positions lie outside the URDF position limits o
 sees the reset state before it commands again (a stale one would pull the arm back); a
 JointTrajectory that starts at the reset state ends the hold early (a resynchronized
 controller). In dynamic mode the servo keeps the URDF velocity and effort limits (see
-:mod:`rns_ros.core.simulation`).
+:mod:`rns_ros.sim.free_floating`).
 If a step diverges anyway (:class:`SimulationDivergedError`) the node logs one error and stops
 stepping: it keeps publishing the last finite state with zero velocities (joint and base) and
 zero efforts until ``~/reset``; no non-finite value is ever published.
@@ -67,7 +67,6 @@ from rns_ros.core.commands import (
     match_named_command,
 )
 from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
-from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.nodes.parameters import (
     JOINTS,
     MODEL_CONFIG,
@@ -79,6 +78,7 @@ from rns_ros.nodes.parameters import (
 )
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
+from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationState
 
 NODE_NAME = "rns_simulator"
 SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4)."

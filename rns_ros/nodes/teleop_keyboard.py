@@ -52,7 +52,7 @@ from rns_ros.cli import (
     one_line,
     startup_interrupted,
 )
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import RnsError
 from rns_ros.keyboard import (
     ControllerStatus,

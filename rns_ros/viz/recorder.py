@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import FreeFloatingState

@@ -33,9 +33,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.inspection import ControlGains, Method
 from rns_ros.core.config import check_keys, read_yaml_mapping
-from rns_ros.core.control import ControlGains, Method
-from rns_ros.core.controller import TwistFrame
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.timing import quintic
 from rns_ros.core.validation import Choice, as_vector, positive

@@ -20,7 +20,7 @@ from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
 from rns_ros.core.errors import SimulationDivergedError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import reactionless_joint_velocity
-from rns_ros.core.simulation import FreeFloatingSimulator, ServoGains, SimulationMode
+from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationMode
 
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
 AMPLITUDE = np.array([0.6, -0.5, 0.5, 0.75, -0.8, 0.7, 1.1])  # rad

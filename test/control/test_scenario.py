@@ -7,8 +7,8 @@ import pinocchio as pin
 import pytest
 import yaml
 
+from rns_ros.control.scenario import TimeScaling, check_speed_limit, load_scenario
 from rns_ros.core import ConfigError
-from rns_ros.core.scenario import TimeScaling, check_speed_limit, load_scenario
 from rns_ros.resources import config_dir, scenario_path
 
 BASE = {

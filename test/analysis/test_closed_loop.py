@@ -9,8 +9,8 @@ import functools
 
 import pytest
 
-from rns_ros.core.closed_loop import run_scenario
-from rns_ros.core.control import ControlGains
+from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.control.inspection import ControlGains
 
 INSPECTION = ("satellite_observation", "own_device_inspection")
 

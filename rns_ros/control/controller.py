@@ -1,4 +1,4 @@
-"""Sampled reactionless camera controller: the law of :mod:`rns_ros.core.control`, held.
+"""Sampled reactionless camera controller: the law of :mod:`rns_ros.control.inspection`, held.
 
 A digital controller evaluates eq. (4.5)/(4.15) at the sampled configuration theta_k and holds the
 resulting theta_dot for one period T while the arm moves. The constraint M~_omega_m(theta) theta_dot
@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rns_ros.core.control import (
+from rns_ros.control.inspection import (
     ControlGains,
     ControlOutput,
     Method,

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.teleop import CommandGate, ControllerState, twist_frame_ids, validate_twist
 from rns_ros.core import ConfigError, InputError
-from rns_ros.core.controller import TwistFrame
-from rns_ros.core.teleop import CommandGate, ControllerState, twist_frame_ids, validate_twist
 
 FRAMES = {"world": TwistFrame.WORLD, "base_link": TwistFrame.BASE, "": TwistFrame.CAMERA}
 

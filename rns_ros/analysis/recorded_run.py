@@ -11,12 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rns_ros.core.control import wrist_offset
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.inspection import wrist_offset
+from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.model import FreeFloatingModel
-from rns_ros.core.scenario import Scenario
 from rns_ros.core.state import FreeFloatingState
 
 

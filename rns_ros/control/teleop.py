@@ -20,7 +20,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from rns_ros.core.controller import TwistFrame
+from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import positive

@@ -12,20 +12,20 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from rns_ros.core.control import ControlGains, Method, wrist_offset
-from rns_ros.core.controller import (
+from rns_ros.control.controller import (
     ControllerSettings,
     HoldCorrection,
     ReactionlessController,
     angular_velocity_in_world,
 )
+from rns_ros.control.inspection import ControlGains, Method, wrist_offset
+from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.model import FreeFloatingModel
-from rns_ros.core.scenario import Scenario
-from rns_ros.core.simulation import FreeFloatingSimulator, SimulationMode
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.core.validation import positive
+from rns_ros.sim.free_floating import FreeFloatingSimulator, SimulationMode
 
 #: Periods commanding less than this rate [rad/s] do not count for the axis error (at rest the
 #: achieved rotation is servo noise with no meaningful direction).

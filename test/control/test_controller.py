@@ -9,17 +9,17 @@ import pytest
 from hypothesis import given, settings
 from rns_testing import SATELLITE_OBSERVATION_DEG, vectors
 
-from rns_ros.core import ConfigError, FreeFloatingState
-from rns_ros.core.closed_loop import run_scenario
-from rns_ros.core.control import position_limit_scale, reactionless_camera_control
-from rns_ros.core.controller import (
+from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.control.controller import (
     ControllerSettings,
     ReactionlessController,
     TwistFrame,
     angular_velocity_in_world,
 )
+from rns_ros.control.inspection import position_limit_scale, reactionless_camera_control
+from rns_ros.core import ConfigError, FreeFloatingState
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.core.simulation import FreeFloatingSimulator
+from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
 

@@ -10,16 +10,16 @@ import pytest
 from hypothesis import assume, given, settings
 from rns_testing import SATELLITE_OBSERVATION_DEG, configurations, vectors
 
-from rns_ros.core import ConfigError, FreeFloatingState
-from rns_ros.core.control import (
+from rns_ros.control.inspection import (
     ControlGains,
     reactionless_camera_control,
     uniform_speed_scale,
     wrist_offset,
 )
+from rns_ros.core import ConfigError, FreeFloatingState
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.core.simulation import FreeFloatingSimulator
 from rns_ros.core.timing import quintic
+from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 SETTINGS = settings(max_examples=40, deadline=None)
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)

@@ -7,6 +7,7 @@ own finer step. Used by the tests, the benchmark and the docs to measure the the
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +15,7 @@ import pinocchio as pin
 
 from rns_ros.control.controller import (
     ControllerSettings,
+    ControllerStep,
     HoldCorrection,
     ReactionlessController,
     angular_velocity_in_world,
@@ -80,6 +82,28 @@ class ClosedLoopResult:
     steps: int
 
 
+@dataclass(frozen=True)
+class PeriodSample:
+    """One control period of :func:`run_scenario`, for time series (``on_period``).
+
+    Attributes:
+        t: start of the period [s].
+        period: its length [s].
+        omega_ref: commanded camera angular velocity, world axes [rad/s], shape (3,).
+        step: what the controller output (joint velocities, determinants, sigma_min...).
+        achieved: camera rotation vector over the period, world axes [rad], shape (3,)
+            (achieved / period is the mean achieved angular velocity).
+        state: the robot at the end of the period.
+    """
+
+    t: float
+    period: float
+    omega_ref: np.ndarray
+    step: ControllerStep
+    achieved: np.ndarray
+    state: FreeFloatingState
+
+
 def run_scenario(
     robot: FreeFloatingModel,
     scenario: Scenario,
@@ -92,6 +116,7 @@ def run_scenario(
     mode: SimulationMode | str = SimulationMode.KINEMATIC,
     simulation_step: float = 1e-3,
     settle: float = 0.0,
+    on_period: Callable[[PeriodSample], None] | None = None,
 ) -> ClosedLoopResult:
     """Run ``scenario`` in closed loop and measure it.
 
@@ -103,6 +128,7 @@ def run_scenario(
         mode: simulator mode.
         simulation_step: simulator step [s].
         settle: extra time after the command ends, zero command [s].
+        on_period: called with a :class:`PeriodSample` after every period (time series).
     """
     period = 1.0 / positive(rate, "rate", "Hz")
     substeps = round(period / positive(simulation_step, "simulation_step", "s"))
@@ -153,6 +179,8 @@ def run_scenario(
         state = FreeFloatingState.compute(robot, simulator.q)
         achieved = pin.log3(state.camera.rotation @ camera_before.T)
         figures.record_step(out, step.joint_velocity, omega, achieved, period, t)
+        if on_period is not None:
+            on_period(PeriodSample(t, period, omega, step, achieved, state))
         figures.base = max(figures.base, attitude_deviation(base_0, state.base_rotation))
         if wrist_0 is not None:
             figures.wrist = max(figures.wrist, float(np.linalg.norm(wrist_offset(state) - wrist_0)))

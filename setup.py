@@ -18,6 +18,7 @@ CONSOLE_SCRIPTS = [
     "rns_observer = rns_ros.observer:main",
     "rns_param = rns_ros.rostools:param_main",
     "rns_topic = rns_ros.rostools:topic_main",
+    "rns_reproduce = rns_ros.reproduce:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

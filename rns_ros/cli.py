@@ -34,6 +34,7 @@ EXECUTABLES = frozenset(
         "rns_observer",
         "rns_param",
         "rns_topic",
+        "rns_reproduce",
     }
 )
 

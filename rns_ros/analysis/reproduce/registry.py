@@ -1,0 +1,294 @@
+"""The reproduction registry: every thesis figure and table as one :class:`Reproduction`.
+
+A chapter module registers its results at import (``register(Reproduction(...))``);
+:func:`load_all` imports the chapter modules listed in :data:`CHAPTER_MODULES`, so a later
+chapter adds itself by adding its module there. Each result has
+
+* ``compute(quick) -> Outcome``: the numbers. ``quick`` uses coarse grids / short runs (tests);
+  the default is the thesis' resolution.
+* ``plot(outcome, figure)``: draws what the thesis figure shows on a matplotlib ``Figure``.
+
+:func:`run_one` turns one result into ``<id>.json`` and ``<id>.png``; the JSON holds the thesis'
+numbers under the thesis' names next to ours, the settings and the documented choices.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rns_ros.core.errors import ConfigError
+
+#: Modules that register results when imported, in report order (later issues append theirs).
+CHAPTER_MODULES = (
+    "rns_ros.analysis.reproduce.chapter3",
+    "rns_ros.analysis.reproduce.chapter4",
+)
+
+
+class Status(StrEnum):
+    """How far a thesis number is reproduced."""
+
+    EXACT = "reproduced exactly"
+    QUALITATIVE = "reproduced qualitatively"
+    NOT_REPRODUCIBLE = "not reproducible"
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One quantity the thesis reports, next to ours.
+
+    Attributes:
+        key: name in the JSON (the thesis' quantity, with its unit as suffix, e.g. ``r_star_m``).
+        thesis: the thesis' value (number or short text); None when it only says it in words.
+        ours: our value (number, text or list).
+        unit: unit of both, e.g. "m", "deg"; "" for counts and text.
+        status: :class:`Status`.
+        note: why the status, the tolerance, or the reason it cannot be reproduced.
+    """
+
+    key: str
+    thesis: Any
+    ours: Any
+    unit: str
+    status: Status
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What ``compute`` returns.
+
+    Attributes:
+        comparisons: the thesis' numbers next to ours.
+        values: our numbers under their JSON names (e.g. ``max_base_deviation_deg``), JSON-able.
+        settings: grid, step, gains, model... everything needed to rerun it.
+        choices: the documented choices this result depends on (ids of thesis_rest ambiguities
+            and our own), one sentence each.
+        figure_data: whatever ``plot`` needs (arrays); not written to the JSON.
+    """
+
+    comparisons: tuple[Comparison, ...]
+    values: Mapping[str, Any]
+    settings: Mapping[str, Any]
+    choices: tuple[str, ...] = ()
+    figure_data: Any = None
+
+
+@dataclass(frozen=True)
+class Reproduction:
+    """One thesis figure or table.
+
+    Attributes:
+        id: short id for the command line, e.g. ``fig3.1``, ``bifurcation``.
+        figure: the thesis' label, e.g. "Fig. 3.1", "§3.2.2".
+        title: one line saying what it shows.
+        compute: ``quick -> Outcome``.
+        plot: ``(outcome, figure) -> None`` draws on a matplotlib Figure.
+        size: figure size [in] (width, height).
+    """
+
+    id: str
+    figure: str
+    title: str
+    compute: Callable[[bool], Outcome]
+    plot: Callable[[Outcome, Any], None]
+    size: tuple[float, float] = field(default=(8.0, 6.0))
+
+
+_REGISTRY: dict[str, Reproduction] = {}
+
+
+def register(reproduction: Reproduction) -> Reproduction:
+    """Add ``reproduction`` (its id must be new)."""
+    if reproduction.id in _REGISTRY:
+        raise ConfigError(f"reproduction id {reproduction.id!r} is registered twice")
+    _REGISTRY[reproduction.id] = reproduction
+    return reproduction
+
+
+def load_all() -> dict[str, Reproduction]:
+    """Import every chapter module and return {id: reproduction} in registration order."""
+    for module in CHAPTER_MODULES:
+        importlib.import_module(module)
+    return dict(_REGISTRY)
+
+
+def resolve(ids) -> list[Reproduction]:
+    """The reproductions named by ``ids``, in the given order.
+
+    Raises:
+        ConfigError: an unknown id (the message lists the known ones).
+    """
+    known = load_all()
+    unknown = [name for name in ids if name not in known]
+    if unknown:
+        raise ConfigError(f"unknown id(s) {unknown}; known: {', '.join(known)}")
+    return [known[name] for name in ids]
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    """One result written to disk: its outcome, files and wall time [s]."""
+
+    reproduction: Reproduction
+    outcome: Outcome
+    json_path: Path
+    png_path: Path
+    seconds: float
+
+
+def output_dir(path: str | Path) -> Path:
+    """Create ``path`` if needed and check it is a writable directory.
+
+    Raises:
+        ConfigError: it is a file, or it cannot be created or written.
+    """
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".rns_reproduce_write_test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+        raise ConfigError(f"--out {str(out)!r} is not a writable directory: {reason}") from None
+    return out
+
+
+def run_one(reproduction: Reproduction, out: Path, *, quick: bool = False) -> RunRecord:
+    """Compute ``reproduction``, write ``out/<id>.json`` and ``out/<id>.png``."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # headless: no display is needed or used
+    from matplotlib.figure import Figure
+
+    start = time.perf_counter()
+    outcome = reproduction.compute(quick)
+    figure = Figure(figsize=reproduction.size, layout="constrained")
+    reproduction.plot(outcome, figure)
+    figure.suptitle(f"{reproduction.figure}: {reproduction.title}", fontsize=10)
+    png = out / f"{reproduction.id}.png"
+    figure.savefig(png, dpi=110)
+    seconds = time.perf_counter() - start
+    document = {
+        "id": reproduction.id,
+        "figure": reproduction.figure,
+        "title": reproduction.title,
+        "quick": quick,
+        "thesis": {c.key: c.thesis for c in outcome.comparisons},
+        "ours": {c.key: c.ours for c in outcome.comparisons},
+        "comparisons": [
+            {
+                "key": c.key,
+                "thesis": c.thesis,
+                "ours": c.ours,
+                "unit": c.unit,
+                "status": c.status.value,
+                "note": c.note,
+            }
+            for c in outcome.comparisons
+        ],
+        **{key: value for key, value in outcome.values.items()},
+        "settings": dict(outcome.settings),
+        "choices": list(outcome.choices),
+        "wall_time_s": round(seconds, 3),
+    }
+    path = out / f"{reproduction.id}.json"
+    path.write_text(json.dumps(_jsonable(document), indent=2, allow_nan=False) + "\n")
+    return RunRecord(reproduction, outcome, path, png, seconds)
+
+
+def _jsonable(value):
+    """Plain JSON types; non-finite floats become strings ("inf", "nan") so the file stays valid."""
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    if isinstance(value, StrEnum):
+        return value.value
+    return value
+
+
+def report_markdown(records: list[RunRecord], figure_dir: str) -> str:
+    """docs/reproduction.md: per result a table thesis | ours | status and its figure.
+
+    Args:
+        figure_dir: path of the PNGs relative to the report (e.g. "reproduction").
+    """
+    counts = {status: 0 for status in Status}
+    for record in records:
+        for comparison in record.outcome.comparisons:
+            counts[comparison.status] += 1
+    lines = [
+        "# Reproduction of the thesis",
+        "",
+        "Generated by `rns_reproduce all` (do not edit by hand). Each section is one registered",
+        "result: the numbers the thesis reports next to ours, the settings and our choices.",
+        "The JSON of each result, with every value, is written next to its figure.",
+        "",
+        "Totals: "
+        + ", ".join(f"{count} {status.value}" for status, count in counts.items())
+        + f"; {len(records)} results, {sum(r.seconds for r in records):.0f} s of computing.",
+        "",
+        "| id | thesis | title |",
+        "|---|---|---|",
+    ]
+    lines += [
+        f"| [`{r.reproduction.id}`](#{_anchor(r.reproduction.id)}) | {r.reproduction.figure} | "
+        f"{r.reproduction.title} |"
+        for r in records
+    ]
+    for record in records:
+        rep, outcome = record.reproduction, record.outcome
+        lines += [
+            "",
+            f"## {rep.id}",
+            "",
+            f"{rep.figure}: {rep.title}. Computed in {record.seconds:.1f} s.",
+            "",
+            "| quantity | thesis | ours | status | note |",
+            "|---|---|---|---|---|",
+        ]
+        for c in outcome.comparisons:
+            unit = f" [{c.unit}]" if c.unit else ""
+            lines.append(
+                f"| `{c.key}`{unit} | {_cell(c.thesis)} | {_cell(c.ours)} | {c.status.value} | "
+                f"{c.note} |"
+            )
+        if outcome.settings:
+            settings = "; ".join(f"{k} = {_cell(v)}" for k, v in outcome.settings.items())
+            lines += ["", f"Settings: {settings}."]
+        if outcome.choices:
+            lines += ["", "Choices:", ""] + [f"* {choice}" for choice in outcome.choices]
+        lines += ["", f"![{rep.figure}]({figure_dir}/{rep.id}.png)"]
+    return "\n".join(lines) + "\n"
+
+
+def _anchor(identifier: str) -> str:
+    return identifier.replace(".", "").lower()
+
+
+def _cell(value) -> str:
+    if value is None:
+        return "—"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list | tuple):
+        return ", ".join(_cell(v) for v in value) if len(value) <= 6 else f"{len(value)} values"
+    return str(value).replace("|", "\\|")

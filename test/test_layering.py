@@ -18,7 +18,8 @@ ALLOWED = {
     "core": {"core"},
     "control": {"core", "control"},
     "sim": {"core", "sim"},
-    "analysis": {"core", "control", "sim", "analysis"},
+    # resources: where the shipped config/ files are (stdlib only), for the thesis scenarios
+    "analysis": {"core", "control", "sim", "analysis", "resources"},
 }
 ROS_OR_VIEWER = ("rclpy", "rerun", "rcl_interfaces", "std_msgs", "sensor_msgs", "geometry_msgs")
 

@@ -269,7 +269,7 @@ def report_markdown(records: list[RunRecord], figure_dir: str) -> str:
             unit = f" [{c.unit}]" if c.unit else ""
             lines.append(
                 f"| `{c.key}`{unit} | {_cell(c.thesis)} | {_cell(c.ours)} | {c.status.value} | "
-                f"{c.note} |"
+                f"{_cell(c.note)} |"
             )
         if outcome.settings:
             settings = "; ".join(f"{k} = {_cell(v)}" for k, v in outcome.settings.items())

@@ -466,7 +466,10 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros, sta
     (+ one period) the controller publishes zero and reports STALE_STATE (ERROR); it resumes only
     with a fresh state, ramping up from rest."""
     probe, streams = stack.probe, stack.streams
-    joints = Recorder(probe, JointState, "joint_states")
+    received = []  # monotonic receipt times of joint_states at the probe [s]
+    probe.create_subscription(
+        JointState, "joint_states", lambda _msg: received.append(time.monotonic()), 50
+    )
     operator = Operator(probe)
     operator.angular, operator.active = (0.2, 0.0, 0.0), True
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
@@ -475,8 +478,6 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros, sta
     assert moving > 0.05
     ros.detach(stack.simulator)
     stack.simulator.destroy_node()  # its loop thread stops: no more joint_states
-    killed = time.monotonic()
-    last_state = len(joints.messages)
     count = len(streams["references"].messages)
 
     def stopped():
@@ -484,11 +485,11 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros, sta
         return bool(after) and _speeds(after[-1:])[0] == 0.0
 
     assert ros.spin_until(stopped, timeout=2.0)
-    # the controller's view: receipt of the last joint_states -> first zero reference
     zero_at = time.monotonic()
-    assert len(joints.messages) == last_state
-    print(f"state loss -> zero command within {zero_at - killed:.3f} s (state_timeout 0.1 s)")
-    assert zero_at - killed < 0.1 + 0.01 + 0.1  # timeout + one period + executor slack
+    # one state may still have been in flight when the node went; the loss starts after it
+    delay = zero_at - received[-1]
+    print(f"last joint_states -> zero command: {delay:.3f} s (state_timeout 0.1 s)")
+    assert 0.09 <= delay < 0.1 + 0.01 + 0.1  # timeout + one period + executor slack
     ros.spin_for(0.5)
     assert np.all(_speeds(streams["references"].messages[-40:]) == 0.0)
     status = streams["status"].messages[-1].status[0]

@@ -264,15 +264,7 @@ def compute_fig3_2(quick: bool) -> Outcome:
             f"'no fixed point … Joint 2 never stops': min M~_1 = {minima_m1[0.5]:.1f} kg m² > 0, "
             "so there is no blue nullcline at r = 0.5 m",
         ),
-        Comparison(
-            "r_star_m",
-            0.945,
-            critical.r_star,
-            "m",
-            Status.EXACT,
-            "thesis 'r ≈ 0.945 m'; ours by brentq on dρ²/dθ2 = 0 (closed form), equal to the "
-            "thesis' three digits",
-        ),
+        _r_star_row(critical),
         Comparison(
             "fixed_points_created_at_r_star",
             2,
@@ -457,16 +449,7 @@ def compute_bifurcation(quick: bool) -> Outcome:
     far_theta1 = sorted(abs(p["theta_rad"][0]) for p in far)
     counts = {r: sum(p["r_m"] == r for p in records) for r in BIFURCATION_DISTANCES}
     comparisons = (
-        Comparison(
-            "r_star_m",
-            0.945,
-            critical.r_star,
-            "m",
-            Status.EXACT,
-            "thesis 'r ≈ 0.945 m'; ours min_θ2 ρ(θ2) by brentq on dρ²/dθ2 = 0, θ2 tolerance "
-            f"{critical.theta2_tolerance:g} rad (r* error ~1e-15 m): equal to the thesis' "
-            "three digits",
-        ),
+        _r_star_row(critical),
         Comparison(
             "fixed_points_created",
             2,
@@ -589,3 +572,17 @@ REPRODUCTIONS: dict[str, Reproduction] = {
         ),
     )
 }
+
+
+def _r_star_row(critical) -> Comparison:
+    """The critical attachment distance r* [m] next to the thesis' 'r ≈ 0.945 m' (§3.2.2)."""
+    return Comparison(
+        "r_star_m",
+        0.945,
+        critical.r_star,
+        "m",
+        Status.EXACT,
+        "thesis 'r ≈ 0.945 m'; ours min_θ2 ρ(θ2) by brentq on dρ²/dθ2 = 0, θ2 tolerance "
+        f"{critical.theta2_tolerance:g} rad (r* error ~1e-15 m): equal to the thesis' "
+        "three digits",
+    )

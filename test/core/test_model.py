@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from rns_ros.analysis.arm_identification import IDENTIFIED
 from rns_ros.core import ConfigError, FreeFloatingModel, InputError, ModelError, ModelSpec
 from rns_ros.core.config import load_model, load_model_config
 from rns_ros.resources import default_model_config
@@ -22,7 +23,8 @@ TABLE_4_1 = {
     "link_6": (20.0, (0.0250, 0.0292, 0.0292)),
     "link_7": (25.0, (0.0990, 0.0990, 0.0313)),
 }
-LINK_LENGTHS = (0.10, 0.33, 1.00, 0.81, 0.35, 0.10, 0.20)  # m, docs/model.md
+# The identified geometry (docs/arm_identification.md): link lengths [m] and lateral offsets.
+LINK_LENGTHS = IDENTIFIED.lengths
 MOUNT = (-0.79, -0.29, 1.0)  # m, thesis section 4.1.1
 
 
@@ -70,26 +72,37 @@ def test_mount_position_and_straight_arm_at_zero(robot):
     pin.framesForwardKinematics(model, data, robot.neutral())
     joint_1 = data.oMi[model.getJointId("joint_1")].translation
     assert np.allclose(joint_1, MOUNT)
-    # theta = 0: straight arm along base +z; only the elbow offset (0.15 m along y) is lateral.
+    # theta = 0: straight arm along base +z, plus the shoulder, elbow and wrist offsets (x, y)
     camera = data.oMf[robot.camera_frame_id].translation
-    assert np.allclose(camera - joint_1, [0.0, 0.15, sum(LINK_LENGTHS)])
+    lateral = np.add.reduce([IDENTIFIED.shoulder, IDENTIFIED.elbow, IDENTIFIED.wrist])
+    assert np.allclose(camera - joint_1, [*lateral, sum(LINK_LENGTHS)])
     wrist = data.oMf[robot.wrist_frame_id].translation
     joint_6 = data.oMi[model.getJointId("joint_6")].translation
     assert np.allclose(wrist, joint_6)
 
 
 def test_folded_elbow_puts_forearm_beside_upper_arm(robot):
+    """theta_4 = pi (the elbow axis is base x at theta = 0) turns the forearm back along the
+    upper arm: the elbow-to-wrist vector is the straight one rotated by pi about x, and the
+    forearm's line passes beside the upper arm's, not through it."""
     model, data = robot.model, robot.data
-    theta = np.zeros(7)
-    theta[3] = np.pi
-    pin.framesForwardKinematics(model, data, robot.configuration(theta))
-    shoulder = data.oMi[model.getJointId("joint_3")].translation
-    elbow = data.oMi[model.getJointId("joint_4")].translation
-    wrist = data.oMf[robot.wrist_frame_id].translation
-    upper_arm = elbow - shoulder
-    # Forearm + forearm-roll link run back along the upper arm, 0.15 m to the side.
-    assert np.allclose(upper_arm, [0.0, 0.15, 1.0])
-    assert np.allclose(wrist - elbow, [0.0, 0.0, -(0.81 + 0.35)], atol=1e-12)
+
+    def points(theta4):
+        theta = np.zeros(7)
+        theta[3] = theta4
+        pin.framesForwardKinematics(model, data, robot.configuration(theta))
+        shoulder = data.oMi[model.getJointId("joint_3")].translation.copy()
+        elbow = data.oMi[model.getJointId("joint_4")].translation.copy()
+        return shoulder, elbow, data.oMf[robot.wrist_frame_id].translation.copy()
+
+    _, elbow_0, wrist_0 = points(0.0)
+    shoulder, elbow, wrist = points(np.pi)
+    np.testing.assert_allclose(wrist - elbow, np.diag([1.0, -1.0, -1.0]) @ (wrist_0 - elbow_0))
+    assert (wrist - elbow)[2] < -0.9  # [m] runs back down along the upper arm (+z)
+    lateral = np.linalg.norm((wrist - shoulder)[:2])
+    # [m] beside it, not through it. The identified offsets leave only 0.070 m between the
+    # folded wrist and the upper-arm axis (docs/arm_identification.md: thin links)
+    assert lateral > 0.05
 
 
 def test_limits(robot):

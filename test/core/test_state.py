@@ -203,8 +203,8 @@ def test_generalized_jacobian_matches_free_floating_finite_differences(robot, co
 def test_generalized_jacobian_tends_to_fixed_base_for_heavy_base():
     urdf, spec = load_model_config(default_model_config())
     text = urdf.read_text()
-    base_block = '<mass value="2550.0"/>\n      <inertia ixx="6200.0" ixy="0" ixz="0" iyy="3540.0"'
-    base_block += ' iyz="0" izz="7090.0"/>'
+    base_block = '<mass value="2550.0" />\n      <inertia ixx="6200.0" ixy="0" ixz="0" iyy="3540.0"'
+    base_block += ' iyz="0" izz="7090.0" />'
     assert base_block in text
     theta = np.deg2rad(SATELLITE_OBSERVATION_DEG)
     gaps = []
@@ -254,8 +254,10 @@ def test_model_without_wrist_frame_has_no_wrist_kinematics():
     assert FreeFloatingState.compute(robot, robot.neutral()).wrist is None
 
 
-def test_straight_arm_is_a_coupling_singularity_and_p_rns_grows(robot):
-    """theta = 0: det(M~ M~^T) = 0 (second singularity type of section 4.3.1); P_RNS rank 5."""
+def test_straight_arm_is_a_coupling_singularity_and_p_rns_grows(inferred_robot):
+    """theta = 0 on the first, inferred geometry (joints 1, 3, 5, 7 coaxial): det(M~ M~^T) = 0
+    (second singularity type of section 4.3.1); P_RNS rank 5."""
+    robot = inferred_robot
     state = FreeFloatingState.compute(robot, robot.neutral())
     assert state.determinants.coupling < 1e-9 * np.prod(
         FreeFloatingState.compute(

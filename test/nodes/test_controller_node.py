@@ -187,13 +187,18 @@ def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros
     assert entry.name == "rns_controller: reactionless control"
     names = list(controller.robot.joint_names)[::-1]
     state_pub = probe.create_publisher(JointState, "joint_states", 10)
-    probe.create_timer(0.01, lambda: state_pub.publish(JointState(name=names, position=[0.3] * 7)))
+    # the satellite-observation start, joint names reversed (the publisher's order is irrelevant)
+    start = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0])
+    reversed_positions = start[::-1].tolist()
+    probe.create_timer(
+        0.01, lambda: state_pub.publish(JointState(name=names, position=reversed_positions))
+    )
     operator = Operator(probe, stamped=False)
     operator.angular, operator.active = (0.0, 0.0, 0.05), True
     assert ros.spin_until(lambda: _state(status.messages[-1])["state"] == "OK")
     assert _state(status.messages[-1])["frame"] == "world"
     point = references.messages[-1].points[0]
-    assert np.allclose(point.positions, 0.3, atol=0.05)
+    assert np.allclose(point.positions, start, atol=0.05)
     assert float(_state(status.messages[-1])["sigma_min"]) > 0.0
 
 

@@ -32,3 +32,24 @@ def test_readme_set_up_commands_exist_in_makefile():
         assert f"make {target}" in README
         assert re.search(rf"^{target}:", makefile, flags=re.M)
     assert "make test" in (REPO / ".ci" / "run").read_text()
+
+
+def test_the_quoted_hold_correction_figures_are_todays():
+    """The README quotes the core loop's base deviation for midpoint and naive holds; a change
+    of model, scenario or law that moves them must update the README too (2 digits)."""
+    from rns_ros.analysis.closed_loop import run_scenario
+    from rns_ros.control.scenario import load_scenario
+    from rns_ros.core import load_model
+    from rns_ros.resources import config_dir, default_model_config
+
+    quoted = re.search(
+        r"keeps the base still over each held period \(([0-9.e-]+) deg over\s+the 20 s "
+        r"satellite-observation scenario at 100 Hz, against ([0-9.e-]+) deg for `naive`\)",
+        README,
+    )
+    assert quoted, "the hold-correction sentence of the README changed; update this test"
+    robot = load_model(default_model_config())
+    scenario = load_scenario(config_dir() / "scenarios" / "satellite_observation.yaml")
+    for text, hold in zip(quoted.groups(), ("midpoint", "naive"), strict=True):
+        measured = run_scenario(robot, scenario, hold_correction=hold).max_base_deviation_deg
+        assert float(text) == float(f"{measured:.1e}"), f"{hold}: README {text}, now {measured:.2e}"

@@ -163,7 +163,11 @@ class ReactionlessController:
         self._hold = None
 
     def resync(self, state: FreeFloatingState) -> None:
-        """Restart theta_ref at the measured angles, keeping the wrist reference."""
+        """Restart theta_ref at the measured angles, keeping the wrist reference (taken from
+        ``state`` when there is none yet: a controller that starts by resyncing must still hold
+        the wrist, eq. 4.6)."""
+        if self._wrist_reference is None and state.wrist is not None:
+            self._wrist_reference = wrist_offset(state)
         self._reference = state.theta.copy()
         self._hold = None
 

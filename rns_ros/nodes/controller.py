@@ -444,12 +444,14 @@ class ControllerNode(Node):
         )
         if self._jump is not None:
             self.get_logger().warn(
-                f"{self._jump}: reference restarted at the measured angles, command ramps up "
-                "from rest"
+                f"{self._jump}: reference and wrist reference restarted at the measured pose, "
+                "command ramps up from rest"
             )
             self._jump = None
             self._gate.stop()
             self._stopped = True
+            # a new pose (reset, re-homed arm): the wrist is held where it is now, eq. (4.6)
+            self.controller.reset(state)
         gate = self._gate.update(now, self._period)
         if self._stopped or gate.stopped:
             self.controller.resync(state)  # restart the reference where the arm is

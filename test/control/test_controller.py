@@ -159,3 +159,23 @@ def test_midpoint_hold_is_second_order_where_naive_is_first(robot, scenario):
     midpoint = deviation("midpoint", 50.0) / deviation("midpoint", 100.0)
     assert 1.6 < naive < 2.5
     assert midpoint > 3.2
+
+
+def test_a_controller_that_starts_with_resync_still_holds_the_wrist(robot):
+    """rns_controller resyncs before its first step (it starts stopped). The wrist reference
+    p_w^init of eq. (4.6) must be taken then too: without it the k_g term was silently off over
+    DDS (the demo's wrist drifted 0.64 m, the k_g = 0 figure, instead of 0.09 m)."""
+    state = FreeFloatingState.compute(robot, robot.configuration(THETA_0))
+    started_by_resync = ReactionlessController(robot, ControllerSettings())
+    started_by_resync.resync(state)
+    started_by_reset = ReactionlessController(robot, ControllerSettings())
+    started_by_reset.reset(state)
+    assert started_by_resync.wrist_reference is not None
+    np.testing.assert_array_equal(
+        started_by_resync.wrist_reference, started_by_reset.wrist_reference
+    )
+    omega = [0.1, 0.0, 0.0]
+    np.testing.assert_allclose(
+        started_by_resync.step(state, omega).joint_velocity,
+        started_by_reset.step(state, omega).joint_velocity,
+    )

@@ -316,6 +316,22 @@ def _max_acceleration(trace: Trace) -> float:
     return float((np.abs(np.diff(trace.theta_dot, axis=0)) / dt[:, None]).max())
 
 
+def _not_singular_row(
+    key: str, what: str, determinants: np.ndarray, k: int, t: float, unit: str, claim: str
+) -> Comparison:
+    """Thesis: ``what`` does not approach 0 at the algorithmic singularity (sample k, time t)."""
+    ratio = _mean_singular_ratio(determinants, k)
+    return Comparison(
+        key,
+        "does not approach 0",
+        float(determinants[k]),
+        unit,
+        _status(ratio > 0.5),
+        f"{what} at {t:.2f} s (start {determinants[0]:.3g}; geometric-mean singular value at "
+        f"{ratio:.2f} of its start): {claim}",
+    )
+
+
 def _mean_singular_ratio(determinants: np.ndarray, k: int) -> float:
     """(det_k / det_0)^(1/6): how far the geometric mean of the three singular values of a
     3-row matrix A moved from the start, det(A A^T) being the product of their squares."""
@@ -548,27 +564,23 @@ def _compute_fig4_6(quick: bool) -> Outcome:
             f"{trace.sigma_min[k]:.3f}): our arm passes close to an algorithmic singularity, "
             "not through it, so the joint rates stay finite.",
         ),
-        Comparison(
+        _not_singular_row(
             "det_kinematic_at_singularity",
-            "does not approach 0",
-            float(trace.det_kinematic[k]),
+            "det(J_omega_e J_omega_e^T)",
+            trace.det_kinematic,
+            k,
+            t_singular,
             "",
-            _status(_mean_singular_ratio(trace.det_kinematic, k) > 0.5),
-            f"det(J_omega_e J_omega_e^T) at {t_singular:.2f} s (start "
-            f"{trace.det_kinematic[0]:.2f}; geometric-mean singular value at "
-            f"{_mean_singular_ratio(trace.det_kinematic, k):.2f} of its start): not a kinematic "
-            "singularity.",
+            "not a kinematic singularity.",
         ),
-        Comparison(
+        _not_singular_row(
             "det_coupling_at_singularity",
-            "does not approach 0",
-            float(trace.det_coupling[k]),
+            "det(M~_omega_m M~_omega_m^T)",
+            trace.det_coupling,
+            k,
+            t_singular,
             "(kg m^2)^6",
-            _status(_mean_singular_ratio(trace.det_coupling, k) > 0.5),
-            f"det(M~_omega_m M~_omega_m^T) at {t_singular:.2f} s (start "
-            f"{trace.det_coupling[0]:.3g}; geometric-mean singular value at "
-            f"{_mean_singular_ratio(trace.det_coupling, k):.2f} of its start): not a "
-            "coupling-inertia singularity, so the singularity is algorithmic.",
+            "not a coupling-inertia singularity, so the singularity is algorithmic.",
         ),
         Comparison(
             "fastest_joints_near_singularity",

@@ -28,6 +28,7 @@ EXECUTABLES = frozenset(
         "rns_demo",
         "rns_simulator",
         "rns_controller",
+        "rns_ptp",
         "rns_rerun_logger",
         "rns_operator",
         "rns_teleop_keyboard",

@@ -1,0 +1,540 @@
+"""rns_ptp: reactionless point-to-point motion of the arm (thesis chapter 4, issue 14).
+
+The planner is :func:`rns_ros.control.ptp.plan_ptp` (and :func:`plan_deployment`); this node only
+converts messages, plans a goal in a worker thread and plays the plan back once per period from an
+executor timer, with exactly rns_controller's output contract (either drives the same simulator).
+
+Subscribes:
+    ptp_goal      sensor_msgs/JointState: target positions matched by joint name; joints the goal
+                  does not name keep their measured value. A goal whose name list is exactly
+                  ``["deploy"]`` (positions ignored) runs the full reactionless deployment
+                  (plan_deployment) from the measured configuration. A new goal replaces the
+                  current plan: the arm stops and the goal is planned from the measured state.
+    joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
+                  ``state_timeout`` (receipt time) stops the arm and abandons the plan
+    base_odom     nav_msgs/Odometry (base pose, for the predicted coupling momentum; watched like
+                  joint_states once it has arrived)
+Publishes (only while a plan plays, plus one zero-velocity message at each stop):
+    joint_references  trajectory_msgs/JointTrajectory, one point: positions = plan at the tick,
+                      velocities = plan rate at mid-period (``output_interface: trajectory``), or
+    joint_velocities  std_msgs/Float64MultiArray in the order of ``joints``
+                      (``output_interface: velocity``)
+    ~/status          diagnostic_msgs/DiagnosticArray every period: state, method, phase,
+                      progress, predicted coupling momentum, folds reached, plan notes
+    /diagnostics      the newest status at 1 Hz (wall clock)
+Service:
+    ~/cancel      std_srvs/Trigger: the playback rate ramps from 1 to 0 at ``cancel_deceleration``
+                  (theta_dot scaled by the rate keeps the path: reactionless phases stay
+                  reactionless), then IDLE
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+import time
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from nav_msgs.msg import Odometry
+from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from rns_ros.control.ptp import PtpMethod, PtpSettings, plan_deployment, plan_ptp
+from rns_ros.core import FreeFloatingState, load_model
+from rns_ros.core.commands import match_named_command
+from rns_ros.core.errors import InputError, RnsError
+from rns_ros.core.validation import Choice
+from rns_ros.nodes.parameters import (
+    JOINTS,
+    MODEL_CONFIG,
+    WORLD_FRAME,
+    ParameterSpec,
+    declare_parameters,
+    velocity_joint_order,
+)
+from rns_ros.nodes.runner import run_node
+from rns_ros.resources import default_model_config
+
+NODE_NAME = "rns_ptp"
+SUMMARY = "Reactionless point-to-point motion: joint goal in, planned joint references out."
+#: A goal whose JointState name list is exactly this runs the full reactionless deployment.
+DEPLOY_GOAL = ["deploy"]
+#: Period of the /diagnostics publication [s] (wall clock).
+DIAGNOSTICS_PERIOD = 1.0
+
+
+class PtpState(Choice):
+    WAITING_FOR_STATE = "WAITING_FOR_STATE"
+    IDLE = "IDLE"
+    PLANNING = "PLANNING"
+    MOVING = "MOVING"
+    CANCELLING = "CANCELLING"
+    DONE = "DONE"
+    INVALID_GOAL = "INVALID_GOAL"
+    STALE_STATE = "STALE_STATE"
+
+
+STATE_LEVELS = {
+    PtpState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
+    PtpState.INVALID_GOAL: DiagnosticStatus.ERROR,
+    PtpState.STALE_STATE: DiagnosticStatus.ERROR,
+}
+
+PARAMETERS = (
+    MODEL_CONFIG,
+    ParameterSpec(
+        "method",
+        "three_phase",
+        "Planner of joint goals: three_phase (reactionless folds + joint-space middle phase), "
+        "joint_space (JS-C), inverse_jacobian (IJ-C), transposed_jacobian (TJ-C)",
+        choices=("three_phase", "joint_space", "inverse_jacobian", "transposed_jacobian"),
+    ),
+    ParameterSpec(
+        "duration",
+        30.0,
+        "Planned duration of a joint_space / inverse_jacobian / transposed_jacobian motion "
+        "(the planner may stretch it to keep the joint velocity limits)",
+        "[s]",
+        0.1,
+        3600.0,
+    ),
+    ParameterSpec(
+        "phase_durations",
+        [5.0, 20.0, 5.0],
+        "Planned durations of the three_phase phases I, II, III (the planner may stretch them)",
+        "[s]",
+        0.01,
+        3600.0,
+        length=(3,),
+    ),
+    ParameterSpec(
+        "deploy_duration",
+        30.0,
+        "Planned duration of the full deployment (goal ['deploy'])",
+        "[s]",
+        0.1,
+        3600.0,
+    ),
+    ParameterSpec("rate", 100.0, "Output rate (playback period)", "[Hz]", 1.0, 1000.0),
+    ParameterSpec(
+        "state_timeout",
+        0.1,
+        "joint_states (and base_odom once it has arrived) older than this by receipt time stop "
+        "the arm: zero velocity, STALE_STATE error, the plan is abandoned",
+        "[s]",
+        0.005,
+        10.0,
+    ),
+    ParameterSpec(
+        "cancel_deceleration",
+        2.0,
+        "On ~/cancel the playback rate (plan seconds per second, 1 while moving) falls to 0 at "
+        "this rate: the arm stops on its path within 1/cancel_deceleration seconds",
+        "[1/s]",
+        0.01,
+        1000.0,
+    ),
+    ParameterSpec(
+        "output_interface",
+        "trajectory",
+        "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
+        "joint_velocities (order: the joints parameter)",
+        choices=("trajectory", "velocity"),
+    ),
+    JOINTS,
+    WORLD_FRAME,
+)
+
+
+class PtpNode(Node):
+    """ROS 2 wrapper of the point-to-point planner (see the module docstring)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        self._params = params = declare_parameters(self, PARAMETERS)
+        self.robot = load_model(params["model_config"] or default_model_config())
+        self.method = PtpMethod.parse(params["method"])
+        self.settings = _settings(params)
+        self._period = 1.0 / params["rate"]
+        self._deceleration = params["cancel_deceleration"]
+        self._theta: np.ndarray | None = None
+        self._base_position = np.zeros(3)
+        self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
+        self._state_received = -np.inf
+        self._odom_received: float | None = None
+        # plan playback: the plan, its clock s [s], the playback rate r [-], node-clock time of
+        # the last tick [s]
+        self.plan = None
+        self._s = 0.0
+        self._rate = 1.0
+        self._last_clock: float | None = None
+        self._mode = PtpState.WAITING_FOR_STATE
+        self._detail = ""
+        self._rejected = ""  # why the newest goal was rejected (shown while not moving)
+        # planning in a worker thread: goals are numbered, only the newest result is taken
+        self._lock = threading.Lock()
+        self._generation = 0
+        self._planned: tuple[int, object] | None = None
+        self._last_status: DiagnosticStatus | None = None
+        self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
+
+        qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self.create_subscription(JointState, "ptp_goal", self._on_goal, QoSProfile(depth=10))
+        self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
+        self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
+        self._state_topic = self.resolve_topic_name("joint_states")
+        self._trajectory = params["output_interface"] == "trajectory"
+        if self._trajectory:
+            self._output = self.create_publisher(
+                JointTrajectory, "joint_references", QoSProfile(depth=1)
+            )
+        else:
+            self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
+            self._output = self.create_publisher(
+                Float64MultiArray, "joint_velocities", QoSProfile(depth=1)
+            )
+        self._status = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
+        )
+        self.create_service(Trigger, "~/cancel", self._on_cancel)
+        self.create_timer(self._period, self._on_tick)
+        self.create_timer(
+            DIAGNOSTICS_PERIOD,
+            self._on_diagnostics,
+            clock=Clock(clock_type=ClockType.STEADY_TIME),
+        )
+        self.get_logger().info(
+            f"{self.method.value} point-to-point motion of {self.robot.name} at "
+            f"{params['rate']} Hz; goals on {self.resolve_topic_name('ptp_goal')}"
+        )
+
+    # --- inputs ---------------------------------------------------------------------------------
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            command = match_named_command(msg.name, self.robot.joint_names, positions=msg.position)
+        except InputError as exc:
+            self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
+            return
+        if command.positions is None:
+            return
+        self._theta = command.positions
+        self._state_received = time.monotonic()
+
+    def _on_odom(self, msg: Odometry) -> None:
+        pose = msg.pose.pose
+        position = np.array([pose.position.x, pose.position.y, pose.position.z])
+        o = pose.orientation
+        orientation = np.array([o.x, o.y, o.z, o.w])
+        norm = np.linalg.norm(orientation)
+        if np.all(np.isfinite(position)) and np.isfinite(norm) and norm > 0.5:
+            self._base_position, self._base_orientation = position, orientation / norm
+            self._odom_received = time.monotonic()
+
+    def _on_goal(self, msg: JointState) -> None:
+        if self._theta is None or self._fault(time.monotonic()) is not None:
+            self._reject("no fresh joint_states yet")
+            return
+        theta = self._theta.copy()
+        try:
+            goal = None if list(msg.name) == DEPLOY_GOAL else self.goal_positions(msg, theta)
+        except InputError as exc:
+            self._reject(str(exc))
+            return
+        if self.plan is not None and self._mode in (PtpState.MOVING, PtpState.CANCELLING):
+            self.get_logger().info("new goal: the current motion stops and is replaced")
+            self._stop_output()
+        self.plan = None
+        self._rejected = ""
+        self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
+        with self._lock:
+            self._generation += 1
+            generation = self._generation
+        threading.Thread(
+            target=self._plan, args=(generation, theta, goal), daemon=True, name="rns_ptp_plan"
+        ).start()
+
+    def goal_positions(self, msg: JointState, theta: np.ndarray) -> np.ndarray:
+        """The goal configuration: the named joints at their positions, the others at ``theta``.
+
+        Raises:
+            InputError: unknown or duplicated names, a length mismatch, non-finite values or
+                positions outside the URDF limits (the message names the joint).
+        """
+        names, positions = list(msg.name), list(msg.position)
+        model = list(self.robot.joint_names)
+        if not names:
+            raise InputError("goal names no joint")
+        if len(positions) != len(names):
+            raise InputError(f"goal has {len(positions)} positions for {len(names)} names")
+        unknown = sorted(set(names) - set(model))
+        if unknown:
+            raise InputError(f"unknown joints {unknown} (model joints: {model})")
+        duplicated = sorted({name for name in names if names.count(name) > 1})
+        if duplicated:
+            raise InputError(f"duplicated joints {duplicated}")
+        goal = theta.copy()
+        for name, value in zip(names, positions, strict=True):
+            if not math.isfinite(value):
+                raise InputError(f"goal position of {name} must be finite, got {value}")
+            goal[model.index(name)] = value
+        lower, upper = self.robot.lower_limits, self.robot.upper_limits
+        for i, name in enumerate(model):
+            if not lower[i] <= goal[i] <= upper[i]:
+                raise InputError(
+                    f"goal {name} = {goal[i]:.4g} rad is outside its limits "
+                    f"[{lower[i]:.4g}, {upper[i]:.4g}] rad"
+                )
+        return goal
+
+    def _plan(self, generation: int, theta: np.ndarray, goal: np.ndarray | None) -> None:
+        try:
+            if goal is None:
+                result = plan_deployment(self.robot, theta, self.settings)
+            else:
+                result = plan_ptp(self.robot, theta, goal, self.method, self.settings)
+        except RnsError as exc:
+            result = exc
+        except Exception as exc:  # a planner bug must not kill the node silently
+            result = InputError(f"planning failed: {type(exc).__name__}: {exc}")
+        with self._lock:
+            if generation == self._generation:
+                self._planned = (generation, result)
+
+    def _reject(self, reason: str) -> None:
+        self.get_logger().error(f"rejected ptp_goal: {reason}")
+        self._rejected = reason
+        if self._mode not in (PtpState.MOVING, PtpState.CANCELLING, PtpState.PLANNING):
+            self._mode, self._detail = PtpState.INVALID_GOAL, reason
+
+    def _on_cancel(self, _request, response):
+        if self._mode is PtpState.MOVING:
+            self._mode, self._detail = PtpState.CANCELLING, "decelerating on the path"
+            response.success, response.message = True, "decelerating to rest on the path"
+        elif self._mode is PtpState.PLANNING:
+            with self._lock:
+                self._generation += 1
+                self._planned = None
+            self._mode, self._detail = PtpState.IDLE, "planning cancelled"
+            response.success, response.message = True, "planning cancelled; the arm is at rest"
+        else:
+            response.success = False
+            response.message = f"nothing to cancel ({self._mode.value})"
+        return response
+
+    # --- playback period ------------------------------------------------------------------------
+    def _on_tick(self) -> None:
+        clock_now = self.get_clock().now().nanoseconds * 1e-9
+        elapsed = 0.0 if self._last_clock is None else max(clock_now - self._last_clock, 0.0)
+        self._last_clock = clock_now
+        if self._theta is None:
+            self._publish_status(PtpState.WAITING_FOR_STATE, f"waiting for {self._state_topic}")
+            return
+        fault = self._fault(time.monotonic())
+        if fault is not None:
+            if self._mode is not PtpState.STALE_STATE:
+                abandoned = "; the plan is abandoned" if self.plan is not None else ""
+                self.get_logger().error(
+                    f"STALE_STATE: {fault}; joints commanded to rest{abandoned}"
+                )
+                self._stop_output()
+                self.plan = None
+                with self._lock:
+                    self._generation += 1
+                    self._planned = None
+            self._mode, self._detail = PtpState.STALE_STATE, fault
+            self._publish_status(self._mode, fault)
+            return
+        if self._mode in (PtpState.STALE_STATE, PtpState.WAITING_FOR_STATE):
+            self._mode, self._detail = PtpState.IDLE, ""
+        if self._mode is PtpState.PLANNING:
+            self._take_plan()
+            if self._mode is PtpState.MOVING:
+                elapsed = 0.0  # the plan starts at this tick
+        if self._mode in (PtpState.MOVING, PtpState.CANCELLING):
+            self._play(elapsed)
+        self._publish_status(self._mode, self._detail)
+
+    def _take_plan(self) -> None:
+        with self._lock:
+            planned, self._planned = self._planned, None
+        if planned is None:
+            return
+        _generation, result = planned
+        if isinstance(result, RnsError):
+            self._mode = PtpState.IDLE  # nothing moves; _reject reports INVALID_GOAL
+            self._reject(str(result))
+            return
+        self.plan, self._s, self._rate = result, 0.0, 1.0
+        self._mode = PtpState.MOVING
+        self._detail = f"{result.method} plan of {result.duration:.3g} s"
+        for note in result.notes:
+            self.get_logger().info(f"plan: {note}")
+        self.get_logger().info(f"moving: {self._detail}")
+
+    def _play(self, elapsed: float) -> None:
+        plan, period = self.plan, self._period
+        if self._mode is PtpState.CANCELLING:
+            self._rate = max(self._rate - self._deceleration * elapsed, 0.0)
+        self._s = min(self._s + self._rate * elapsed, plan.duration)
+        if self._s >= plan.duration or self._rate <= 0.0:
+            reference = plan.sample(self._s)
+            self._publish_output(reference.theta, np.zeros(self.robot.n))
+            if self._rate <= 0.0:
+                self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
+            else:
+                self._mode, self._detail = PtpState.DONE, "goal reached"
+            self.get_logger().info(self._detail)
+            return
+        # mid-period hold correction: the rate held over the period is the plan's rate at its
+        # middle (reactionless over the hold), scaled by the mid-period playback rate
+        rate_mid = self._rate
+        if self._mode is PtpState.CANCELLING:
+            rate_mid = max(self._rate - 0.5 * self._deceleration * period, 0.0)
+        reference = plan.sample(self._s)
+        middle = plan.sample(min(self._s + rate_mid * 0.5 * period, plan.duration))
+        velocities = rate_mid * np.asarray(middle.theta_dot, dtype=float)
+        positions = np.asarray(reference.theta, dtype=float)
+        if not (np.all(np.isfinite(velocities)) and np.all(np.isfinite(positions))):
+            self._stop_output()
+            self.plan = None
+            self._mode, self._detail = PtpState.INVALID_GOAL, "the plan gave a non-finite sample"
+            self.get_logger().error(self._detail)
+            return
+        self._publish_output(positions, velocities)
+
+    def _fault(self, now: float) -> str | None:
+        timeout = self._params["state_timeout"]
+        age = now - self._state_received
+        if age > timeout:
+            return f"joint_states {age:.3f} s old (state_timeout {timeout} s)"
+        if self._odom_received is not None and now - self._odom_received > timeout:
+            return f"base_odom {now - self._odom_received:.3f} s old (state_timeout {timeout} s)"
+        return None
+
+    def _stop_output(self) -> None:
+        if self._theta is not None:
+            self._publish_output(self._theta, np.zeros(self.robot.n))
+
+    def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
+        self._velocities = velocities
+        if self._trajectory:
+            msg = JointTrajectory()
+            msg.header.stamp = self.get_clock().now().to_msg()
+            msg.joint_names = list(self.robot.joint_names)
+            msg.points = [
+                JointTrajectoryPoint(
+                    positions=np.asarray(positions, dtype=float).tolist(),
+                    velocities=np.asarray(velocities, dtype=float).tolist(),
+                )
+            ]
+        else:
+            data = np.empty(self.robot.n)
+            data[self._velocity_order] = velocities
+            msg = Float64MultiArray(data=data.tolist())
+        self._output.publish(msg)
+
+    # --- status ---------------------------------------------------------------------------------
+    def _values(self, state: PtpState) -> dict:
+        values = {"method": self.method.value}
+        plan = self.plan
+        moving = state in (PtpState.MOVING, PtpState.CANCELLING)
+        if plan is not None:
+            reference = plan.sample(self._s)
+            values["plan_method"] = str(plan.method)
+            values["phase"] = reference.phase if moving else "done"
+            values["progress"] = float(reference.progress)
+            values["duration"] = float(plan.duration)
+            values["playback_rate"] = self._rate if moving else 0.0
+            folds = [
+                f"{p.name}: {math.degrees(p.fold_reached):.4g} deg"
+                for p in plan.phases
+                if p.fold_reached is not None
+            ]
+            values["fold_reached"] = ", ".join(folds) if folds else "none"
+            values["notes"] = "; ".join(plan.notes) if plan.notes else "none"
+        momentum = 0.0
+        if moving and self._theta is not None:
+            state_ff = FreeFloatingState.compute(
+                self.robot,
+                self.robot.configuration(self._theta, self._base_position, self._base_orientation),
+            )
+            momentum = float(
+                np.linalg.norm(state_ff.coupling_angular_momentum_matrix @ self._velocities)
+            )
+        values["coupling_momentum"] = momentum
+        if self._rejected:
+            values["rejected_goal"] = self._rejected
+        return values
+
+    def _publish_status(self, state: PtpState, detail: str) -> None:
+        level = STATE_LEVELS.get(state, DiagnosticStatus.OK)
+        message = f"{state.value}: {detail}" if detail else state.value
+        if self._rejected and state is not PtpState.INVALID_GOAL:
+            message += f"; last goal rejected: {self._rejected}"
+        status = DiagnosticStatus(
+            level=level,
+            name=f"{self.get_name()}: point-to-point motion",
+            message=message,
+            hardware_id=self.robot.name,
+            values=[
+                KeyValue(key=key, value=_text(value))
+                for key, value in {"state": state.value, **self._values(state)}.items()
+            ],
+        )
+        self._last_status = status
+        msg = DiagnosticArray(status=[status])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._status.publish(msg)
+
+    def _on_diagnostics(self) -> None:
+        if self._last_status is None:
+            return
+        msg = DiagnosticArray(status=[self._last_status])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(msg)
+
+    def destroy_node(self) -> None:
+        """Stop the arm: one zero-velocity output, then tear down."""
+        if self._theta is not None:
+            try:
+                self._stop_output()
+                self._output.wait_for_all_acked(Duration(seconds=0.5))
+            except Exception as exc:  # the context may already be shut down (Ctrl-C)
+                self.get_logger().warn(f"could not publish the final zero velocity: {exc}")
+        super().destroy_node()
+
+
+def _settings(params: dict) -> PtpSettings:
+    """PtpSettings from the parameters (only the fields the planner has)."""
+    fields = {field.name for field in dataclasses.fields(PtpSettings)}
+    values = {
+        "duration": float(params["duration"]),
+        "phase_durations": tuple(float(x) for x in params["phase_durations"]),
+        "deploy_duration": float(params["deploy_duration"]),
+    }
+    return PtpSettings(**{k: v for k, v in values.items() if k in fields})
+
+
+def _text(value) -> str:
+    if isinstance(value, np.ndarray):
+        return " ".join(f"{x:.6g}" for x in value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def main(args=None) -> int:
+    return run_node(PtpNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

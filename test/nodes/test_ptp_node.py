@@ -1,0 +1,262 @@
+"""rns_ptp over real DDS (loopback, private Context) driving rns_simulator (kinematic)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Odometry
+from rclpy.parameter import Parameter
+from rns_testing import Recorder
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from rns_ros.control.ptp import plan_ptp
+from rns_ros.core import ConfigError
+from rns_ros.core.integration import attitude_deviation
+from rns_ros.nodes.ptp import PARAMETERS, PtpNode
+from rns_ros.nodes.simulator import SATELLITE_OBSERVATION_RAD, SimulatorNode
+from rns_ros.sim.free_floating import FreeFloatingSimulator
+
+REPO = Path(__file__).resolve().parents[2]
+JOINTS = [f"joint_{i}" for i in range(1, 8)]
+START = np.array(SATELLITE_OBSERVATION_RAD)
+#: A goal a few degrees from the simulator's default initial configuration [rad].
+SMALL_STEP = np.deg2rad([3.0, -3.0, 2.0, 4.0, -3.0, 2.0, 3.0])
+
+
+def _node(ros, cls, **overrides):
+    parameters = [Parameter(name, value=value) for name, value in overrides.items()]
+    return ros.add(cls(context=ros.context, parameter_overrides=parameters))
+
+
+def _values(msg: DiagnosticArray) -> dict[str, str]:
+    return {kv.key: kv.value for kv in msg.status[0].values}
+
+
+def _stack(ros, **ptp_overrides):
+    _node(ros, SimulatorNode)
+    ptp = _node(ros, PtpNode, **ptp_overrides)
+    probe = ros.probe()
+    return SimpleNamespace(
+        ptp=ptp,
+        probe=probe,
+        goal=probe.create_publisher(JointState, "ptp_goal", 10),
+        references=Recorder(probe, JointTrajectory, "joint_references"),
+        status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
+        joints=Recorder(probe, JointState, "joint_states"),
+        odom=Recorder(probe, Odometry, "base_odom"),
+    )
+
+
+def _state(stack) -> str | None:
+    return _values(stack.status.messages[-1])["state"] if stack.status.messages else None
+
+
+def _ready(ros, stack):
+    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=10.0)
+
+
+def _send(stack, names, positions):
+    stack.goal.publish(JointState(name=list(names), position=[float(x) for x in positions]))
+
+
+def _odom_rotation(msg: Odometry) -> np.ndarray:
+    o = msg.pose.pose.orientation
+    return pin.Quaternion(o.w, o.x, o.y, o.z).toRotationMatrix()
+
+
+def _core_deviation(robot, plan, period=0.01, dt=1e-3) -> float:
+    """Max base attitude deviation [rad] of the node's playback of ``plan`` on the core kinematic
+    simulator: theta_dot = plan rate at mid-period, held for each period."""
+    q0 = robot.configuration(START, np.zeros(3), np.array([0.0, 0.0, 0.0, 1.0]))
+    simulator = FreeFloatingSimulator(robot, dt=dt, initial_q=q0)
+    r0 = pin.XYZQUATToSE3(q0[:7]).rotation
+    worst, t = 0.0, 0.0
+    while t < plan.duration:
+        simulator.set_reference(velocities=plan.sample(t + period / 2).theta_dot)
+        for _ in range(round(period / dt)):
+            simulator.step()
+        t += period
+        rotation = pin.XYZQUATToSE3(simulator.q[:7]).rotation
+        worst = max(worst, attitude_deviation(r0, rotation))
+    return worst
+
+
+def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
+    stack = _stack(ros, method="joint_space", duration=2.0)
+    _ready(ros, stack)
+    goal = START + SMALL_STEP
+    _send(stack, reversed(JOINTS), goal[::-1])  # matched by name, not by order
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    moving = _values(stack.status.messages[-1])
+    assert moving["method"] == "joint_space"
+    assert moving["phase"] == "JS-C"
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
+    ros.spin_for(0.3)
+    final = np.array(stack.joints.messages[-1].position)
+    error = np.degrees(np.abs(final - goal)).max()
+    print(f"final joint error {error:.2e} deg")
+    assert error < 0.1
+    # stopped: one zero-velocity message at the end, nothing after it
+    assert np.all(np.array(stack.references.messages[-1].points[0].velocities) == 0.0)
+    seen = [_values(m)["state"] for m in stack.status.messages]
+    assert seen[-1] == "DONE"
+    odom = stack.odom.messages
+    dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
+    plan = plan_ptp(stack.ptp.robot, START, goal, "joint_space", stack.ptp.settings)
+    core = _core_deviation(stack.ptp.robot, plan)
+    print(f"base deviation over DDS {math.degrees(dds):.4e} deg, core {math.degrees(core):.4e}")
+    assert core > 0.0
+    assert dds == pytest.approx(core, rel=0.2)
+
+
+def test_a_partial_goal_keeps_the_other_joints(ros):
+    stack = _stack(ros, method="joint_space", duration=1.0)
+    _ready(ros, stack)
+    _send(stack, ["joint_4"], [START[3] + math.radians(3.0)])
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
+    ros.spin_for(0.2)
+    final = np.array(stack.joints.messages[-1].position)
+    expected = START.copy()
+    expected[3] += math.radians(3.0)
+    assert np.degrees(np.abs(final - expected)).max() < 0.1
+
+
+def test_three_phase_goal_is_reached(ros):
+    stack = _stack(ros, method="three_phase", phase_durations=[2.0, 4.0, 2.0])
+    _ready(ros, stack)
+    goal = START + SMALL_STEP
+    try:
+        plan_ptp(stack.ptp.robot, START, goal, "three_phase", stack.ptp.settings)
+    except NotImplementedError as exc:
+        pytest.skip(f"planner: {exc}")
+    _send(stack, JOINTS, goal)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=10.0)
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=25.0)
+    ros.spin_for(0.3)
+    final = np.array(stack.joints.messages[-1].position)
+    assert np.degrees(np.abs(final - goal)).max() < 0.1
+
+
+@pytest.mark.parametrize(
+    ("names", "positions", "message"),
+    [
+        (JOINTS, [math.nan, *START[1:]], "must be finite"),
+        (["joint_9"], [0.0], "unknown joints ['joint_9']"),
+        (["joint_2"], [10.0], "outside its limits"),
+        (["joint_1", "joint_2"], [0.0], "2 names"),
+    ],
+)
+def test_bad_goals_are_rejected_and_nothing_moves(ros, names, positions, message):
+    stack = _stack(ros, method="joint_space", duration=1.0)
+    _ready(ros, stack)
+    count = len(stack.joints.messages)
+    _send(stack, names, positions)
+    assert ros.spin_until(lambda: _state(stack) == "INVALID_GOAL", timeout=5.0)
+    ros.spin_for(0.3)
+    status = stack.status.messages[-1].status[0]
+    assert status.level == status.ERROR
+    assert message in status.message
+    assert stack.references.messages == []
+    positions = np.array([m.position for m in stack.joints.messages[count:]])
+    assert np.ptp(positions, axis=0).max() < 1e-12
+
+
+def test_cancel_decelerates_to_rest_without_a_velocity_jump(ros):
+    stack = _stack(ros, method="joint_space", duration=3.0, cancel_deceleration=2.0)
+    _ready(ros, stack)
+    _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    ros.spin_for(1.2)  # around the middle of the quintic: fastest
+    client = stack.probe.create_client(Trigger, "rns_ptp/cancel")
+    assert client.wait_for_service(timeout_sec=5.0)
+    before = len(stack.references.messages)
+    future = client.call_async(Trigger.Request())
+    assert ros.spin_until(future.done, timeout=5.0)
+    assert future.result().success
+    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=3.0)
+    ros.spin_for(0.2)
+    seen = [_values(m)["state"] for m in stack.status.messages]
+    assert "CANCELLING" in seen
+    velocities = np.array([m.points[0].velocities for m in stack.references.messages])
+    assert np.all(velocities[-1] == 0.0)
+    speed = np.abs(velocities[before - 1]).max()
+    assert speed > 0.01
+    steps = np.abs(np.diff(velocities[before - 5 :], axis=0)).max(axis=1)
+    # rate falls by 2/s * 10 ms = 2 % per tick (plus the plan's own change, and late ticks): no jump
+    print(f"speed at cancel {speed:.3f} rad/s, largest step {steps.max():.2e} rad/s per tick")
+    assert steps.max() < 0.1 * speed
+    stopped_after = len(stack.references.messages) - before
+    assert stopped_after < 0.5 / 0.01 + 10  # 1 / cancel_deceleration plus slack
+
+
+def test_stale_state_stops_the_arm_and_abandons_the_plan(ros):
+    simulator = _node(ros, SimulatorNode)
+    _node(ros, PtpNode, method="joint_space", duration=3.0)
+    probe = ros.probe()
+    goal = probe.create_publisher(JointState, "ptp_goal", 10)
+    references = Recorder(probe, JointTrajectory, "joint_references")
+    status = Recorder(probe, DiagnosticArray, "rns_ptp/status")
+    stack = SimpleNamespace(status=status, goal=goal)
+    _ready(ros, stack)
+    _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    ros.spin_for(0.5)
+    ros.detach(simulator)
+    simulator.destroy_node()
+    assert ros.spin_until(lambda: _state(stack) == "STALE_STATE", timeout=2.0)
+    ros.spin_for(0.3)
+    assert np.all(np.array(references.messages[-1].points[0].velocities) == 0.0)
+    entry = status.messages[-1].status[0]
+    assert entry.level == entry.ERROR
+    assert "joint_states" in entry.message
+    # a fresh state: IDLE, the old plan does not resume
+    _node(ros, SimulatorNode)
+    count = len(references.messages)
+    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=10.0)
+    ros.spin_for(0.3)
+    assert len(references.messages) == count
+
+
+def test_status_before_the_first_joint_state(ros):
+    node = _node(ros, PtpNode)
+    probe = ros.probe()
+    status = Recorder(probe, DiagnosticArray, "rns_ptp/status")
+    diagnostics = Recorder(probe, DiagnosticArray, "/diagnostics")
+    assert ros.spin_until(lambda: diagnostics.messages, timeout=3.0)
+    values = _values(status.messages[-1])
+    assert values["state"] == "WAITING_FOR_STATE"
+    assert values["method"] == "three_phase"
+    entry = diagnostics.messages[-1].status[0]
+    assert entry.hardware_id == node.robot.name
+    assert entry.level == entry.WARN
+
+
+def test_config_yaml_mirrors_the_declared_defaults():
+    content = yaml.safe_load((REPO / "config" / "ptp.yaml").read_text())
+    values = content["/**"]["ros__parameters"]
+    assert values == {spec.name: spec.default for spec in PARAMETERS}
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"method": "magic"}, "'method' must be one of"),
+        ({"rate": 5000.0}, "'rate' out of range"),
+        ({"output_interface": "velocity", "joints": JOINTS[:6]}, "'joints'"),
+    ],
+)
+def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
+    with pytest.raises(ConfigError, match=message):
+        PtpNode(
+            context=ros.context,
+            parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
+        )

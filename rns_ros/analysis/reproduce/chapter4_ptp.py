@@ -1,0 +1,565 @@
+"""Chapter 4, §4.4–4.5: point-to-point 3-phase motion, its baselines and the deployment task.
+
+Plans come from :mod:`rns_ros.control.ptp` and are played by :func:`rns_ros.analysis.ptp_runs.
+run_plan` (kinematic free-floating model, RK4, 100 Hz hold sampled at mid-period):
+
+* ``table4.2``: max base attitude deviation of the 3-phase method and of JS-C, IJ-C, TJ-C from
+  [−20 −40 0 −60 180 180 0]° to [−120 50 0 −60 180 180 0]°.
+* ``fig4.10``: joint velocities and coupling angular momentum M~_ωm θ̇ of the 3-phase plan.
+* ``fig4.12``: base attitude deviation of the four methods against time.
+* ``fig4.13``: full reactionless deployment from the stowed pose (snapshots, base deviation).
+* ``partial_deployment``: stowed → [90 50 0 −300 0 20 0]° by Phase II + Phase III against a
+  joint-space line.
+
+The arm is the identified geometry (docs/arm_identification.md), not the thesis' (which it does
+not print): numbers are compared qualitatively. Its Phase III fold and the partial-deployment
+fold turn back before θ4 = −π; the plans end those folds at the turning point (docs/ptp.md).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import pinocchio as pin
+
+from rns_ros.analysis.ptp_runs import PtpRun, run_plan
+from rns_ros.analysis.reproduce.registry import (
+    Comparison,
+    Outcome,
+    Reproduction,
+    Status,
+    register,
+)
+from rns_ros.control.ptp import (
+    PtpPlan,
+    PtpSettings,
+    plan_deployment,
+    plan_partial_deployment,
+    plan_ptp,
+)
+from rns_ros.core import FreeFloatingModel, load_model
+from rns_ros.core.state import FreeFloatingState
+from rns_ros.resources import default_model_config
+
+INITIAL_DEG = (-20.0, -40.0, 0.0, -60.0, 180.0, 180.0, 0.0)
+FINAL_DEG = (-120.0, 50.0, 0.0, -60.0, 180.0, 180.0, 0.0)
+STOWED = (math.pi / 2, -math.pi / 2, 0.0, -math.pi, math.pi, math.pi, 0.0)
+PARTIAL_FINAL_DEG = (90.0, 50.0, 0.0, -300.0, 0.0, 20.0, 0.0)
+#: Table 4.2 [deg] and the thesis' printed ratios.
+THESIS_TABLE = {"3-phase": 1.95, "JS-C": 3.61, "IJ-C": 3.21, "TJ-C": 3.85}
+THESIS_RATIO = {"3-phase": 1.00, "JS-C": 1.84, "IJ-C": 1.64, "TJ-C": 1.96}
+#: §4.5.2 [deg] and the reduction [%].
+THESIS_PARTIAL = {"partial_reactionless": 5.48, "baseline": 7.66}
+THESIS_REDUCTION = 28.5
+#: Thesis EE position at the end of the 3-phase run (IJ-C/TJ-C target) [m].
+THESIS_CAMERA_TARGET = (-1.7, 0.45, 1.7)
+#: Simulator step [s] (full / quick) and IJ-C/TJ-C offline integration step [s].
+STEP, QUICK_STEP = 1e-3, 1e-2
+INTEGRATION, QUICK_INTEGRATION = 0.01, 0.05
+RATE = 100.0
+METHODS = ("3-phase", "JS-C", "IJ-C", "TJ-C")
+_COLORS = {"3-phase": "tab:blue", "JS-C": "tab:orange", "IJ-C": "tab:green", "TJ-C": "tab:red"}
+
+CHOICES = (
+    "Model: the identified 7-DoF geometry (docs/arm_identification.md); the thesis prints none, "
+    "so all numbers are qualitative.",
+    "A-0.1: base attitude deviation = geodesic angle of R_b(0)^T R_b(t).",
+    "Kinematic free-floating simulation, zero momentum, RK4; 100 Hz zero-order hold of the "
+    "reference joint velocity sampled at mid-period (like the controller).",
+    "A-2.1/A-2.2: reactionless elbow path by arc length (theta_dot = beta n, n unit null vector "
+    "of M~_P_omega_m, sign-continuous); a fold ends at theta_4 = -pi or at the first turning "
+    "point of theta_4 (most-folded configuration).",
+    "A-2.3: each reactionless phase is a quintic in arc length, stretched (not clipped) to the "
+    "URDF velocity limits (0.5 rad/s for joints 1-4).",
+    "A-2.4: Phase II is a quintic joint-space line FA-1 -> FA-2 (20 s nominal).",
+    "A-2.5: the IJ-C/TJ-C camera target is our own 3-phase run's final camera position (world).",
+    "A-2.7/A-2.8/A-2.9: JS-C quintic; IJ-C Generalized Jacobian pseudoinverse, K_p = 1 1/s; TJ-C "
+    "Generalized Jacobian transpose with the first K of (1, 2, 5, 10, ...) giving < 1 cm final "
+    "error; positioning joints only (wrist start = goal here).",
+)
+
+
+@functools.cache
+def _robot() -> FreeFloatingModel:
+    return load_model(default_model_config())
+
+
+def _step(quick: bool) -> float:
+    return QUICK_STEP if quick else STEP
+
+
+@functools.cache
+def _table_runs(quick: bool) -> dict[str, PtpRun]:
+    """The four Table 4.2 runs (3-phase first: its final camera is the IJ-C/TJ-C target)."""
+    robot = _robot()
+    start, goal = np.deg2rad(INITIAL_DEG), np.deg2rad(FINAL_DEG)
+    runs = {"3-phase": run_plan(robot, plan_ptp(robot, start, goal, "three_phase"), **_loop(quick))}
+    settings = PtpSettings(
+        camera_target=tuple(runs["3-phase"].camera[-1]),
+        integration_step=QUICK_INTEGRATION if quick else INTEGRATION,
+    )
+    for name, method in (
+        ("JS-C", "joint_space"),
+        ("IJ-C", "inverse_jacobian"),
+        ("TJ-C", "transposed_jacobian"),
+    ):
+        plan = plan_ptp(robot, start, goal, method, settings)
+        runs[name] = run_plan(robot, plan, **_loop(quick))
+    return runs
+
+
+def _loop(quick: bool) -> dict:
+    return {"dt": _step(quick), "rate": RATE}
+
+
+def _settings(quick: bool) -> dict:
+    defaults = PtpSettings()
+    return {
+        "model": f"{_robot().name} (config/urdf/rns_7dof_arm.urdf)",
+        "simulation_step_s": _step(quick),
+        "control_rate_hz": RATE,
+        "phase_durations_nominal_s": list(defaults.phase_durations),
+        "duration_nominal_s": defaults.duration,
+        "path_step_rad": defaults.path_step,
+        "elbow_gain_per_s": defaults.elbow_gain,
+        "fold_angle_deg": math.degrees(defaults.fold_angle),
+        "velocity_limits_rad_s": _robot().velocity_limits.tolist(),
+    }
+
+
+def _phases(plan: PtpPlan) -> list[dict]:
+    return [
+        {
+            "name": p.name,
+            "start_s": round(p.start, 4),
+            "end_s": round(p.end, 4),
+            "reactionless": p.reactionless,
+            "fold_reached_deg": None if p.fold_reached is None else math.degrees(p.fold_reached),
+        }
+        for p in plan.phases
+    ]
+
+
+def _plan_coupling(plan: PtpPlan, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Times [s], theta_dot (k, n) and M~_omega_m theta_dot (k, 3) of the plan's own reference."""
+    robot = _robot()
+    times = np.linspace(0.0, plan.duration, count)
+    rates, coupling = [], []
+    for t in times:
+        reference = plan.sample(t)
+        state = FreeFloatingState.compute(robot, robot.configuration(reference.theta))
+        rates.append(reference.theta_dot)
+        coupling.append(state.coupling_angular_momentum_matrix @ reference.theta_dot)
+    return times, np.array(rates), np.array(coupling)
+
+
+def _relative_reactionless_coupling(plan: PtpPlan, count: int) -> float:
+    """max |M~ theta_dot| / |theta_dot| over the plan's reactionless phases [kg m^2]."""
+    times, rates, coupling = _plan_coupling(plan, count)
+    worst = 0.0
+    for t, rate, h in zip(times, rates, coupling, strict=True):
+        speed = float(np.linalg.norm(rate))
+        if plan.is_reactionless(t) and speed > 0.0:
+            worst = max(worst, float(np.linalg.norm(h)) / speed)
+    return worst
+
+
+# table 4.2 ----------------------------------------------------------------------------------
+def _compute_table4_2(quick: bool) -> Outcome:
+    runs = _table_runs(quick)
+    deviation = {name: runs[name].max_base_deviation_deg for name in METHODS}
+    ratio = {name: deviation[name] / deviation["3-phase"] for name in METHODS}
+    least = min(deviation, key=deviation.get) == "3-phase"
+    plan = runs["3-phase"].plan
+    comparisons = [
+        Comparison(
+            f"max_base_deviation_{name}_deg",
+            THESIS_TABLE[name],
+            round(deviation[name], 4),
+            "deg",
+            Status.QUALITATIVE,
+            "identified geometry, not the thesis'; compare the ordering, not the digits",
+        )
+        for name in METHODS
+    ]
+    comparisons += [
+        Comparison(
+            f"ratio_{name}",
+            THESIS_RATIO[name],
+            round(ratio[name], 3),
+            "",
+            Status.QUALITATIVE if ratio[name] > 1.0 else Status.NOT_REPRODUCIBLE,
+            "ratio to the 3-phase deviation; thesis: 'about two times'",
+        )
+        for name in METHODS[1:]
+    ]
+    comparisons.append(
+        Comparison(
+            "three_phase_least",
+            "3-phase least (about 2x smaller)",
+            f"3-phase least: {least}; ratios {min(ratio[n] for n in METHODS[1:]):.2f}-"
+            f"{max(ratio[n] for n in METHODS[1:]):.2f}",
+            "",
+            Status.QUALITATIVE if least else Status.NOT_REPRODUCIBLE,
+            "our ratios are smaller than the thesis' ~2: Phase II here spans FA-1 -> FA-2 with "
+            "the Phase III fold ending at its turning point (theta_4 = "
+            f"{math.degrees(plan.phases[2].fold_reached):.1f} deg, not -180 deg)",
+        )
+    )
+    target = runs["IJ-C"].plan.details["camera_target"]
+    comparisons.append(
+        Comparison(
+            "camera_target_m",
+            list(THESIS_CAMERA_TARGET),
+            np.round(target, 4).tolist(),
+            "m",
+            Status.QUALITATIVE,
+            "final camera position of our 3-phase run (world = base frame at t = 0)",
+        )
+    )
+    values = {
+        "max_base_deviation_deg": {k: round(v, 6) for k, v in deviation.items()},
+        "ratio": {k: round(v, 6) for k, v in ratio.items()},
+        "phases": _phases(plan),
+        "notes": {name: list(runs[name].plan.notes) for name in METHODS},
+        "tj_c_gain": runs["TJ-C"].plan.details["gain"],
+        "final_camera_error_m": {
+            name: float(np.linalg.norm(runs[name].camera[-1] - target)) for name in METHODS
+        },
+        "durations_s": {name: runs[name].plan.duration for name in METHODS},
+    }
+    return Outcome(
+        tuple(comparisons),
+        values,
+        _settings(quick),
+        CHOICES,
+        {"kind": "deviation", "runs": runs},
+    )
+
+
+def _plot_deviation(outcome: Outcome, figure) -> None:
+    runs = outcome.figure_data["runs"]
+    axes = figure.subplots(2, 2, sharey=True).ravel()
+    for ax, name in zip(axes, METHODS, strict=True):
+        run = runs[name]
+        ax.plot(run.t, np.rad2deg(run.base_deviation), color=_COLORS[name])
+        for phase in run.plan.phases[:-1]:
+            ax.axvline(phase.end, color="k", lw=0.8, ls="--", alpha=0.6)
+        ax.set_title(f"{name}: max {run.max_base_deviation_deg:.2f} deg", fontsize=9)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("base attitude deviation [deg]")
+        ax.grid(alpha=0.3)
+
+
+def _compute_fig4_12(quick: bool) -> Outcome:
+    runs = _table_runs(quick)
+    deviation = {name: runs[name].max_base_deviation_deg for name in METHODS}
+    phase_two = runs["3-phase"].plan.phases[1]
+    run = runs["3-phase"]
+    before = float(run.base_deviation[run.t <= phase_two.start].max())
+    after_end = float(np.ptp(run.base_deviation[run.t >= phase_two.end]))
+    comparisons = (
+        Comparison(
+            "deviation_only_in_phase_II_deg",
+            "3-phase deviation grows only in Phase II",
+            {"phase_I_max": round(math.degrees(before), 6), "phase_III_change": after_end},
+            "deg",
+            Status.QUALITATIVE if math.degrees(before) < 1e-3 else Status.NOT_REPRODUCIBLE,
+            "Phase I/III deviation from the mid-period hold of the reactionless reference only",
+        ),
+        Comparison(
+            "max_base_deviation_deg",
+            THESIS_TABLE,
+            {k: round(v, 4) for k, v in deviation.items()},
+            "deg",
+            Status.QUALITATIVE,
+            "curves, see table4.2",
+        ),
+    )
+    values = {"max_base_deviation_deg": deviation}
+    return Outcome(comparisons, values, _settings(quick), CHOICES, {"runs": runs})
+
+
+# fig 4.10 -----------------------------------------------------------------------------------
+def _compute_fig4_10(quick: bool) -> Outcome:
+    run = _table_runs(quick)["3-phase"]
+    plan = run.plan
+    count = 301 if quick else 1201
+    times, rates, coupling = _plan_coupling(plan, count)
+    relative = _relative_reactionless_coupling(plan, count)
+    phase_of = [plan.sample(t).phase for t in times]
+    per_phase = {
+        p.name: float(
+            np.linalg.norm(coupling[[name == p.name for name in phase_of]], axis=1).max(initial=0)
+        )
+        for p in plan.phases
+    }
+    comparisons = (
+        Comparison(
+            "coupling_only_in_phase_II",
+            "only Phase II introduces coupling angular momentum",
+            {k: f"{v:.3g}" for k, v in per_phase.items()},
+            "kg m^2/s",
+            Status.QUALITATIVE if relative < 1e-10 else Status.NOT_REPRODUCIBLE,
+            f"plan reference: max |M~ theta_dot| / |theta_dot| in Phases I/III = {relative:.2e} "
+            "kg m^2 (machine precision); the played run (mid-period hold) reaches "
+            f"{run.max_coupling(True):.3g} kg m^2/s there",
+        ),
+        Comparison(
+            "phase_durations_s",
+            [5.0, 20.0, 5.0],
+            [round(p.end - p.start, 3) for p in plan.phases],
+            "s",
+            Status.QUALITATIVE,
+            "Phases I/III stretched to the 0.5 rad/s limits of joints 1-4 (A-2.3)",
+        ),
+    )
+    values = {
+        "max_coupling_per_phase": per_phase,
+        "reactionless_relative_coupling": relative,
+        "phases": _phases(plan),
+        "notes": list(plan.notes),
+    }
+    data = {"times": times, "rates": rates, "coupling": coupling, "plan": plan}
+    return Outcome(comparisons, values, _settings(quick), CHOICES, data)
+
+
+def _plot_fig4_10(outcome: Outcome, figure) -> None:
+    data = outcome.figure_data
+    axes = figure.subplots(2, 1, sharex=True)
+    for i in range(data["rates"].shape[1]):
+        axes[0].plot(data["times"], data["rates"][:, i], label=f"joint {i + 1}")
+    for i, axis in enumerate("xyz"):
+        axes[1].plot(data["times"], data["coupling"][:, i], label=axis)
+    for ax in axes:
+        for phase in data["plan"].phases:
+            ax.axvline(phase.end, color="k", lw=0.8, ls="--", alpha=0.6)
+            ax.text(
+                0.5 * (phase.start + phase.end),
+                0.95,
+                phase.name,
+                ha="center",
+                transform=ax.get_xaxis_transform(),
+                fontsize=9,
+            )
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=4)
+    axes[0].set_ylabel("(a) joint velocity [rad/s]")
+    axes[1].set_ylabel("(b) M~_wm theta_dot [kg m^2/s]")
+    axes[1].set_xlabel("t [s]")
+
+
+# fig 4.13: deployment -----------------------------------------------------------------------
+def _joint_points(robot: FreeFloatingModel, theta: np.ndarray) -> np.ndarray:
+    """Joint origins and the camera in the base frame [m], shape (n + 2, 3)."""
+    data = robot.model.createData()
+    q = robot.configuration(theta)
+    pin.forwardKinematics(robot.model, data, q)
+    pin.updateFramePlacements(robot.model, data)
+    points = [data.oMi[j].translation.copy() for j in range(1, robot.model.njoints)]
+    points.append(data.oMf[robot.camera_frame_id].translation.copy())
+    return np.array(points)
+
+
+@functools.cache
+def _deployment(quick: bool) -> PtpRun:
+    robot = _robot()
+    return run_plan(robot, plan_deployment(robot, STOWED), **_loop(quick))
+
+
+def _compute_fig4_13(quick: bool) -> Outcome:
+    run = _deployment(quick)
+    plan = run.plan
+    robot = _robot()
+    snapshot_times = np.linspace(0.0, plan.duration, 6)
+    snapshots = [plan.sample(t).theta for t in snapshot_times]
+    reached = math.degrees(plan.phases[0].fold_reached)
+    target = math.degrees(STOWED[3] + PtpSettings().deploy_rate * PtpSettings().deploy_duration)
+    comparisons = (
+        Comparison(
+            "max_base_deviation_deg",
+            0.0,
+            float(f"{run.max_base_deviation_deg:.3g}"),
+            "deg",
+            Status.QUALITATIVE if run.max_base_deviation_deg < 1e-3 else Status.NOT_REPRODUCIBLE,
+            "reactionless: only the mid-period hold error remains",
+        ),
+        Comparison(
+            "theta4_final_deg",
+            round(target, 2),
+            round(reached, 2),
+            "deg",
+            Status.QUALITATIVE if abs(reached - target) < 0.1 else Status.NOT_REPRODUCIBLE,
+            "thesis: -180 + 0.183 rad/s x 30 s; ours a quintic in arc length (same end, rest to "
+            "rest) instead of a constant theta_dot_4",
+        ),
+    )
+    values = {
+        "max_base_deviation_deg": run.max_base_deviation_deg,
+        "theta4_final_deg": reached,
+        "final_theta_deg": np.rad2deg(run.theta[-1]).tolist(),
+        "snapshot_times_s": snapshot_times.tolist(),
+        "notes": list(plan.notes),
+    }
+    points = [_joint_points(robot, theta) for theta in snapshots]
+    data = {"run": run, "points": points, "times": snapshot_times}
+    return Outcome(comparisons, values, _settings(quick), CHOICES, data)
+
+
+def _plot_fig4_13(outcome: Outcome, figure) -> None:
+    data = outcome.figure_data
+    axes = figure.subplots(2, 2)
+    colors = [f"C{i}" for i in range(len(data["points"]))]
+    for ax, (i, j), label in (
+        (axes[0, 0], (0, 2), ("x [m]", "z [m]")),
+        (axes[0, 1], (0, 1), ("x [m]", "y [m]")),
+        (axes[1, 0], (1, 2), ("y [m]", "z [m]")),
+    ):
+        for points, color, t in zip(data["points"], colors, data["times"], strict=True):
+            ax.plot(points[:, i], points[:, j], "-o", color=color, ms=3, label=f"t = {t:.0f} s")
+        ax.plot(0.0, 0.0, "ks", ms=8)
+        ax.set_xlabel(label[0])
+        ax.set_ylabel(label[1])
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    run = data["run"]
+    axes[1, 1].plot(run.t, np.rad2deg(run.base_deviation))
+    axes[1, 1].set_xlabel("t [s]")
+    axes[1, 1].set_ylabel("base attitude deviation [deg]")
+    axes[1, 1].grid(alpha=0.3)
+
+
+# partial deployment -------------------------------------------------------------------------
+@functools.cache
+def _partial(quick: bool) -> dict[str, PtpRun]:
+    robot = _robot()
+    goal = np.deg2rad(PARTIAL_FINAL_DEG)
+    plan = plan_partial_deployment(robot, STOWED, goal)
+    baseline = plan_ptp(robot, STOWED, goal, "joint_space", PtpSettings(duration=plan.duration))
+    return {
+        "partial_reactionless": run_plan(robot, plan, **_loop(quick)),
+        "baseline": run_plan(robot, baseline, **_loop(quick)),
+    }
+
+
+def _compute_partial(quick: bool) -> Outcome:
+    runs = _partial(quick)
+    deviation = {name: run.max_base_deviation_deg for name, run in runs.items()}
+    reduction = (
+        100.0 * (deviation["baseline"] - deviation["partial_reactionless"]) / deviation["baseline"]
+    )
+    plan = runs["partial_reactionless"].plan
+    fold = math.degrees(plan.phases[-1].fold_reached)
+    comparisons = [
+        Comparison(
+            f"max_base_deviation_{name}_deg",
+            THESIS_PARTIAL[name],
+            round(deviation[name], 4),
+            "deg",
+            Status.QUALITATIVE,
+            "identified geometry, not the thesis'",
+        )
+        for name in THESIS_PARTIAL
+    ]
+    comparisons.append(
+        Comparison(
+            "reduction_percent",
+            THESIS_REDUCTION,
+            round(reduction, 2),
+            "%",
+            Status.QUALITATIVE if reduction > 0.0 else Status.NOT_REPRODUCIBLE,
+            f"the Phase III fold turns back at theta_4 = {fold:.1f} deg before -180 deg "
+            "(A-2.11 reading), so Phase II still moves theta_4 and the reduction is smaller",
+        )
+    )
+    values = {
+        "max_base_deviation_deg": {k: round(v, 6) for k, v in deviation.items()},
+        "reduction_percent": reduction,
+        "phases": _phases(plan),
+        "notes": list(plan.notes),
+        "final_error_deg": float(
+            np.abs(np.rad2deg(runs["partial_reactionless"].theta[-1]) - PARTIAL_FINAL_DEG).max()
+        ),
+    }
+    choices = (
+        *CHOICES,
+        "A-2.11: the goal's theta_4 = -300 deg is read literally; its fold runs towards -180 deg.",
+        "A-2.12/A-2.13: Phase II (20 s nominal) and Phase III (5 s nominal) as in 4.4, all seven "
+        "joints interpolated in Phase II; the joint-space baseline runs over the same total time "
+        "(the kinematic base deviation depends on the path only, not its timing).",
+    )
+    return Outcome(tuple(comparisons), values, _settings(quick), choices, {"runs": runs})
+
+
+def _plot_partial(outcome: Outcome, figure) -> None:
+    runs = outcome.figure_data["runs"]
+    axes = figure.subplots(2, 1)
+    for name, run in runs.items():
+        axes[0].plot(run.t, np.rad2deg(run.base_deviation), label=name)
+    for phase in runs["partial_reactionless"].plan.phases[:-1]:
+        axes[0].axvline(phase.end, color="k", lw=0.8, ls="--", alpha=0.6)
+    axes[0].set_ylabel("base attitude deviation [deg]")
+    axes[0].legend(fontsize=8)
+    run = runs["partial_reactionless"]
+    for i in range(run.theta.shape[1]):
+        axes[1].plot(run.t, np.rad2deg(run.theta[:, i]), label=f"joint {i + 1}")
+    axes[1].set_ylabel("partial: theta [deg]")
+    axes[1].legend(fontsize=7, ncol=4)
+    for ax in axes:
+        ax.set_xlabel("t [s]")
+        ax.grid(alpha=0.3)
+
+
+register(
+    Reproduction(
+        "table4.2",
+        "Table 4.2",
+        "max base attitude deviation: 3-phase vs JS-C, IJ-C, TJ-C",
+        _compute_table4_2,
+        _plot_deviation,
+        (10.0, 7.0),
+    )
+)
+register(
+    Reproduction(
+        "fig4.10",
+        "Fig. 4.10",
+        "3-phase: joint velocities and coupling angular momentum per phase",
+        _compute_fig4_10,
+        _plot_fig4_10,
+        (10.0, 7.0),
+    )
+)
+register(
+    Reproduction(
+        "fig4.12",
+        "Fig. 4.12",
+        "base attitude deviation of the 3-phase method and the three baselines",
+        _compute_fig4_12,
+        _plot_deviation,
+        (10.0, 7.0),
+    )
+)
+register(
+    Reproduction(
+        "fig4.13",
+        "Fig. 4.13",
+        "full reactionless deployment from the stowed pose (snapshots)",
+        _compute_fig4_13,
+        _plot_fig4_13,
+        (10.0, 9.0),
+    )
+)
+register(
+    Reproduction(
+        "partial_deployment",
+        "§4.5.2",
+        "partial reactionless deployment vs joint-space baseline",
+        _compute_partial,
+        _plot_partial,
+        (10.0, 7.0),
+    )
+)

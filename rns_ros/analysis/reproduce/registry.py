@@ -32,6 +32,7 @@ from rns_ros.core.errors import ConfigError
 CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter3",
     "rns_ros.analysis.reproduce.chapter4",
+    "rns_ros.analysis.reproduce.chapter4_ptp",
 )
 
 

@@ -130,20 +130,50 @@ def test_a_partial_goal_keeps_the_other_joints(ros):
     assert np.degrees(np.abs(final - expected)).max() < 0.1
 
 
-def test_three_phase_goal_is_reached(ros):
-    stack = _stack(ros, method="three_phase", phase_durations=[2.0, 4.0, 2.0])
-    _ready(ros, stack)
+def test_three_phase_goal_is_reached_under_sim_time(ros):
+    """The thesis 3-phase motion to a goal a few degrees away: reactionless fold of theta_4 to
+    -180 deg, joint-space phase II, reactionless unfold (~33 s: the folds are stretched to the
+    velocity limits). Played on simulated time at 3x real time (the node follows /clock)."""
+    _node(ros, SimulatorNode, publish_clock=True, real_time_factor=3.0)
+    ptp = _node(
+        ros, PtpNode, method="three_phase", phase_durations=[2.0, 4.0, 2.0], use_sim_time=True
+    )
+    probe = ros.probe()
+    stack = SimpleNamespace(
+        goal=probe.create_publisher(JointState, "ptp_goal", 10),
+        status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
+        joints=Recorder(probe, JointState, "joint_states"),
+        odom=Recorder(probe, Odometry, "base_odom"),
+    )
     goal = START + SMALL_STEP
     try:
-        plan_ptp(stack.ptp.robot, START, goal, "three_phase", stack.ptp.settings)
+        plan = plan_ptp(ptp.robot, START, goal, "three_phase", ptp.settings)
     except NotImplementedError as exc:
         pytest.skip(f"planner: {exc}")
+    _ready(ros, stack)
     _send(stack, JOINTS, goal)
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=10.0)
-    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=25.0)
+    phases = set()
+
+    def done():
+        if stack.status.messages:
+            phases.add(_values(stack.status.messages[-1]).get("phase"))
+        return _state(stack) == "DONE"
+
+    assert ros.spin_until(done, timeout=plan.duration / 3.0 + 15.0)
+    assert {"I", "II", "III"} <= phases
     ros.spin_for(0.3)
+    values = _values(stack.status.messages[-1])
+    assert "I: -180 deg" in values["fold_reached"]
     final = np.array(stack.joints.messages[-1].position)
-    assert np.degrees(np.abs(final - goal)).max() < 0.1
+    error = np.degrees(np.abs(final - goal)).max()
+    odom = stack.odom.messages
+    dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
+    print(f"three_phase {plan.duration:.1f} s: joint error {error:.2e} deg")
+    print(f"base deviation {math.degrees(dds):.2e} deg (phase II is not reactionless)")
+    # open-loop playback over 32 s at 3x real time: 0.01-0.1 deg of drift seen (the delivery
+    # jitter of /clock and of the commands), against 0.1 deg at 1x for the 2 s JS-C test
+    assert error < 0.5
 
 
 @pytest.mark.parametrize(

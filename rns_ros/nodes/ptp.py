@@ -67,6 +67,10 @@ NODE_NAME = "rns_ptp"
 SUMMARY = "Reactionless point-to-point motion: joint goal in, planned joint references out."
 #: A goal whose JointState name list is exactly this runs the full reactionless deployment.
 DEPLOY_GOAL = ["deploy"]
+#: A stale state while a goal is planned does not abandon it: planning (pure Python, holding the
+#: GIL) can starve the executor, and the arm is at rest. A plan that is ready waits this long [s]
+#: for a fresh joint state before it is abandoned as STALE_STATE.
+PLANNING_GRACE = 1.0
 #: Period of the /diagnostics publication [s] (wall clock).
 DIAGNOSTICS_PERIOD = 1.0
 
@@ -182,7 +186,7 @@ class PtpNode(Node):
         # planning in a worker thread: goals are numbered, only the newest result is taken
         self._lock = threading.Lock()
         self._generation = 0
-        self._planned: tuple[int, object] | None = None
+        self._planned: tuple[int, object, float] | None = None  # (goal, plan, monotonic time)
         self._last_status: DiagnosticStatus | None = None
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
 
@@ -307,7 +311,7 @@ class PtpNode(Node):
             result = InputError(f"planning failed: {type(exc).__name__}: {exc}")
         with self._lock:
             if generation == self._generation:
-                self._planned = (generation, result)
+                self._planned = (generation, result, time.monotonic())
 
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected ptp_goal: {reason}")
@@ -338,7 +342,14 @@ class PtpNode(Node):
         if self._theta is None:
             self._publish_status(PtpState.WAITING_FOR_STATE, f"waiting for {self._state_topic}")
             return
-        fault = self._fault(time.monotonic())
+        now = time.monotonic()
+        fault = self._fault(now)
+        if fault is not None and self._mode is PtpState.PLANNING:
+            with self._lock:
+                ready = self._planned[2] if self._planned is not None else None
+            if ready is None or now - ready < PLANNING_GRACE:
+                self._publish_status(self._mode, f"{self._detail} (waiting: {fault})")
+                return
         if fault is not None:
             if self._mode is not PtpState.STALE_STATE:
                 abandoned = "; the plan is abandoned" if self.plan is not None else ""
@@ -368,7 +379,7 @@ class PtpNode(Node):
             planned, self._planned = self._planned, None
         if planned is None:
             return
-        _generation, result = planned
+        result = planned[1]
         if isinstance(result, RnsError):
             self._mode = PtpState.IDLE  # nothing moves; _reject reports INVALID_GOAL
             self._reject(str(result))

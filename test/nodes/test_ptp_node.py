@@ -15,6 +15,7 @@ from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rns_testing import Recorder
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
@@ -290,3 +291,77 @@ def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
             context=ros.context,
             parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
         )
+
+
+def test_deploy_goal_runs_the_reactionless_deployment(ros):
+    """name: ["deploy"] (positions ignored): the full deployment from the measured configuration;
+    a reactionless fold, so the base stays (nearly) still over DDS."""
+    stack = _stack(ros, deploy_duration=2.0)
+    _ready(ros, stack)
+    stack.goal.publish(JointState(name=["deploy"]))
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    assert _values(stack.status.messages[-1])["phase"] == "deploy"
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
+    ros.spin_for(0.3)
+    plan = stack.ptp.plan
+    assert str(plan.method) == "deploy"
+    final = np.array(stack.joints.messages[-1].position)
+    assert np.degrees(np.abs(final - plan.goal)).max() < 0.1
+    assert np.degrees(abs(final[3] - START[3])) > 5.0  # theta_4 moved
+    odom = stack.odom.messages
+    dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
+    values = _values(stack.status.messages[-1])
+    print(f"deploy: base deviation {math.degrees(dds):.2e} deg, fold {values['fold_reached']}")
+    assert math.degrees(dds) < 0.01
+    assert values["fold_reached"].startswith("deploy: ")
+
+
+def test_velocity_interface_and_a_planned_closed_loop_method(ros):
+    """output_interface velocity (joints reversed at both ends) with inverse_jacobian, which is
+    integrated offline while the node reports PLANNING; the arm ends at the plan's goal."""
+    order = list(reversed(JOINTS))
+    _node(ros, SimulatorNode, command_interface="velocity", joints=order)
+    ptp = _node(
+        ros,
+        PtpNode,
+        method="inverse_jacobian",
+        duration=2.0,
+        output_interface="velocity",
+        joints=order,
+    )
+    probe = ros.probe()
+    stack = SimpleNamespace(
+        goal=probe.create_publisher(JointState, "ptp_goal", 10),
+        status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
+        joints=Recorder(probe, JointState, "joint_states"),
+        velocities=Recorder(probe, Float64MultiArray, "joint_velocities"),
+    )
+    _ready(ros, stack)
+    _send(stack, JOINTS, START + SMALL_STEP)
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=20.0)
+    ros.spin_for(0.3)
+    seen = {_values(m)["state"] for m in stack.status.messages}
+    assert {"PLANNING", "MOVING", "DONE"} <= seen
+    assert np.all(np.array(stack.velocities.messages[-1].data) == 0.0)
+    final = np.array(stack.joints.messages[-1].position)
+    error = np.degrees(np.abs(final - ptp.plan.goal)).max()
+    print(f"inverse_jacobian over the velocity interface: error {error:.2e} deg")
+    assert error < 0.1
+
+
+def test_a_new_goal_replaces_the_current_plan(ros):
+    stack = _stack(ros, method="joint_space", duration=2.0)
+    _ready(ros, stack)
+    _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    ros.spin_for(0.5)
+    second = START - SMALL_STEP
+    _send(stack, JOINTS, second)
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
+    ros.spin_for(0.3)
+    final = np.array(stack.joints.messages[-1].position)
+    assert np.degrees(np.abs(final - second)).max() < 0.1
+    assert np.allclose(stack.ptp.plan.goal, second)
+    # the first motion was cut short: no DONE before the second goal's
+    states = [_values(m)["state"] for m in stack.status.messages]
+    assert states.count("DONE") == len(states) - states.index("DONE")

@@ -34,6 +34,7 @@ import dataclasses
 import math
 import threading
 import time
+from types import SimpleNamespace
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -84,12 +85,14 @@ class PtpState(Choice):
     DONE = "DONE"
     INVALID_GOAL = "INVALID_GOAL"
     STALE_STATE = "STALE_STATE"
+    CONFLICTING_STATE = "CONFLICTING_STATE"
 
 
 STATE_LEVELS = {
     PtpState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
     PtpState.INVALID_GOAL: DiagnosticStatus.ERROR,
     PtpState.STALE_STATE: DiagnosticStatus.ERROR,
+    PtpState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
 }
 
 PARAMETERS = (
@@ -188,6 +191,9 @@ class PtpNode(Node):
         self._generation = 0
         self._planned: tuple[int, object, float] | None = None  # (goal, plan, monotonic time)
         self._last_status: DiagnosticStatus | None = None
+        # the graph, read once a second: joint_states sources, other joint commanders
+        self._state_publishers: list[str] = []
+        self._commanders: list[str] = []
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -205,6 +211,7 @@ class PtpNode(Node):
             self._output = self.create_publisher(
                 Float64MultiArray, "joint_velocities", QoSProfile(depth=1)
             )
+        self._output_topic = self._output.topic_name
         self._status = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
         self._diagnostics = self.create_publisher(
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
@@ -244,8 +251,9 @@ class PtpNode(Node):
             self._odom_received = time.monotonic()
 
     def _on_goal(self, msg: JointState) -> None:
-        if self._theta is None or self._fault(time.monotonic()) is not None:
-            self._reject("no fresh joint_states yet")
+        fault = self._fault(time.monotonic())
+        if self._theta is None or fault is not None:
+            self._reject(fault[1] if fault is not None else "no joint_states yet")
             return
         theta = self._theta.copy()
         try:
@@ -348,23 +356,24 @@ class PtpNode(Node):
             with self._lock:
                 ready = self._planned[2] if self._planned is not None else None
             if ready is None or now - ready < PLANNING_GRACE:
-                self._publish_status(self._mode, f"{self._detail} (waiting: {fault})")
+                self._publish_status(self._mode, f"{self._detail} (waiting: {fault[1]})")
                 return
         if fault is not None:
-            if self._mode is not PtpState.STALE_STATE:
+            state, text = fault
+            if self._mode is not state:
                 abandoned = "; the plan is abandoned" if self.plan is not None else ""
                 self.get_logger().error(
-                    f"STALE_STATE: {fault}; joints commanded to rest{abandoned}"
+                    f"{state.value}: {text}; joints commanded to rest{abandoned}"
                 )
                 self._stop_output()
                 self.plan = None
                 with self._lock:
                     self._generation += 1
                     self._planned = None
-            self._mode, self._detail = PtpState.STALE_STATE, fault
-            self._publish_status(self._mode, fault)
+            self._mode, self._detail = state, text
+            self._publish_status(self._mode, text)
             return
-        if self._mode in (PtpState.STALE_STATE, PtpState.WAITING_FOR_STATE):
+        if self._mode in FAULTS or self._mode is PtpState.WAITING_FOR_STATE:
             self._mode, self._detail = PtpState.IDLE, ""
         if self._mode is PtpState.PLANNING:
             self._take_plan()
@@ -422,13 +431,23 @@ class PtpNode(Node):
             return
         self._publish_output(positions, velocities)
 
-    def _fault(self, now: float) -> str | None:
+    def _fault(self, now: float) -> tuple[PtpState, str] | None:
+        """(state, reason) when the measured state cannot be trusted: two sources or stale."""
+        if len(self._state_publishers) > 1:
+            return (
+                PtpState.CONFLICTING_STATE,
+                f"{len(self._state_publishers)} publishers on {self._state_topic} "
+                f"({', '.join(self._state_publishers)}): remap to exactly one source",
+            )
         timeout = self._params["state_timeout"]
         age = now - self._state_received
         if age > timeout:
-            return f"joint_states {age:.3f} s old (state_timeout {timeout} s)"
+            return PtpState.STALE_STATE, f"joint_states {age:.3f} s old (state_timeout {timeout} s)"
         if self._odom_received is not None and now - self._odom_received > timeout:
-            return f"base_odom {now - self._odom_received:.3f} s old (state_timeout {timeout} s)"
+            return (
+                PtpState.STALE_STATE,
+                f"base_odom {now - self._odom_received:.3f} s old (state_timeout {timeout} s)",
+            )
         return None
 
     def _stop_output(self) -> None:
@@ -491,6 +510,12 @@ class PtpNode(Node):
         message = f"{state.value}: {detail}" if detail else state.value
         if self._rejected and state is not PtpState.INVALID_GOAL:
             message += f"; last goal rejected: {self._rejected}"
+        if self._commanders:
+            level = max(level, DiagnosticStatus.WARN, key=_level_rank)
+            message += (
+                f"; {', '.join(self._commanders)} also publish(es) on {self._output_topic}: "
+                "run only one of rns_controller / rns_ptp"
+            )
         status = DiagnosticStatus(
             level=level,
             name=f"{self.get_name()}: point-to-point motion",
@@ -507,11 +532,36 @@ class PtpNode(Node):
         self._status.publish(msg)
 
     def _on_diagnostics(self) -> None:
+        self._check_graph()
         if self._last_status is None:
             return
         msg = DiagnosticArray(status=[self._last_status])
         msg.header.stamp = self.get_clock().now().to_msg()
         self._diagnostics.publish(msg)
+
+    def _check_graph(self) -> None:
+        """Who publishes joint_states (more than one source is a fault: the plan would start
+        from one robot's angles and the watchdog be fed by another) and who else commands the
+        joints on our output topic (reported: two commanders make the arm jerk between them)."""
+        self._state_publishers = _node_names(
+            info
+            for info in self.get_publishers_info_by_topic(self._state_topic)
+            if info.topic_type == "sensor_msgs/msg/JointState"
+        )
+        me = _node_names(
+            [SimpleNamespace(node_name=self.get_name(), node_namespace=self.get_namespace())]
+        )
+        commanders = [
+            name
+            for name in _node_names(self.get_publishers_info_by_topic(self._output_topic))
+            if name not in me
+        ]
+        for name in set(commanders) - set(self._commanders):
+            self.get_logger().warn(
+                f"{name} also publishes on {self._output_topic}: only one of rns_controller / "
+                "rns_ptp may command the joints at a time"
+            )
+        self._commanders = commanders
 
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""
@@ -533,6 +583,21 @@ def _settings(params: dict) -> PtpSettings:
         "deploy_duration": float(params["deploy_duration"]),
     }
     return PtpSettings(**{k: v for k, v in values.items() if k in fields})
+
+
+#: States in which the measured state cannot be trusted (zero output, the plan abandoned).
+FAULTS = (PtpState.STALE_STATE, PtpState.CONFLICTING_STATE)
+
+
+def _node_names(infos) -> list[str]:
+    return [
+        f"{info.node_namespace.rstrip('/')}/{info.node_name}" if info.node_name else "?"
+        for info in infos
+    ]
+
+
+def _level_rank(level) -> int:
+    return level[0] if isinstance(level, bytes) else int(level)
 
 
 def _text(value) -> str:

@@ -365,3 +365,40 @@ def test_a_new_goal_replaces_the_current_plan(ros):
     # the first motion was cut short: no DONE before the second goal's
     states = [_values(m)["state"] for m in stack.status.messages]
     assert states.count("DONE") == len(states) - states.index("DONE")
+
+
+def test_two_joint_state_sources_stop_the_arm_and_a_second_commander_is_reported(ros):
+    stack = _stack(ros, method="joint_space", duration=3.0)
+    _ready(ros, stack)
+    commander = ros.probe("other_commander")
+    other = commander.create_publisher(JointTrajectory, "joint_references", 1)
+    assert ros.spin_until(
+        lambda: "other_commander" in stack.status.messages[-1].status[0].message, timeout=3.0
+    )
+    entry = stack.status.messages[-1].status[0]
+    assert entry.level == entry.WARN
+    assert "run only one of rns_controller / rns_ptp" in entry.message
+    commander.destroy_publisher(other)
+    _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    _node(ros, SimulatorNode)  # a second robot on the same joint_states
+    assert ros.spin_until(lambda: _state(stack) == "CONFLICTING_STATE", timeout=3.0)
+    ros.spin_for(0.2)
+    assert np.all(np.array(stack.references.messages[-1].points[0].velocities) == 0.0)
+    assert "2 publishers on /joint_states" in stack.status.messages[-1].status[0].message
+    assert stack.ptp.plan is None
+
+
+def test_shutdown_publishes_zero_velocity(ros):
+    stack = _stack(ros, method="joint_space", duration=3.0)
+    _ready(ros, stack)
+    _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    ros.spin_for(0.5)
+    assert np.abs(stack.references.messages[-1].points[0].velocities).max() > 0.01
+    ros.detach(stack.ptp)
+    count = len(stack.references.messages)
+    stack.ptp.destroy_node()
+    assert ros.spin_until(lambda: len(stack.references.messages) > count, timeout=2.0)
+    ros.spin_for(0.2)
+    assert np.all(np.array(stack.references.messages[-1].points[0].velocities) == 0.0)

@@ -19,12 +19,12 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
+from rns_ros.analysis.ptp_runs import run_plan
 from rns_ros.control.ptp import plan_ptp
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.ptp import PARAMETERS, PtpNode
 from rns_ros.nodes.simulator import SATELLITE_OBSERVATION_RAD, SimulatorNode
-from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -74,23 +74,6 @@ def _odom_rotation(msg: Odometry) -> np.ndarray:
     return pin.Quaternion(o.w, o.x, o.y, o.z).toRotationMatrix()
 
 
-def _core_deviation(robot, plan, period=0.01, dt=1e-3) -> float:
-    """Max base attitude deviation [rad] of the node's playback of ``plan`` on the core kinematic
-    simulator: theta_dot = plan rate at mid-period, held for each period."""
-    q0 = robot.configuration(START, np.zeros(3), np.array([0.0, 0.0, 0.0, 1.0]))
-    simulator = FreeFloatingSimulator(robot, dt=dt, initial_q=q0)
-    r0 = pin.XYZQUATToSE3(q0[:7]).rotation
-    worst, t = 0.0, 0.0
-    while t < plan.duration:
-        simulator.set_reference(velocities=plan.sample(t + period / 2).theta_dot)
-        for _ in range(round(period / dt)):
-            simulator.step()
-        t += period
-        rotation = pin.XYZQUATToSE3(simulator.q[:7]).rotation
-        worst = max(worst, attitude_deviation(r0, rotation))
-    return worst
-
-
 def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
     stack = _stack(ros, method="joint_space", duration=2.0)
     _ready(ros, stack)
@@ -113,7 +96,7 @@ def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
     odom = stack.odom.messages
     dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
     plan = plan_ptp(stack.ptp.robot, START, goal, "joint_space", stack.ptp.settings)
-    core = _core_deviation(stack.ptp.robot, plan)
+    core = run_plan(stack.ptp.robot, plan, rate=100.0).max_base_deviation
     print(f"base deviation over DDS {math.degrees(dds):.4e} deg, core {math.degrees(core):.4e}")
     assert core > 0.0
     assert dds == pytest.approx(core, rel=0.2)

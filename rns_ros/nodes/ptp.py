@@ -195,6 +195,7 @@ class PtpNode(Node):
         self._state_publishers: list[str] = []
         self._commanders: list[str] = []
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
+        self._deferred: tuple[JointState, float] | None = None  # (goal, monotonic stop time)
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self.create_subscription(JointState, "ptp_goal", self._on_goal, QoSProfile(depth=10))
@@ -261,11 +262,26 @@ class PtpNode(Node):
         except InputError as exc:
             self._reject(str(exc))
             return
+        self._rejected = ""
+        with self._lock:
+            self._generation += 1  # a plan still being computed for an older goal is dropped
+            self._planned = None
+        if self._deferred is not None:  # still stopping for an earlier goal: this one replaces it
+            self._deferred = (msg, self._deferred[1])
+            return
         if self.plan is not None and self._mode in (PtpState.MOVING, PtpState.CANCELLING):
+            # the arm moves: stop it and plan from where it comes to rest, sampled by a joint
+            # state received after the stop (joint_states lag by up to a publish period)
             self.get_logger().info("new goal: the current motion stops and is replaced")
             self._stop_output()
+            self.plan = None
+            self._deferred = (msg, time.monotonic())
+            self._mode, self._detail = PtpState.PLANNING, "stopping for the new goal"
+            return
+        self._start_planning(theta, goal)
+
+    def _start_planning(self, theta: np.ndarray, goal: np.ndarray | None) -> None:
         self.plan = None
-        self._rejected = ""
         self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
         with self._lock:
             self._generation += 1
@@ -335,6 +351,7 @@ class PtpNode(Node):
             with self._lock:
                 self._generation += 1
                 self._planned = None
+            self._deferred = None
             self._mode, self._detail = PtpState.IDLE, "planning cancelled"
             response.success, response.message = True, "planning cancelled; the arm is at rest"
         else:
@@ -355,6 +372,8 @@ class PtpNode(Node):
         if fault is not None and self._mode is PtpState.PLANNING:
             with self._lock:
                 ready = self._planned[2] if self._planned is not None else None
+            if self._deferred is not None:
+                ready = self._deferred[1]
             if ready is None or now - ready < PLANNING_GRACE:
                 self._publish_status(self._mode, f"{self._detail} (waiting: {fault[1]})")
                 return
@@ -367,6 +386,7 @@ class PtpNode(Node):
                 )
                 self._stop_output()
                 self.plan = None
+                self._deferred = None
                 with self._lock:
                     self._generation += 1
                     self._planned = None
@@ -375,6 +395,8 @@ class PtpNode(Node):
             return
         if self._mode in FAULTS or self._mode is PtpState.WAITING_FOR_STATE:
             self._mode, self._detail = PtpState.IDLE, ""
+        if self._mode is PtpState.PLANNING and self._deferred is not None:
+            self._start_deferred(now)
         if self._mode is PtpState.PLANNING:
             self._take_plan()
             if self._mode is PtpState.MOVING:
@@ -382,6 +404,22 @@ class PtpNode(Node):
         if self._mode in (PtpState.MOVING, PtpState.CANCELLING):
             self._play(elapsed)
         self._publish_status(self._mode, self._detail)
+
+    def _start_deferred(self, now: float) -> None:
+        """Plan the goal that arrived during a motion once a joint state received at least two
+        periods after the stop shows where the arm came to rest."""
+        msg, stopped = self._deferred
+        if self._state_received < stopped + 2.0 * self._period:
+            return
+        self._deferred = None
+        theta = self._theta.copy()
+        try:  # joints the goal does not name keep the angles where the arm stopped
+            goal = None if list(msg.name) == DEPLOY_GOAL else self.goal_positions(msg, theta)
+        except InputError as exc:
+            self._mode = PtpState.IDLE
+            self._reject(str(exc))
+            return
+        self._start_planning(theta, goal)
 
     def _take_plan(self) -> None:
         with self._lock:

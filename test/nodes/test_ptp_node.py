@@ -333,18 +333,29 @@ def test_velocity_interface_and_a_planned_closed_loop_method(ros):
 
 
 def test_a_new_goal_replaces_the_current_plan(ros):
-    stack = _stack(ros, method="joint_space", duration=2.0)
+    """A goal in the middle of a fast motion (~0.5 rad/s): the arm stops, the goal is planned
+    from where it came to rest (a joint state sampled after the stop), and is reached."""
+    stack = _stack(ros, method="joint_space", duration=1.0)
     _ready(ros, stack)
     _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
     ros.spin_for(0.5)
+    assert np.abs(stack.references.messages[-1].points[0].velocities).max() > 0.3
     second = START - SMALL_STEP
-    _send(stack, JOINTS, second)
+    _send(
+        stack,
+        ["joint_1", "joint_2", "joint_3", "joint_5", "joint_6", "joint_7"],
+        np.delete(second, 3),
+    )
     assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
     ros.spin_for(0.3)
     final = np.array(stack.joints.messages[-1].position)
-    assert np.degrees(np.abs(final - second)).max() < 0.1
-    assert np.allclose(stack.ptp.plan.goal, second)
+    goal = stack.ptp.plan.goal
+    assert np.allclose(np.delete(goal, 3), np.delete(second, 3))
+    # joint_4 was not named: it keeps the angle where the arm came to rest
+    print(f"replaced goal: final error {np.degrees(np.abs(final - goal)).max():.2e} deg")
+    assert np.degrees(np.abs(final - goal)).max() < 0.1
+    assert np.degrees(abs(final[3] - START[3])) > 1.0
     # the first motion was cut short: no DONE before the second goal's
     states = [_values(m)["state"] for m in stack.status.messages]
     assert states.count("DONE") == len(states) - states.index("DONE")

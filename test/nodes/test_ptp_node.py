@@ -396,3 +396,33 @@ def test_shutdown_publishes_zero_velocity(ros):
     assert ros.spin_until(lambda: len(stack.references.messages) > count, timeout=2.0)
     ros.spin_for(0.2)
     assert np.all(np.array(stack.references.messages[-1].points[0].velocities) == 0.0)
+
+
+def test_dynamic_simulator_follows_the_positions_of_the_plan(ros):
+    """Dynamic mode: the simulator's joint servo tracks positions + velocities (the trajectory
+    contract); the goal is reached and a second cancel finds nothing to cancel."""
+    _node(ros, SimulatorNode, mode="dynamic")
+    ptp = _node(ros, PtpNode, method="joint_space", duration=2.0)
+    probe = ros.probe()
+    stack = SimpleNamespace(
+        probe=probe,
+        goal=probe.create_publisher(JointState, "ptp_goal", 10),
+        status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
+        joints=Recorder(probe, JointState, "joint_states"),
+    )
+    _ready(ros, stack)
+    goal = START + SMALL_STEP
+    _send(stack, JOINTS, goal)
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
+    ros.spin_for(0.3)
+    final = np.array(stack.joints.messages[-1].position)
+    error = np.degrees(np.abs(final - goal)).max()
+    print(f"dynamic mode: final joint error {error:.2e} deg")
+    assert error < 0.1
+    assert np.allclose(ptp.plan.goal, goal)
+    client = probe.create_client(Trigger, "rns_ptp/cancel")
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(Trigger.Request())
+    assert ros.spin_until(future.done, timeout=5.0)
+    assert not future.result().success
+    assert "nothing to cancel (DONE)" in future.result().message

@@ -164,11 +164,8 @@ def test_model_with_a_nan_inertia_is_one_line_naming_the_link_and_exit_2(tmp_pat
 
 
 # --- Ctrl-C during start-up ------------------------------------------------------------------
-@pytest.mark.parametrize("delay", [0.3])
-@pytest.mark.parametrize("executable", CHECKED)
-def test_ctrl_c_during_start_up_exits_0_without_a_traceback(executable, delay, tmp_path):
-    # 0.3 s: still importing numpy / Pinocchio / rclpy (~0.4 s), where Python's own handler
-    # would raise KeyboardInterrupt. The keyboard teleop needs a terminal to get that far.
+def _interrupt_after(executable: str, delay: float, tmp_path) -> tuple[int, str]:
+    """Start ``executable``, send SIGINT after ``delay`` [s]; (exit code, stderr)."""
     master, slave = pty.openpty()
     stdin = slave if executable == "rns_teleop_keyboard" else subprocess.DEVNULL
     args = ["--no-record"] if executable == "rns_demo" else []
@@ -194,13 +191,27 @@ def test_ctrl_c_during_start_up_exits_0_without_a_traceback(executable, delay, t
                     break
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-        err = proc.stderr.read().decode(errors="replace")
-        assert proc.wait() == 0, err[-3000:]
-        assert "Traceback" not in err, err[-3000:]
-        assert "KeyboardInterrupt" not in err, err[-3000:]
+        return proc.wait(), proc.stderr.read().decode(errors="replace")
     finally:
         os.close(master)
         proc.stderr.close()
+
+
+@pytest.mark.parametrize("executable", CHECKED)
+def test_ctrl_c_during_start_up_exits_0_without_a_traceback(executable, tmp_path):
+    """0.3 s: still importing numpy / Pinocchio / rclpy (~0.4 s), where Python's own handler
+    would raise KeyboardInterrupt. The keyboard teleop needs a terminal to get that far. On a
+    loaded machine the interpreter itself may still be starting at 0.3 s: an interrupt whose
+    traceback holds no frame of an rns_ros/ file landed before any of our code ran (nothing of
+    ours can handle it), so that attempt is repeated later, up to 1.2 s."""
+    for delay in (0.3, 0.6, 1.2):
+        code, err = _interrupt_after(executable, delay, tmp_path)
+        before_our_code = code != 0 and "Traceback" in err and "rns_ros/" not in err
+        if not before_our_code:
+            break
+    assert code == 0, err[-3000:]
+    assert "Traceback" not in err, err[-3000:]
+    assert "KeyboardInterrupt" not in err, err[-3000:]
 
 
 # --- unknown -p names --------------------------------------------------------------------------

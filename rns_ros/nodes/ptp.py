@@ -423,9 +423,12 @@ class PtpNode(Node):
 
     def _take_plan(self) -> None:
         with self._lock:
-            planned, self._planned = self._planned, None
-        if planned is None:
-            return
+            planned = self._planned
+            # a plan starts only on a joint state received after it was ready: the planning
+            # thread holds the GIL, and the last state before it may be close to stale already
+            if planned is None or self._state_received < planned[2]:
+                return
+            self._planned = None
         result = planned[1]
         if isinstance(result, RnsError):
             self._mode = PtpState.IDLE  # nothing moves; _reject reports INVALID_GOAL

@@ -436,7 +436,7 @@ def test_a_diverged_step_stops_the_simulation_until_reset(ros):
     assert len({_sim_seconds(m) for m in held}) == 1  # simulated time stopped
     diverged = [e for e in errors if "diverged" in e]
     assert len(diverged) == 1, errors
-    assert "non-finite q and v" in diverged[0]
+    assert "non-finite" in diverged[0]  # q and v, or v alone: depends on the RK4 stage hit
 
     assert client.wait_for_service(timeout_sec=5.0)
     future = client.call_async(Trigger.Request())

@@ -75,6 +75,7 @@ from rns_ros.nodes.parameters import (
     velocity_joint_order,
 )
 from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.status import level_rank, node_names, status_text, type_name
 from rns_ros.resources import default_model_config
 
 NODE_NAME = "rns_controller"
@@ -576,7 +577,7 @@ class ControllerNode(Node):
         level = STATE_LEVELS.get(state, DiagnosticStatus.WARN)
         message = f"{state.value}: {detail}" if detail else state.value
         if self._advisories:
-            level = max(level, DiagnosticStatus.WARN, key=_level_rank)
+            level = max(level, DiagnosticStatus.WARN, key=level_rank)
             message = "; ".join([message, *self._advisories])
         self._last_state = state
         status = DiagnosticStatus(
@@ -585,7 +586,7 @@ class ControllerNode(Node):
             message=message,
             hardware_id=self.robot.name,
             values=[
-                KeyValue(key=key, value=_text(value))
+                KeyValue(key=key, value=status_text(value))
                 for key, value in {"state": state.value, **values}.items()
             ],
         )
@@ -607,7 +608,7 @@ class ControllerNode(Node):
         """Read the graph: more than one joint_states source is a fault (two robots' states
         interleaved make the law reverse at every message); more than one command source, or a
         command publisher of the other message type (its messages never arrive), is reported."""
-        expected = _type_name(self._command_type)
+        expected = type_name(self._command_type)
         commands, others = [], []
         for info in self.get_publishers_info_by_topic(self._topics["cmd_twist"]):
             (commands if info.topic_type == expected else others).append(info)
@@ -615,27 +616,27 @@ class ControllerNode(Node):
         if len(commands) > 1:
             advisories.append(
                 f"{len(commands)} publishers on {self._topics['cmd_twist']} "
-                f"({', '.join(_node_names(commands))}): their commands interleave"
+                f"({', '.join(node_names(commands))}): their commands interleave"
             )
         for info in others:
             if info.topic_type not in self._warned_types:
                 self._warned_types.add(info.topic_type)
                 other = "false" if self._command_type is TwistStamped else "true"
                 self.get_logger().warn(
-                    f"{_node_names([info])[0]} publishes {info.topic_type} on "
+                    f"{node_names([info])[0]} publishes {info.topic_type} on "
                     f"{self._topics['cmd_twist']}, but this controller takes {expected}: those "
                     f"commands are dropped; restart with -p twist_stamped:={other} (or make the "
                     "teleop publish the other type)"
                 )
             advisories.append(
-                f"{_node_names([info])[0]} publishes {info.topic_type}, ignored: set "
+                f"{node_names([info])[0]} publishes {info.topic_type}, ignored: set "
                 f"twist_stamped:={'false' if self._command_type is TwistStamped else 'true'}"
             )
         self._advisories = advisories
-        self._state_publishers = _node_names(
+        self._state_publishers = node_names(
             info
             for info in self.get_publishers_info_by_topic(self._topics["joint_states"])
-            if info.topic_type == _type_name(JointState)
+            if info.topic_type == type_name(JointState)
         )
 
     # --- parameters, shutdown ---------------------------------------------------------------------
@@ -690,31 +691,6 @@ class ControllerNode(Node):
             except Exception as exc:  # the context may already be shut down (Ctrl-C)
                 self.get_logger().warn(f"could not publish the final zero velocity: {exc}")
         super().destroy_node()
-
-
-def _type_name(msg_type) -> str:
-    """'geometry_msgs/msg/TwistStamped' for the class TwistStamped (the graph's spelling)."""
-    module = msg_type.__module__.split(".")
-    return f"{module[0]}/msg/{msg_type.__name__}"
-
-
-def _node_names(infos) -> list[str]:
-    return [
-        f"{info.node_namespace.rstrip('/')}/{info.node_name}" if info.node_name else "?"
-        for info in infos
-    ]
-
-
-def _level_rank(level) -> int:
-    return level[0] if isinstance(level, bytes) else int(level)
-
-
-def _text(value) -> str:
-    if isinstance(value, np.ndarray):
-        return " ".join(f"{x:.6g}" for x in value)
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
 
 
 def main(args=None) -> int:

@@ -62,6 +62,7 @@ from rns_ros.nodes.parameters import (
     velocity_joint_order,
 )
 from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.status import level_rank, node_names, status_text
 from rns_ros.resources import default_model_config
 
 NODE_NAME = "rns_ptp"
@@ -552,7 +553,7 @@ class PtpNode(Node):
         if self._rejected and state is not PtpState.INVALID_GOAL:
             message += f"; last goal rejected: {self._rejected}"
         if self._commanders:
-            level = max(level, DiagnosticStatus.WARN, key=_level_rank)
+            level = max(level, DiagnosticStatus.WARN, key=level_rank)
             message += (
                 f"; {', '.join(self._commanders)} also publish(es) on {self._output_topic}: "
                 "run only one of rns_controller / rns_ptp"
@@ -563,7 +564,7 @@ class PtpNode(Node):
             message=message,
             hardware_id=self.robot.name,
             values=[
-                KeyValue(key=key, value=_text(value))
+                KeyValue(key=key, value=status_text(value))
                 for key, value in {"state": state.value, **self._values(state)}.items()
             ],
         )
@@ -584,17 +585,17 @@ class PtpNode(Node):
         """Who publishes joint_states (more than one source is a fault: the plan would start
         from one robot's angles and the watchdog be fed by another) and who else commands the
         joints on our output topic (reported: two commanders make the arm jerk between them)."""
-        self._state_publishers = _node_names(
+        self._state_publishers = node_names(
             info
             for info in self.get_publishers_info_by_topic(self._state_topic)
             if info.topic_type == "sensor_msgs/msg/JointState"
         )
-        me = _node_names(
+        me = node_names(
             [SimpleNamespace(node_name=self.get_name(), node_namespace=self.get_namespace())]
         )
         commanders = [
             name
-            for name in _node_names(self.get_publishers_info_by_topic(self._output_topic))
+            for name in node_names(self.get_publishers_info_by_topic(self._output_topic))
             if name not in me
         ]
         for name in set(commanders) - set(self._commanders):
@@ -628,25 +629,6 @@ def _settings(params: dict) -> PtpSettings:
 
 #: States in which the measured state cannot be trusted (zero output, the plan abandoned).
 FAULTS = (PtpState.STALE_STATE, PtpState.CONFLICTING_STATE)
-
-
-def _node_names(infos) -> list[str]:
-    return [
-        f"{info.node_namespace.rstrip('/')}/{info.node_name}" if info.node_name else "?"
-        for info in infos
-    ]
-
-
-def _level_rank(level) -> int:
-    return level[0] if isinstance(level, bytes) else int(level)
-
-
-def _text(value) -> str:
-    if isinstance(value, np.ndarray):
-        return " ".join(f"{x:.6g}" for x in value)
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
 
 
 def main(args=None) -> int:

@@ -43,7 +43,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.controller import (
     ControllerSettings,
@@ -74,6 +74,7 @@ from rns_ros.nodes.parameters import (
     specs_by_name,
     velocity_joint_order,
 )
+from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import run_node
 from rns_ros.nodes.status import level_rank, node_names, status_text, type_name
 from rns_ros.resources import default_model_config
@@ -301,9 +302,10 @@ class ControllerNode(Node):
             name: self.resolve_topic_name(name) for name in ("cmd_twist", "joint_states")
         }
 
-        self._trajectory = params["output_interface"] == "trajectory"
+        trajectory = params["output_interface"] == "trajectory"
         output_qos = QoSProfile(depth=1)
-        if self._trajectory:
+        self._velocity_order = None  # JointTrajectory output
+        if trajectory:
             self._output = self.create_publisher(JointTrajectory, "joint_references", output_qos)
         else:
             # ros2_control convention: data[p[i]] is model joint i (see velocity_joint_order)
@@ -409,13 +411,9 @@ class ControllerNode(Node):
         )
 
     def _on_odom(self, msg: Odometry) -> None:
-        pose = msg.pose.pose
-        position = np.array([pose.position.x, pose.position.y, pose.position.z])
-        o = pose.orientation
-        orientation = np.array([o.x, o.y, o.z, o.w])
-        norm = np.linalg.norm(orientation)
-        if np.all(np.isfinite(position)) and np.isfinite(norm) and norm > 0.5:
-            self._base_position, self._base_orientation = position, orientation / norm
+        pose = base_pose(msg)
+        if pose is not None:
+            self._base_position, self._base_orientation = pose
             self._odom_received = time.monotonic()
 
     # --- control period -------------------------------------------------------------------------
@@ -475,25 +473,15 @@ class ControllerNode(Node):
 
     def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:
         """(state, detail) when the measured state cannot be trusted: stale or two sources."""
-        if len(self._state_publishers) > 1:
-            return (
-                ControllerState.CONFLICTING_STATE,
-                f"{len(self._state_publishers)} publishers on {self._topics['joint_states']} "
-                f"({', '.join(self._state_publishers)}): remap to exactly one source",
-            )
-        timeout = self._params["state_timeout"]
-        age = now - self._state_received
-        if age > timeout:
-            return (
-                ControllerState.STALE_STATE,
-                f"joint_states {age:.3f} s old (state_timeout {timeout} s)",
-            )
-        if self._odom_received is not None and now - self._odom_received > timeout:
-            return (
-                ControllerState.STALE_STATE,
-                f"base_odom {now - self._odom_received:.3f} s old (state_timeout {timeout} s)",
-            )
-        return None
+        problem = measured_state_problem(
+            now,
+            self._state_publishers,
+            self._topics["joint_states"],
+            self._state_received,
+            self._odom_received,
+            self._params["state_timeout"],
+        )
+        return None if problem is None else (ControllerState(problem[0]), problem[1])
 
     def _hold_still(self, state: ControllerState, detail: str) -> None:
         """Publish zero velocity where the reference stands, report ``state``; the next good
@@ -543,18 +531,12 @@ class ControllerNode(Node):
         )
 
     def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
-        if self._trajectory:
-            msg = JointTrajectory()
-            msg.header.stamp = self.get_clock().now().to_msg()
-            msg.joint_names = list(self.robot.joint_names)
-            msg.points = [
-                JointTrajectoryPoint(positions=positions.tolist(), velocities=velocities.tolist())
-            ]
-        else:
-            data = np.empty(self.robot.n)
-            data[self._velocity_order] = velocities
-            msg = Float64MultiArray(data=data.tolist())
-        self._output.publish(msg)
+        stamp = self.get_clock().now().to_msg()
+        self._output.publish(
+            joint_command(
+                stamp, self.robot.joint_names, positions, velocities, self._velocity_order
+            )
+        )
 
     def _step_values(self, step: ControllerStep, gate: GateOutput) -> dict:
         out = step.output

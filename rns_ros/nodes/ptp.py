@@ -46,7 +46,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.ptp import PtpMethod, PtpSettings, plan_deployment, plan_ptp
 from rns_ros.core import FreeFloatingState, load_model
@@ -61,6 +61,7 @@ from rns_ros.nodes.parameters import (
     declare_parameters,
     velocity_joint_order,
 )
+from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import run_node
 from rns_ros.nodes.status import level_rank, node_names, status_text
 from rns_ros.resources import default_model_config
@@ -203,8 +204,9 @@ class PtpNode(Node):
         self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
         self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
         self._state_topic = self.resolve_topic_name("joint_states")
-        self._trajectory = params["output_interface"] == "trajectory"
-        if self._trajectory:
+        trajectory = params["output_interface"] == "trajectory"
+        self._velocity_order = None  # JointTrajectory output
+        if trajectory:
             self._output = self.create_publisher(
                 JointTrajectory, "joint_references", QoSProfile(depth=1)
             )
@@ -243,13 +245,9 @@ class PtpNode(Node):
         self._state_received = time.monotonic()
 
     def _on_odom(self, msg: Odometry) -> None:
-        pose = msg.pose.pose
-        position = np.array([pose.position.x, pose.position.y, pose.position.z])
-        o = pose.orientation
-        orientation = np.array([o.x, o.y, o.z, o.w])
-        norm = np.linalg.norm(orientation)
-        if np.all(np.isfinite(position)) and np.isfinite(norm) and norm > 0.5:
-            self._base_position, self._base_orientation = position, orientation / norm
+        pose = base_pose(msg)
+        if pose is not None:
+            self._base_position, self._base_orientation = pose
             self._odom_received = time.monotonic()
 
     def _on_goal(self, msg: JointState) -> None:
@@ -475,22 +473,15 @@ class PtpNode(Node):
 
     def _fault(self, now: float) -> tuple[PtpState, str] | None:
         """(state, reason) when the measured state cannot be trusted: two sources or stale."""
-        if len(self._state_publishers) > 1:
-            return (
-                PtpState.CONFLICTING_STATE,
-                f"{len(self._state_publishers)} publishers on {self._state_topic} "
-                f"({', '.join(self._state_publishers)}): remap to exactly one source",
-            )
-        timeout = self._params["state_timeout"]
-        age = now - self._state_received
-        if age > timeout:
-            return PtpState.STALE_STATE, f"joint_states {age:.3f} s old (state_timeout {timeout} s)"
-        if self._odom_received is not None and now - self._odom_received > timeout:
-            return (
-                PtpState.STALE_STATE,
-                f"base_odom {now - self._odom_received:.3f} s old (state_timeout {timeout} s)",
-            )
-        return None
+        problem = measured_state_problem(
+            now,
+            self._state_publishers,
+            self._state_topic,
+            self._state_received,
+            self._odom_received,
+            self._params["state_timeout"],
+        )
+        return None if problem is None else (PtpState(problem[0]), problem[1])
 
     def _stop_output(self) -> None:
         if self._theta is not None:
@@ -498,21 +489,12 @@ class PtpNode(Node):
 
     def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
         self._velocities = velocities
-        if self._trajectory:
-            msg = JointTrajectory()
-            msg.header.stamp = self.get_clock().now().to_msg()
-            msg.joint_names = list(self.robot.joint_names)
-            msg.points = [
-                JointTrajectoryPoint(
-                    positions=np.asarray(positions, dtype=float).tolist(),
-                    velocities=np.asarray(velocities, dtype=float).tolist(),
-                )
-            ]
-        else:
-            data = np.empty(self.robot.n)
-            data[self._velocity_order] = velocities
-            msg = Float64MultiArray(data=data.tolist())
-        self._output.publish(msg)
+        stamp = self.get_clock().now().to_msg()
+        self._output.publish(
+            joint_command(
+                stamp, self.robot.joint_names, positions, velocities, self._velocity_order
+            )
+        )
 
     # --- status ---------------------------------------------------------------------------------
     def _values(self, state: PtpState) -> dict:

@@ -255,19 +255,7 @@ def reactionless_path(
     turning, kinks, min_n4, reached, arc = [], [], abs(float(n[elbow])), False, 0.0
     while arc < max_arc - 1e-12:
         h = min(step, max_arc - arc)
-        k1 = n
-        x = theta.copy()
-        x[p] += 0.5 * h * k1
-        k2 = null(x, k1)
-        x = theta.copy()
-        x[p] += 0.5 * h * k2
-        k3 = null(x, k2)
-        x = theta.copy()
-        x[p] += h * k3
-        k4 = null(x, k3)
-        new = theta.copy()
-        new[p] += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        n_new = null(new, k4)
+        new, n_new = _rk4_step(null, theta, n, h, p)
         min_n4 = min(min_n4, abs(float(n_new[elbow])))
         elbow_before, elbow_after = theta[p[-1]], new[p[-1]]
         if (elbow_after - theta4_target) * sense >= 0.0:
@@ -303,9 +291,9 @@ def reactionless_path(
     )
 
 
-def _refine(null: _NullVector, theta, n, h, fraction, p):
-    """One RK4 step of length ``fraction * h`` from (theta, n): (theta, n, length, True)."""
-    h = float(np.clip(fraction, 0.0, 1.0)) * h
+def _rk4_step(null: _NullVector, theta, n, h, p) -> tuple[np.ndarray, np.ndarray]:
+    """One RK4 step of arc length ``h`` [rad] along d theta_P / d sigma = n(theta) from
+    (theta, n): (theta [rad] (n_joints,), unit n at it, sign-continuous)."""
     k1 = n
     x = theta.copy()
     x[p] += 0.5 * h * k1
@@ -318,7 +306,14 @@ def _refine(null: _NullVector, theta, n, h, fraction, p):
     k4 = null(x, k3)
     new = theta.copy()
     new[p] += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return new, null(new, k4), h, True
+    return new, null(new, k4)
+
+
+def _refine(null: _NullVector, theta, n, h, fraction, p):
+    """One RK4 step of length ``fraction * h`` from (theta, n): (theta, n, length, True)."""
+    h = float(np.clip(fraction, 0.0, 1.0)) * h
+    new, n_new = _rk4_step(null, theta, n, h, p)
+    return new, n_new, h, True
 
 
 # segments ------------------------------------------------------------------------------------

@@ -140,3 +140,43 @@ def check_reference_positions(
             f"{current[joint]:.4g} rad; allowed [{current[joint] - max_error:.4g}, "
             f"{current[joint] + max_error:.4g}] rad (max_reference_error {max_error} rad)"
         )
+
+
+def partial_joint_goal(
+    names: Sequence[str],
+    positions: Sequence[float],
+    model_joints: Sequence[str],
+    current: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> np.ndarray:
+    """A goal configuration [rad], shape (n,): the named joints at ``positions``, the others at
+    their ``current`` angle (model order, like ``lower`` and ``upper`` [rad]).
+
+    Raises:
+        InputError: no names, unknown or duplicated names, a length mismatch, non-finite values,
+            or a goal outside the URDF limits (the message names the joint and the range).
+    """
+    names, positions, model = list(names), list(positions), list(model_joints)
+    if not names:
+        raise InputError("goal names no joint")
+    if len(positions) != len(names):
+        raise InputError(f"goal has {len(positions)} positions for {len(names)} names")
+    unknown = sorted(set(names) - set(model))
+    if unknown:
+        raise InputError(f"unknown joints {unknown} (model joints: {model})")
+    duplicated = sorted({name for name in names if names.count(name) > 1})
+    if duplicated:
+        raise InputError(f"duplicated joints {duplicated}")
+    goal = np.array(current, dtype=float)
+    for name, value in zip(names, positions, strict=True):
+        if not np.isfinite(value):
+            raise InputError(f"goal position of {name} must be finite, got {value}")
+        goal[model.index(name)] = value
+    for i, name in enumerate(model):
+        if not lower[i] <= goal[i] <= upper[i]:
+            raise InputError(
+                f"goal {name} = {goal[i]:.4g} rad is outside its limits "
+                f"[{lower[i]:.4g}, {upper[i]:.4g}] rad"
+            )
+    return goal

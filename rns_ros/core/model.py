@@ -219,6 +219,19 @@ class FreeFloatingModel:
         """theta [rad] (n,) from a configuration q (7 + n,)."""
         return np.asarray(q)[7:]
 
+    def skeleton(self, q: np.ndarray) -> np.ndarray:
+        """Base origin, every arm joint origin and the camera in world [m], shape (n + 2, 3).
+
+        A stick figure of configuration q (7 + n,) for plots and the rerun ghost arm. Uses its own
+        ``pin.Data``: the shared :attr:`data` of the current state is left untouched.
+        """
+        data = self.model.createData()
+        pin.forwardKinematics(self.model, data, np.asarray(q, dtype=float))
+        pin.updateFramePlacements(self.model, data)
+        points = [data.oMi[j].translation.copy() for j in range(1, self.model.njoints)]
+        points.append(data.oMf[self.camera_frame_id].translation.copy())
+        return np.array(points)
+
 
 # URDF inertial checks ---------------------------------------------------------------------------
 def check_urdf_inertials(xml: str, name: str = "robot") -> None:

@@ -50,7 +50,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.ptp import PtpMethod, PtpSettings, plan_deployment, plan_ptp
 from rns_ros.core import FreeFloatingState, load_model
-from rns_ros.core.commands import match_named_command
+from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (
@@ -290,37 +290,12 @@ class PtpNode(Node):
         ).start()
 
     def goal_positions(self, msg: JointState, theta: np.ndarray) -> np.ndarray:
-        """The goal configuration: the named joints at their positions, the others at ``theta``.
-
-        Raises:
-            InputError: unknown or duplicated names, a length mismatch, non-finite values or
-                positions outside the URDF limits (the message names the joint).
-        """
-        names, positions = list(msg.name), list(msg.position)
-        model = list(self.robot.joint_names)
-        if not names:
-            raise InputError("goal names no joint")
-        if len(positions) != len(names):
-            raise InputError(f"goal has {len(positions)} positions for {len(names)} names")
-        unknown = sorted(set(names) - set(model))
-        if unknown:
-            raise InputError(f"unknown joints {unknown} (model joints: {model})")
-        duplicated = sorted({name for name in names if names.count(name) > 1})
-        if duplicated:
-            raise InputError(f"duplicated joints {duplicated}")
-        goal = theta.copy()
-        for name, value in zip(names, positions, strict=True):
-            if not math.isfinite(value):
-                raise InputError(f"goal position of {name} must be finite, got {value}")
-            goal[model.index(name)] = value
-        lower, upper = self.robot.lower_limits, self.robot.upper_limits
-        for i, name in enumerate(model):
-            if not lower[i] <= goal[i] <= upper[i]:
-                raise InputError(
-                    f"goal {name} = {goal[i]:.4g} rad is outside its limits "
-                    f"[{lower[i]:.4g}, {upper[i]:.4g}] rad"
-                )
-        return goal
+        """The goal configuration: the named joints at their positions, the others at ``theta``
+        (:func:`rns_ros.core.commands.partial_joint_goal`; raises its InputError)."""
+        robot = self.robot
+        return partial_joint_goal(
+            msg.name, msg.position, robot.joint_names, theta, robot.lower_limits, robot.upper_limits
+        )
 
     def _plan(self, generation: int, theta: np.ndarray, goal: np.ndarray | None) -> None:
         try:

@@ -17,6 +17,11 @@ of 100 Hz state while a busy logger catches up instead of dropping samples):
     cmd_twist                 geometry_msgs/TwistStamped: commanded angular velocity, turned into
                               world axes (``header.frame_id``: ``world_frame``, the base link or the
                               camera frame; empty: ``default_twist_frame``; others are skipped)
+    <ptp_status_topic>        diagnostic_msgs/DiagnosticArray of rns_ptp: phase (code and a log
+                              line per change), progress, predicted coupling momentum
+    ptp_goal                  sensor_msgs/JointState goal of rns_ptp (by joint name; joints it
+                              does not name at their newest measured angle): a translucent ghost
+                              arm at the goal; the ``["deploy"]`` goal clears it
 
 Sinks (``sink``): ``spawn`` a native viewer, ``connect`` to one, ``serve`` a local web viewer,
 ``save`` an .rrd, or ``auto`` (spawn with a display, else save). Everything binds 127.0.0.1.
@@ -38,7 +43,7 @@ from sensor_msgs.msg import JointState
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import twist_frame_ids
 from rns_ros.core import FreeFloatingModel, load_model_config
-from rns_ros.core.commands import match_named_command
+from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError
 from rns_ros.nodes.parameters import (
     MODEL_CONFIG,
@@ -47,6 +52,7 @@ from rns_ros.nodes.parameters import (
     declare_parameters,
     specs_by_name,
 )
+from rns_ros.nodes.ptp import DEPLOY_GOAL
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 from rns_ros.viz.recorder import RecorderSettings, TelemetryRecorder
@@ -103,6 +109,11 @@ PARAMETERS = (
         "DiagnosticArray status of the controller",
     ),
     ParameterSpec(
+        "ptp_status_topic",
+        "rns_ptp/status",
+        "DiagnosticArray status of the point-to-point node",
+    ),
+    ParameterSpec(
         "default_twist_frame",
         "camera",
         "Axes of cmd_twist with an empty header.frame_id (as the controller's parameter)",
@@ -132,6 +143,7 @@ class RerunLoggerNode(Node):
         params = declare_parameters(self, PARAMETERS)
         urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
         self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
+        self._limits = (self.robot.lower_limits, self.robot.upper_limits)
         self._frames = twist_frame_ids(
             self.robot, params["world_frame"], params["default_twist_frame"]
         )
@@ -164,6 +176,11 @@ class RerunLoggerNode(Node):
                 DiagnosticArray, params["controller_status_topic"], self._on_status, qos
             )
             self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, qos)
+            self.create_subscription(
+                DiagnosticArray, params["ptp_status_topic"], self._on_ptp_status, qos
+            )
+            # goals are rare and must not be missed by a late logger: reliable, like rns_ptp's
+            self.create_subscription(JointState, "ptp_goal", self._on_ptp_goal, 10)
             # A quiet system still shows its newest samples: send the buffer periodically, by
             # wall time (a sim-time timer would fire 100x as often at real_time_factor 100).
             self._timer = self.create_timer(
@@ -216,6 +233,32 @@ class RerunLoggerNode(Node):
                     self._stamp_ns(msg.header), values, level, status.message
                 )
                 return
+
+    def _on_ptp_status(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            values = {kv.key: kv.value for kv in status.values}
+            if "phase" in values or "state" in values:
+                level = status.level[0] if isinstance(status.level, bytes) else int(status.level)
+                self.recorder.ptp_status(self._stamp_ns(msg.header), values, level, status.message)
+                return
+
+    def _on_ptp_goal(self, msg: JointState) -> None:
+        stamp = self._stamp_ns(msg.header)
+        if list(msg.name) == DEPLOY_GOAL:
+            self.recorder.ptp_goal(stamp, None)
+            return
+        state = self.recorder.state
+        robot = self.robot
+        try:
+            if state is None and len(set(msg.name)) < robot.n:
+                raise InputError("a partial goal before the first joint_states")
+            current = robot.lower_limits if state is None else state.theta  # all named if None
+            goal = partial_joint_goal(
+                msg.name, msg.position, robot.joint_names, current, *self._limits
+            )
+            self.recorder.ptp_goal(stamp, goal)
+        except InputError as exc:
+            self._ignored("ptp_goal", exc)
 
     def _on_twist(self, msg: TwistStamped) -> None:
         frame = self._frames.get(msg.header.frame_id)

@@ -16,7 +16,12 @@ def default_blueprint() -> rrb.Blueprint:
     scene = rrb.Spatial3DView(
         name="Satellite and arm",
         origin="/",
-        contents=["+ /**", f"- /{paths.PLOTS}/**", f"- /{paths.CONTROLLER_LOG}"],
+        contents=[
+            "+ /**",
+            f"- /{paths.PLOTS}/**",
+            f"- /{paths.CONTROLLER_LOG}",
+            f"- /{paths.PTP_LOG}",
+        ],
     )
     plots = rrb.Vertical(
         rrb.TimeSeriesView(name="Base attitude deviation [deg]", origin=paths.BASE_ATTITUDE),
@@ -36,6 +41,8 @@ def default_blueprint() -> rrb.Blueprint:
         rrb.Tabs(
             rrb.TimeSeriesView(name="Controller", origin=paths.CONTROLLER),
             rrb.TextLogView(name="Controller log", origin=paths.CONTROLLER_LOG),
+            rrb.TimeSeriesView(name="Point-to-point (rns_ptp)", origin=paths.PTP),
+            rrb.TextLogView(name="rns_ptp log", origin=paths.PTP_LOG),
             rrb.TimeSeriesView(name="System momentum", origin=paths.MOMENTUM),
             rrb.TimeSeriesView(name="det(M~ M~ᵀ) [(kg m²)⁶]", origin=paths.DET_COUPLING),
         ),

@@ -22,6 +22,12 @@ visual_geometries/<link>/visual_<k>``                    ``<visual>`` elements, 
 ``world/camera/pointing``              Arrows3D          camera optical axis +z, from Pinocchio
                                                          forward kinematics [m] (``joint_states``)
 ``world/camera/trail``                 LineStrips3D      recent camera positions [m]
+``world/ptp/goal``                     LineStrips3D      ghost arm of the newest ``ptp_goal``:
+                                                         base, joint origins, camera [m] at the
+                                                         goal angles and the base pose of the
+                                                         moment it arrived; cleared by a
+                                                         ``["deploy"]`` goal (no fixed goal)
+``world/ptp/goal/joints``              Points3D          the same points as spheres
 =====================================  ================  =====================================
 
 Time series (``Scalars``, one entity per series, one row per logged message):
@@ -39,8 +45,13 @@ Time series (``Scalars``, one entity per series, one row per logged message):
 * ``plots/controller/state`` [-]: numeric state code (:data:`CONTROLLER_STATE_CODES`);
   ``plots/controller/damping`` [-] (DLS lambda^2); ``plots/controller/speed_scale`` [-].
 * ``plots/momentum/{linear,angular}``: |p| [kg m/s] and |l| [kg m^2/s] (``momentum``).
+* ``plots/ptp/phase`` [-]: numeric phase code of rns_ptp (:data:`PTP_PHASE_CODES`: 0 at rest,
+  1-3 the 3-phase method's phases I-III, ...); ``plots/ptp/progress`` [-] from 0 to 1; the
+  predicted |M~_omega_m theta_dot| of rns_ptp goes to ``plots/coupling_momentum/norm`` (the two
+  commanders never run together).
 
-Text: ``log/controller`` (TextLog): one line whenever the controller state changes.
+Text: ``log/controller`` (TextLog): one line whenever the controller state changes;
+``log/ptp``: one line whenever the rns_ptp state or phase changes.
 """
 
 from __future__ import annotations
@@ -99,7 +110,14 @@ MOMENTUM = "plots/momentum"
 MOMENTUM_LINEAR = "plots/momentum/linear"
 MOMENTUM_ANGULAR = "plots/momentum/angular"
 
+PTP = "plots/ptp"
+PTP_PHASE = "plots/ptp/phase"
+PTP_PROGRESS = "plots/ptp/progress"
+PTP_GOAL = "world/ptp/goal"
+PTP_GOAL_JOINTS = "world/ptp/goal/joints"
+
 CONTROLLER_LOG = "log/controller"
+PTP_LOG = "log/ptp"
 
 
 def axis_paths(group: str) -> tuple[str, str, str]:
@@ -141,6 +159,19 @@ CONTROLLER_STATE_CODES = {
     "WAITING_FOR_STATE": 8,
     "STALE_STATE": 9,
     "CONFLICTING_STATE": 10,
+}
+
+
+#: Numeric code of each rns_ptp phase on ``plots/ptp/phase`` (control.ptp.PhaseInfo names).
+PTP_PHASE_CODES = {
+    "done": 0,
+    "I": 1,
+    "II": 2,
+    "III": 3,
+    "JS-C": 4,
+    "IJ-C": 5,
+    "TJ-C": 6,
+    "deploy": 7,
 }
 
 
@@ -186,6 +217,8 @@ def series_table(joint_names: tuple[str, ...] | list[str]) -> dict[str, Series]:
         CONTROLLER_SPEED_SCALE: Series("speed scale [-]", _RGB[2]),
         MOMENTUM_LINEAR: Series("|p| [kg m/s]", _RGB[0]),
         MOMENTUM_ANGULAR: Series("|l| [kg m²/s]", _RGB[2]),
+        PTP_PHASE: Series("rns_ptp phase code [-]", _GREY),
+        PTP_PROGRESS: Series("rns_ptp progress [-]", _RGB[2]),
     }
     for index, axis in enumerate(AXES):
         table[COUPLING_MOMENTUM_AXES[index]] = Series(f"{axis} [kg m²/s]", _RGB[index])

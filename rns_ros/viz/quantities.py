@@ -122,6 +122,33 @@ class ControllerStatus:
         return cls(state=values.get("state") or None, coupling_momentum=vector, **scalars)
 
 
+@dataclass(frozen=True)
+class PtpStatus:
+    """The numbers of one ``rns_ptp/status`` entry; None where a key is missing or bad.
+
+    Attributes:
+        state: node state name (``IDLE``, ``MOVING``, ``DONE``, ...).
+        phase: phase name (``I``, ``II``, ``III``, ``JS-C``, ..., ``done``).
+        progress: fraction of the plan played [-] in [0, 1].
+        coupling_momentum: predicted |M~_omega_m theta_dot| [kg m^2/s].
+    """
+
+    state: str | None = None
+    phase: str | None = None
+    progress: float | None = None
+    coupling_momentum: float | None = None
+
+    @classmethod
+    def parse(cls, values: Mapping[str, str]) -> PtpStatus:
+        """From the status key/values (numbers as text)."""
+        return cls(
+            state=values.get("state") or None,
+            phase=values.get("phase") or None,
+            progress=_number(values.get("progress")),
+            coupling_momentum=_number(values.get("coupling_momentum")),
+        )
+
+
 def _number(text: str | None) -> float | None:
     try:
         value = float(text)

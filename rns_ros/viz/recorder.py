@@ -39,6 +39,7 @@ from rns_ros.viz.blueprint import default_blueprint
 from rns_ros.viz.quantities import (
     AttitudeDeviation,
     ControllerStatus,
+    PtpStatus,
     RateLimiter,
     Trail,
     achieved_angular_velocity,
@@ -52,7 +53,11 @@ SIM_TIME_LIMIT_NS = 10**18
 #: Longest wait for buffered data to reach the sink when closing [s].
 FLUSH_TIMEOUT = 10.0
 _TEXT_LEVEL = {0: rr.TextLogLevel.INFO, 1: rr.TextLogLevel.WARN, 2: rr.TextLogLevel.ERROR}
-_STREAMS = ("joints", "odom", "momentum", "status", "twist")
+_STREAMS = ("joints", "odom", "momentum", "status", "twist", "ptp_status", "ptp_goal")
+#: Ghost arm of a ptp goal: translucent so the real arm shows through it.
+GHOST_COLOR = (120, 170, 255, 110)
+GHOST_LINE_RADIUS = 0.03
+GHOST_JOINT_RADIUS = 0.06
 
 
 @dataclass(frozen=True)
@@ -158,6 +163,7 @@ class TelemetryRecorder:
         self._base_logged = False
         self._state: FreeFloatingState | None = None
         self._controller_state: str | None = None
+        self._ptp_step: tuple[str | None, str | None] = (None, None)  # (state, phase)
         #: Messages recorded per input stream (the others were above ``max_rate``).
         self.counts = dict.fromkeys(_STREAMS, 0)
 
@@ -302,6 +308,63 @@ class TelemetryRecorder:
                 self._vector(paths.COMMANDED_ANGULAR_VELOCITY_AXES, stamp_ns, omega)
                 self._send_if_due()
             return True
+
+    def ptp_status(
+        self, stamp_ns: int, values: Mapping[str, str], level: int = 0, message: str = ""
+    ) -> None:
+        """One rns_ptp status (key/values as published, diagnostic level, message): phase code,
+        progress and the predicted coupling momentum norm; ``log/ptp`` gets a line whenever the
+        state or the phase changes. Missing or unparsable keys are skipped."""
+        with self._lock:
+            if not self._accept("ptp_status", stamp_ns):
+                return
+            self.counts["ptp_status"] += 1
+            status = PtpStatus.parse(values)
+            if status.phase in paths.PTP_PHASE_CODES:
+                self._scalar(paths.PTP_PHASE, stamp_ns, paths.PTP_PHASE_CODES[status.phase])
+            if status.progress is not None:
+                self._scalar(paths.PTP_PROGRESS, stamp_ns, status.progress)
+            if status.coupling_momentum is not None:
+                self._scalar(paths.COUPLING_MOMENTUM_NORM, stamp_ns, status.coupling_momentum)
+            step = (status.state, status.phase)
+            if status.state is not None and step != self._ptp_step:
+                self._ptp_step = step
+                self._set_time(stamp_ns)
+                text = message or status.state
+                if status.phase is not None:
+                    text = f"phase {status.phase}: {text}"
+                self.rec.log(paths.PTP_LOG, rr.TextLog(text, level=_TEXT_LEVEL.get(level)))
+            self._send_if_due()
+
+    def ptp_goal(self, stamp_ns: int, theta_goal=None) -> None:
+        """A point-to-point goal: the ghost arm at joint angles ``theta_goal`` [rad] (n,), placed
+        at the newest base pose; None (a deployment, whose end is not a fixed configuration)
+        clears the ghost.
+
+        Raises:
+            InputError: wrong length or not finite.
+        """
+        with self._lock:
+            if theta_goal is not None:
+                q = self.robot.configuration(
+                    theta_goal, self._base_position, self._base_orientation
+                )
+            if not self._accept("ptp_goal", stamp_ns):
+                return
+            self.counts["ptp_goal"] += 1
+            self._set_time(stamp_ns)
+            if theta_goal is None:
+                self.rec.log(paths.PTP_GOAL, rr.Clear(recursive=True))
+                return
+            points = self.robot.skeleton(q)
+            self.rec.log(
+                paths.PTP_GOAL,
+                rr.LineStrips3D([points], colors=[GHOST_COLOR], radii=[GHOST_LINE_RADIUS]),
+            )
+            self.rec.log(
+                paths.PTP_GOAL_JOINTS,
+                rr.Points3D(points, colors=[GHOST_COLOR], radii=[GHOST_JOINT_RADIUS]),
+            )
 
     # --- sending, closing -----------------------------------------------------------------------
     def send(self) -> None:

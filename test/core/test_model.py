@@ -267,3 +267,28 @@ def test_pinocchio_bodies_are_checked_too(robot):
     model.inertias[1] = pin.Inertia(2550.0, np.zeros(3), np.zeros((3, 3)))
     with pytest.raises(ModelError, match=r"joint 'root_joint'.*positive definite"):
         FreeFloatingModel(model, robot.spec)
+
+
+def test_skeleton_is_rigid_and_ends_at_the_camera(robot):
+    """Stick figure: consecutive joint origins keep the URDF offsets at any angles and base pose
+    (rigid links), the first point is the base origin and the last the camera of the state."""
+    from rns_ros.core.state import FreeFloatingState
+
+    rng = np.random.default_rng(3)
+    zero = robot.skeleton(robot.configuration(np.zeros(robot.n)))
+    assert zero.shape == (robot.n + 2, 3)
+    offsets = [
+        np.linalg.norm(robot.model.jointPlacements[j].translation)
+        for j in range(2, robot.model.njoints)
+    ]
+    for _ in range(5):
+        theta = rng.uniform(-np.pi, np.pi, robot.n)
+        position = rng.normal(size=3)
+        quaternion = rng.normal(size=4)
+        q = robot.configuration(theta, position, quaternion)
+        points = robot.skeleton(q)
+        np.testing.assert_allclose(points[0], position, atol=1e-12)
+        lengths = np.linalg.norm(np.diff(points[:-1], axis=0), axis=1)
+        np.testing.assert_allclose(lengths, offsets, atol=1e-12)
+        camera = FreeFloatingState.compute(robot, q).camera.position
+        np.testing.assert_allclose(points[-1], camera, atol=1e-12)

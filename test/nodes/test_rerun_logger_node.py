@@ -21,10 +21,11 @@ from sensor_msgs.msg import JointState
 
 from rns_ros.core import ConfigError
 from rns_ros.nodes.controller import ControllerNode
+from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.rerun_logger import PARAMETERS, RerunLoggerNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.viz import paths
-from rns_ros.viz.readback import read_scalars, recording_summary
+from rns_ros.viz.readback import read_components, read_scalars, recording_summary
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -39,6 +40,44 @@ def _close(ros, node) -> None:
     ros.executor.remove_node(node)
     ros.nodes.remove(node)
     node.destroy_node()
+
+
+def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
+    """A partial goal for rns_ptp: the ghost stands at the goal (the unnamed joints at their
+    measured angles), and the recording holds the JS-C phase and the progress up to 1."""
+    rrd = tmp_path / "ptp.rrd"
+    _node(ros, SimulatorNode)
+    ptp = _node(ros, PtpNode, method="joint_space", duration=1.0)
+    logger = _node(ros, RerunLoggerNode, sink="save", rrd_path=str(rrd))
+    goals = ros.probe().create_publisher(JointState, "ptp_goal", 10)
+    assert ros.spin_until(lambda: logger.recorder.state is not None, timeout=10.0)
+    assert ros.spin_until(lambda: ptp._theta is not None, timeout=10.0)
+    theta = logger.recorder.state.theta.copy()
+    goals.publish(JointState(name=["joint_2"], position=[float(theta[1]) + 0.05]))
+    assert ros.spin_until(lambda: logger.recorder.counts["ptp_goal"] == 1, timeout=5.0)
+    assert ros.spin_until(
+        lambda: logger.recorder.counts["ptp_status"] > 0 and ptp.plan is not None, timeout=10.0
+    )
+    ros.spin_for(2.0)  # the 1 s motion and its end
+    _close(ros, logger)
+
+    goal = theta.copy()
+    goal[1] += 0.05
+    (strip,) = [
+        row["LineStrips3D:strips"][0]
+        for row in read_components(rrd, paths.PTP_GOAL)
+        if "LineStrips3D:strips" in row
+    ]
+    expected = logger.robot.skeleton(logger.robot.configuration(goal))
+    # the base has not moved before the goal: the ghost is the goal arm at the origin pose
+    np.testing.assert_allclose(np.array(strip), expected, atol=1e-4)
+    _, phases = read_scalars(rrd, paths.PTP_PHASE)
+    assert paths.PTP_PHASE_CODES["JS-C"] in phases
+    assert phases[-1] == paths.PTP_PHASE_CODES["done"]
+    _, progress = read_scalars(rrd, paths.PTP_PROGRESS)
+    assert progress.max() == pytest.approx(1.0)
+    log = [row["TextLog:text"][0] for row in read_components(rrd, paths.PTP_LOG)]
+    assert any(line.startswith("phase JS-C") for line in log), log
 
 
 def test_config_yaml_mirrors_the_declared_defaults():

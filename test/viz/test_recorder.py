@@ -76,7 +76,8 @@ def _feed(recorder, samples: int, start_ns: int = 0) -> None:
 
 
 def _series_paths(robot) -> list[str]:
-    return list(paths.series_table(robot.joint_names))
+    """Every series the teleoperation stack feeds (rns_ptp's are tested on their own)."""
+    return [p for p in paths.series_table(robot.joint_names) if not p.startswith(paths.PTP)]
 
 
 def test_every_documented_series_has_one_sample_per_message(open_recorder, robot):
@@ -286,3 +287,64 @@ def test_bad_inputs_raise_typed_errors_and_leave_the_recording_usable(open_recor
 def test_bad_settings_are_config_errors(settings, message):
     with pytest.raises(ConfigError, match=message):
         RecorderSettings(**settings)
+
+
+def test_ptp_phase_progress_and_log_follow_the_status(open_recorder):
+    recorder = open_recorder()
+    steps = [
+        ("IDLE", None, None),
+        ("PLANNING", None, None),
+        ("MOVING", "I", 0.1),
+        ("MOVING", "I", 0.2),
+        ("MOVING", "II", 0.5),
+        ("MOVING", "III", 0.9),
+        ("DONE", "done", 1.0),
+    ]
+    for k, (state, phase, progress) in enumerate(steps):
+        values = {"state": state, "coupling_momentum": str(0.01 * k)}
+        if phase is not None:
+            values |= {"phase": phase, "progress": str(progress)}
+        recorder.ptp_status(k * PERIOD_NS, values, 0, state)
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    assert read_scalars(rrd, paths.PTP_PHASE)[1].tolist() == [1, 1, 2, 3, 0]
+    assert read_scalars(rrd, paths.PTP_PROGRESS)[1].tolist() == [0.1, 0.2, 0.5, 0.9, 1.0]
+    norm = read_scalars(rrd, paths.COUPLING_MOMENTUM_NORM)[1]
+    assert norm == pytest.approx([0.01 * k for k in range(7)])
+    log = [row["TextLog:text"][0] for row in read_components(rrd, paths.PTP_LOG)]
+    assert log == [
+        "IDLE",
+        "PLANNING",
+        "phase I: MOVING",
+        "phase II: MOVING",
+        "phase III: MOVING",
+        "phase done: DONE",
+    ]
+
+
+def test_ptp_goal_ghost_arm_stands_on_the_newest_base_pose(open_recorder, robot):
+    """The ghost starts at the base origin of the newest odometry and ends at the camera of the
+    goal configuration there; consecutive points keep the arm's rigid joint offsets."""
+    recorder = open_recorder()
+    base_position = np.array([0.3, -0.2, 0.1])
+    recorder.base_odom(0, base_position, _base_quaternion(500))
+    goal = np.radians([-120.0, 50.0, 0.0, -60.0, 180.0, 180.0, 0.0])
+    recorder.ptp_goal(PERIOD_NS, goal)
+    with pytest.raises(InputError, match="finite"):
+        recorder.ptp_goal(2 * PERIOD_NS, [math.nan] * 7)
+    recorder.ptp_goal(3 * PERIOD_NS, None)  # deploy: no fixed goal
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    rows = read_components(rrd, paths.PTP_GOAL)
+    strips = [row for row in rows if "LineStrips3D:strips" in row]
+    assert len(strips) == 1
+    points = np.array(strips[0]["LineStrips3D:strips"][0])
+    assert points.shape == (robot.n + 2, 3)
+    q = robot.configuration(goal, base_position, _base_quaternion(500))
+    camera = FreeFloatingState.compute(robot, q).camera.position
+    np.testing.assert_allclose(points[0], base_position, atol=1e-6)
+    np.testing.assert_allclose(points[-1], camera, atol=1e-6)
+    joints = read_components(rrd, paths.PTP_GOAL_JOINTS)
+    assert any("Points3D:positions" in row for row in joints)
+    # the deploy goal clears the ghost (a Clear tombstone on the entity)
+    assert any(any("Clear" in key for key in row) for row in rows)

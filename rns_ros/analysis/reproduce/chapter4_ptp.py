@@ -22,7 +22,6 @@ import functools
 import math
 
 import numpy as np
-import pinocchio as pin
 
 from rns_ros.analysis.ptp_runs import PtpRun, run_plan
 from rns_ros.analysis.reproduce.registry import (
@@ -352,17 +351,6 @@ def _plot_fig4_10(outcome: Outcome, figure) -> None:
 
 
 # fig 4.13: deployment -----------------------------------------------------------------------
-def _joint_points(robot: FreeFloatingModel, theta: np.ndarray) -> np.ndarray:
-    """Joint origins and the camera in the base frame [m], shape (n + 2, 3)."""
-    data = robot.model.createData()
-    q = robot.configuration(theta)
-    pin.forwardKinematics(robot.model, data, q)
-    pin.updateFramePlacements(robot.model, data)
-    points = [data.oMi[j].translation.copy() for j in range(1, robot.model.njoints)]
-    points.append(data.oMf[robot.camera_frame_id].translation.copy())
-    return np.array(points)
-
-
 @functools.cache
 def _deployment(quick: bool) -> PtpRun:
     robot = _robot()
@@ -403,7 +391,7 @@ def _compute_fig4_13(quick: bool) -> Outcome:
         "snapshot_times_s": snapshot_times.tolist(),
         "notes": list(plan.notes),
     }
-    points = [_joint_points(robot, theta) for theta in snapshots]
+    points = [robot.skeleton(robot.configuration(theta)) for theta in snapshots]
     data = {"run": run, "points": points, "times": snapshot_times}
     return Outcome(comparisons, values, _settings(quick), CHOICES, data)
 

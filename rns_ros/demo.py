@@ -1,5 +1,8 @@
 """rns_demo: the thesis satellite-observation scenario over real DDS, three ways, compared.
 
+``--scenario ptp_three_phase`` runs the point-to-point task instead (:mod:`rns_ros.demo_ptp`):
+rns_ptp with the 3-phase method and the JS-C / IJ-C / TJ-C baselines, in a Table 4.2-style table.
+
 For each method (default: reactionless ``dls``, reactionless ``sc``, ``conventional``) a fresh
 launch-free stack runs in this process (:class:`rns_ros.harness.Harness`, its own domain,
 localhost only): ``rns_simulator`` starting from the scenario's joint angles, ``rns_controller``
@@ -30,6 +33,14 @@ from rns_ros.analysis.recorded_run import RunFigures, run_figures
 from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
 from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import RnsError, load_model
+from rns_ros.demo_ptp import (
+    PTP_METHODS,
+    PTP_SCENARIOS,
+    PtpScenario,
+    format_ptp_table,
+    non_finite_ptp_figures,
+    run_ptp_method,
+)
 from rns_ros.harness import Harness, TopicLog
 from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller import ControllerNode
@@ -221,12 +232,16 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "baseline, compared in one table.",
     )
     parser.add_argument(
-        "--scenario", default="satellite_observation", help="scenario name or YAML file"
+        "--scenario",
+        default="satellite_observation",
+        help="inspection scenario name or YAML file, or a point-to-point scenario "
+        f"({', '.join(PTP_SCENARIOS)}: rns_ptp instead of rns_controller)",
     )
     parser.add_argument(
         "--methods",
-        default=",".join(DEFAULT_METHODS),
-        help=f"comma-separated, from {list(METHODS)}",
+        default=None,
+        help=f"comma-separated; inspection: from {list(METHODS)} (default "
+        f"{','.join(DEFAULT_METHODS)}); point-to-point: from {list(PTP_METHODS)} (default all)",
     )
     parser.add_argument("--mode", choices=("kinematic", "dynamic"), default="kinematic")
     parser.add_argument("--rate", type=float, default=100.0, help="controller rate [Hz]")
@@ -246,10 +261,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     add_domain_id_argument(parser, 42, "of the runs")
     args = parser.parse_args(argv)
     args.ros_args = ros_args
-    args.methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    unknown = [m for m in args.methods if m not in METHODS]
+    ptp = args.scenario in PTP_SCENARIOS
+    allowed, default = (list(PTP_METHODS), list(PTP_METHODS)) if ptp else (METHODS, DEFAULT_METHODS)
+    text = ",".join(default) if args.methods is None else args.methods
+    args.methods = [m.strip() for m in text.split(",") if m.strip()]
+    unknown = [m for m in args.methods if m not in allowed]
     if unknown or not args.methods:
-        parser.error(f"--methods must be a comma-separated subset of {list(METHODS)}")
+        parser.error(f"--methods for {args.scenario} must be a comma-separated subset of {allowed}")
     if not 1.0 <= args.rate <= 1000.0:
         parser.error(f"--rate must be in [1, 1000] Hz, got {args.rate}")
     if not 0.0 <= args.real_time_factor <= 1000.0:
@@ -265,6 +283,8 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str] | None) -> int:
     args = parse_args(argv)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if args.scenario in PTP_SCENARIOS:
+        return _main_ptp(args, PTP_SCENARIOS[args.scenario])
     try:
         scenario_file = scenario_path(args.scenario)
         (scenario,) = check_scenarios([scenario_file])
@@ -299,6 +319,49 @@ def _main(argv: list[str] | None) -> int:
             | {"recording": row.recording}
             for row in rows
         ]
+        args.summary.write_text(json.dumps(summary, indent=2) + "\n")
+        print(f"summary written to {args.summary}")
+    return 0
+
+
+def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
+    print(f"scenario: {scenario.name} ({scenario.description})")
+    print(
+        f"model: {default_model_config()}; {args.mode} simulation, rns_ptp at {args.rate:g} Hz, "
+        f"real-time factor {args.real_time_factor:g}, ROS domain {args.domain_id} "
+        "(localhost only)\n",
+        flush=True,
+    )
+    rows = []
+    try:
+        for method in args.methods:
+            print(f"running {method} ...", flush=True)
+            rows.append(
+                run_ptp_method(
+                    method,
+                    scenario,
+                    args,
+                    lambda stack, name, timing: _add_logger(stack, name, args, timing),
+                )
+            )
+    except RnsError as exc:
+        print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
+        return 2
+    print()
+    print(format_ptp_table(rows))
+    problems = non_finite_ptp_figures(rows)
+    if problems:
+        print(f"rns_demo: non-finite figures: {'; '.join(problems)}", file=sys.stderr)
+        return 1
+    print(
+        "\nratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
+        "not printed (ours is identified, docs/arm_identification.md): compare the ranking."
+    )
+    recordings = [row.recording for row in rows if row.recording]
+    if recordings:
+        print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
+    if args.summary:
+        summary = [asdict(row) for row in rows]
         args.summary.write_text(json.dumps(summary, indent=2) + "\n")
         print(f"summary written to {args.summary}")
     return 0

@@ -111,7 +111,7 @@ def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path):
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["--methods", "magic"], "--methods must be"),
+        (["--methods", "magic"], "--methods for satellite_observation must be"),
         (["--rate", "0"], "--rate must be in"),
         (["--real-time-factor", "-1"], "--real-time-factor must be in"),
     ],

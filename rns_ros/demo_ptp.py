@@ -1,0 +1,237 @@
+"""rns_demo --scenario ptp_three_phase: the thesis' point-to-point motion over DDS, four planners.
+
+The §4.4 task (Table 4.2): the arm moves from [-20 -40 0 -60 180 180 0] deg to
+[-120 50 0 -60 180 180 0] deg. For each planner of ``rns_ptp`` (``three_phase``, ``joint_space``
+= JS-C, ``inverse_jacobian`` = IJ-C, ``transposed_jacobian`` = TJ-C) a fresh in-process stack
+(:class:`rns_ros.harness.Harness`, its own domain, localhost only) runs ``rns_simulator`` from the
+start angles, ``rns_ptp`` with that method, and ``rns_rerun_logger`` (one ``.rrd`` per run, with the
+goal as a ghost arm and the phases plotted). The goal is published once on ``ptp_goal``; the run
+ends when ``rns_ptp`` reports DONE. The table gives, per method, the largest base attitude
+deviation from ``base_odom`` (geodesic angle of R_b(0)^T R_b(t), A-0.1), its ratio to the 3-phase
+method, the thesis' values (its arm geometry differs: compare the ranking, not the degrees), the
+final joint error, the planned duration and the folds the reactionless phases reached.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
+
+from rns_ros.analysis.reproduce.chapter4_ptp import FINAL_DEG, INITIAL_DEG, THESIS_TABLE
+from rns_ros.core import RnsError
+from rns_ros.core.integration import attitude_deviation
+from rns_ros.core.state import FreeFloatingState
+from rns_ros.harness import Harness, TopicLog
+from rns_ros.nodes.ptp import PtpNode
+from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.viz.quantities import rotation_from_quaternion
+
+#: rns_ptp methods in Table 4.2 order, with the thesis' labels.
+PTP_METHODS = {
+    "three_phase": "3-phase",
+    "joint_space": "JS-C",
+    "inverse_jacobian": "IJ-C",
+    "transposed_jacobian": "TJ-C",
+}
+#: States of rns_ptp that end a demo run without reaching the goal.
+FAILED_STATES = ("INVALID_GOAL", "STALE_STATE", "CONFLICTING_STATE")
+#: Wall-time allowance for planning (IJ-C/TJ-C integrate the 3-phase plan first) [s].
+PLANNING_ALLOWANCE = 60.0
+SETTLE = 0.3
+
+
+@dataclass(frozen=True)
+class PtpScenario:
+    """A point-to-point task: start and goal joint angles [rad], shape (n,) each."""
+
+    name: str
+    description: str
+    start: tuple[float, ...]
+    goal: tuple[float, ...]
+
+
+PTP_SCENARIOS = {
+    "ptp_three_phase": PtpScenario(
+        "ptp_three_phase",
+        "thesis section 4.4 point-to-point motion (Table 4.2): 3-phase vs JS-C, IJ-C, TJ-C",
+        tuple(math.radians(x) for x in INITIAL_DEG),
+        tuple(math.radians(x) for x in FINAL_DEG),
+    )
+}
+
+
+@dataclass(frozen=True)
+class PtpDemoRow:
+    """One DDS run of a point-to-point method.
+
+    Attributes:
+        method: rns_ptp method; label: the thesis' name (3-phase, JS-C, ...).
+        max_base_deviation_deg: largest base attitude deviation over the run [deg].
+        final_joint_error_deg: max |theta - goal| over the joints at the end [deg].
+        final_camera_error_m: for IJ-C / TJ-C, which steer the camera rather than the joints:
+            distance of the camera at the end (measured angles and base pose) from the plan's
+            camera target [m]; None for the joint-space methods.
+        duration_s: planned duration (after any stretching to the velocity limits) [s].
+        fold_reached: theta_4 at the folded end of each reactionless phase, as rns_ptp reports.
+        max_joint_speed: largest |theta_dot| of joint_states [rad/s].
+        wall_time_s: wall time of the run [s].
+        recording: the .rrd written, or None.
+    """
+
+    method: str
+    label: str
+    max_base_deviation_deg: float
+    final_joint_error_deg: float
+    final_camera_error_m: float | None
+    duration_s: float
+    fold_reached: str
+    max_joint_speed: float
+    wall_time_s: float
+    recording: str | None
+
+
+def _values(msg: DiagnosticArray) -> dict[str, str]:
+    return {kv.key: kv.value for kv in msg.status[0].values} if msg.status else {}
+
+
+def run_ptp_method(
+    method: str, scenario: PtpScenario, args: argparse.Namespace, add_logger
+) -> PtpDemoRow:
+    """One DDS run: simulator at ``scenario.start``, rns_ptp with ``method``, goal once, until
+    DONE. ``add_logger(stack, name, timing)`` adds the rerun logger and returns its file or None.
+
+    Raises:
+        RnsError: rns_ptp rejected the goal, lost the state, or did not finish in time.
+    """
+    sim_time = args.real_time_factor != 1.0
+    timing = {"use_sim_time": True} if sim_time else {}
+    start = time.perf_counter()
+    with Harness(args.domain_id, args.ros_args) as stack:
+        joints = stack.record(JointState, "joint_states")
+        odom = stack.record(Odometry, "base_odom")
+        status = stack.record(DiagnosticArray, "rns_ptp/status")
+        recording = None if args.no_record else add_logger(stack, method, timing)
+        stack.add(
+            SimulatorNode,
+            {
+                "initial_joint_positions": list(scenario.start),
+                "mode": args.mode,
+                "real_time_factor": args.real_time_factor,
+                "publish_clock": sim_time,
+                "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
+            },
+        )
+        ptp = stack.add(PtpNode, {"method": method, "rate": args.rate, **timing})
+        goal_publisher = stack.probe().create_publisher(JointState, "ptp_goal", 10)
+
+        def state() -> str | None:
+            latest = status.latest()
+            return _values(latest).get("state") if latest is not None else None
+
+        if not stack.spin_until(lambda: state() == "IDLE", timeout=20.0):
+            raise RnsError(f"{method}: rns_ptp did not become IDLE (state {state()})")
+        names = list(ptp.robot.joint_names)
+        goal_publisher.publish(JointState(name=names, position=list(scenario.goal)))
+        if not stack.spin_until(
+            lambda: state() in ("MOVING", *FAILED_STATES), timeout=PLANNING_ALLOWANCE
+        ):
+            raise RnsError(f"{method}: no plan within {PLANNING_ALLOWANCE:.0f} s")
+        duration = float(_values(status.latest()).get("duration", "nan"))
+        budget = 30.0 + duration / max(args.real_time_factor, 1.0)
+        finished = stack.spin_until(lambda: state() in ("DONE", *FAILED_STATES), timeout=budget)
+        final = _values(status.latest())
+        if not finished or final["state"] != "DONE":
+            raise RnsError(
+                f"{method}: rns_ptp ended in {final['state']} ({status.latest().status[0].message})"
+            )
+        target = ptp.plan.details.get("camera_target") if ptp.plan is not None else None
+        stack.spin_for(SETTLE)
+        robot = ptp.robot
+    deviation, error, speed = _figures(joints, odom, np.array(scenario.goal))
+    camera_error = None
+    if target is not None:
+        pose = odom.latest().pose.pose
+        q = robot.configuration(
+            joints.latest().position,
+            [pose.position.x, pose.position.y, pose.position.z],
+            [pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w],
+        )
+        camera = FreeFloatingState.compute(robot, q).camera.position
+        camera_error = float(np.linalg.norm(camera - np.asarray(target)))
+    return PtpDemoRow(
+        method=method,
+        label=PTP_METHODS[method],
+        max_base_deviation_deg=deviation,
+        final_joint_error_deg=error,
+        final_camera_error_m=camera_error,
+        duration_s=duration,
+        fold_reached=final.get("fold_reached", "none"),
+        max_joint_speed=speed,
+        wall_time_s=time.perf_counter() - start,
+        recording=recording,
+    )
+
+
+def _figures(joints: TopicLog, odom: TopicLog, goal: np.ndarray) -> tuple[float, float, float]:
+    """(max base deviation [deg], final joint error [deg], max joint speed [rad/s])."""
+    if len(joints) < 2 or len(odom) < 2:
+        raise RnsError("fewer than two robot states were recorded; is DDS working on loopback?")
+    quaternions = odom.array(
+        lambda m: [getattr(m.pose.pose.orientation, axis) for axis in ("x", "y", "z", "w")]
+    )
+    rotations = [rotation_from_quaternion(quaternion) for quaternion in quaternions]
+    deviation = max(attitude_deviation(rotations[0], rotation) for rotation in rotations)
+    positions = joints.array(lambda m: m.position)
+    velocities = joints.array(lambda m: m.velocity)
+    error = float(np.degrees(np.abs(positions[-1] - goal)).max())
+    return math.degrees(deviation), error, float(np.abs(velocities).max())
+
+
+def format_ptp_table(rows: list[PtpDemoRow]) -> str:
+    """Table 4.2 style: deviation and ratio to the 3-phase run, next to the thesis'."""
+    reference = next((r.max_base_deviation_deg for r in rows if r.method == "three_phase"), None)
+    thesis_reference = THESIS_TABLE["3-phase"]
+    header = (
+        f"{'method':<10}{'max base dev [deg]':>20}{'ratio':>8}{'thesis [deg]':>14}"
+        f"{'thesis ratio':>14}{'end error':>16}{'max |θ̇| [rad/s]':>18}{'T [s]':>8}"
+        f"{'wall [s]':>10}  folds reached (θ4)"
+    )
+    lines = [header, "-" * len(header)]
+    for row in rows:
+        ratio = row.max_base_deviation_deg / reference if reference else math.nan
+        thesis = THESIS_TABLE[row.label]
+        if row.final_camera_error_m is None:
+            end = f"{row.final_joint_error_deg:.2g} deg"
+        else:
+            end = f"{1e3 * row.final_camera_error_m:.3g} mm cam"
+        lines.append(
+            f"{row.label:<10}{row.max_base_deviation_deg:>20.4f}{ratio:>8.2f}{thesis:>14.2f}"
+            f"{thesis / thesis_reference:>14.2f}{end:>16}"
+            f"{row.max_joint_speed:>18.3f}{row.duration_s:>8.2f}{row.wall_time_s:>10.1f}"
+            f"  {row.fold_reached}"
+        )
+    return "\n".join(lines)
+
+
+def non_finite_ptp_figures(rows: list[PtpDemoRow]) -> list[str]:
+    """One text per run with a NaN or infinite figure; empty when all are finite."""
+    problems = []
+    for row in rows:
+        values = {
+            "max_base_deviation_deg": row.max_base_deviation_deg,
+            "final_joint_error_deg": row.final_joint_error_deg,
+            "max_joint_speed": row.max_joint_speed,
+            "duration_s": row.duration_s,
+            "final_camera_error_m": row.final_camera_error_m or 0.0,
+        }
+        bad = [f"{name} = {value}" for name, value in values.items() if not math.isfinite(value)]
+        if bad:
+            problems.append(f"{row.label}: " + ", ".join(bad))
+    return problems

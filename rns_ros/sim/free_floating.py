@@ -53,6 +53,12 @@ from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.core.fastmath import solve_small
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import Choice, as_vector, positive
+from rns_ros.sim.reaction_wheels import (
+    ReactionWheels,
+    limit_wheel_torque,
+    spin_reduced_model,
+    wheel_speeds,
+)
 
 #: theta_dot = f(t [s], q (7 + n,)) [rad/s], shape (n,): a continuous-time joint-velocity law.
 JointVelocityField = Callable[[float, np.ndarray], np.ndarray]
@@ -153,6 +159,8 @@ class FreeFloatingSimulator:
         initial_momentum: conserved centroidal momentum h_G = [p [kg m/s]; l_G [kg m^2/s]] about
             the system CoM, world axes, shape (6,); default zero.
         gains: servo gains for the dynamic mode; default critically damped at 50 rad/s.
+        wheels: :class:`ReactionWheels` on the base (gyrostat model, see
+            :mod:`rns_ros.sim.reaction_wheels`), driven by :meth:`set_wheel_torque`; None: none.
     """
 
     def __init__(
@@ -164,8 +172,10 @@ class FreeFloatingSimulator:
         initial_q=None,
         initial_momentum=None,
         gains: ServoGains | None = None,
+        wheels: ReactionWheels | None = None,
     ) -> None:
         self.robot = robot
+        self.wheels = wheels
         self.mode = SimulationMode.parse(mode)
         self.dt = positive(dt, "dt", "[s]")
         if self.dt > 0.1:
@@ -185,7 +195,14 @@ class FreeFloatingSimulator:
         self._position_rate = np.divide(stiffness, damping, out=np.zeros(n), where=damping > 0.0)
         self.velocity_limits = _limits(robot.velocity_limits)
         self.effort_limits = _limits(robot.model.effortLimit[6:])
-        self._model, self._data = robot.model, robot.data
+        if wheels is None:
+            self._model, self._data = robot.model, robot.data
+        else:
+            self._model = spin_reduced_model(robot.model, wheels)
+            self._data = self._model.createData()
+            self._fext = pin.StdVec_Force()
+            for _ in range(self._model.njoints):
+                self._fext.append(pin.Force.Zero())
         self._tau_full = np.zeros(robot.model.nv)
         self._check_friction_stiffness()
         self.reset()
@@ -236,6 +253,14 @@ class FreeFloatingSimulator:
         self.reference = JointReference(
             positions=self.q[7:].copy(), velocities=np.zeros(n), accelerations=np.zeros(n)
         )
+        #: absolute axial wheel momenta H [N m s] (3,), base axes; zero without wheels
+        self.wheel_momentum = np.zeros(3)
+        #: wheel spin angles relative to the base [rad] (3,)
+        self.wheel_angles = np.zeros(3)
+        #: commanded and applied (limited) wheel torques [N m] (3,), and the limited wheels
+        self.wheel_command = np.zeros(3)
+        self.wheel_torque = np.zeros(3)
+        self.wheel_saturated = np.zeros(3, dtype=bool)
         self._v = self._kinematic_velocity(self.q, np.zeros(n))
 
     @property
@@ -266,13 +291,40 @@ class FreeFloatingSimulator:
         if self.mode is SimulationMode.KINEMATIC:
             self._v = None  # the joints take the new rates at once
 
+    def set_wheel_torque(self, torque) -> None:
+        """Motor torques of the three wheels [N m] (3,), base x y z, held until the next call;
+        the limits apply at every step (:func:`limit_wheel_torque`).
+
+        Raises:
+            ConfigError: the simulator has no wheels. InputError: not a finite 3-vector.
+        """
+        if self.wheels is None:
+            raise ConfigError("this simulator has no reaction wheels")
+        self.wheel_command = as_vector(torque, 3, "wheel torque")
+
+    @property
+    def wheel_speeds(self) -> np.ndarray:
+        """Wheel spin rates relative to the base [rad/s] (3,); zero without wheels."""
+        if self.wheels is None:
+            return np.zeros(3)
+        return wheel_speeds(self.wheel_momentum, self.v[3:6], self.wheels.inertia)
+
     def snapshot(self) -> SimulationState:
         """Copies of time, q, v and effort."""
         return SimulationState(self.time, self.q.copy(), self.v.copy(), self.effort.copy())
 
     def centroidal_momentum(self) -> np.ndarray:
         """h_G = A_G(q) v: [p; l_G] about the system CoM, world axes, shape (6,), measured now."""
-        return pin.computeCentroidalMomentum(self._model, self._data, self.q, self.v).vector.copy()
+        momentum = pin.computeCentroidalMomentum(self._model, self._data, self.q, self.v).vector
+        return momentum + self._wheel_couple(self.q, self.wheel_momentum)
+
+    def _wheel_couple(self, q: np.ndarray, wheel_momentum: np.ndarray) -> np.ndarray:
+        """[0; R_b H] (6,): the wheels' spin momentum in world axes, a pure couple."""
+        couple = np.zeros(6)
+        if self.wheels is not None:
+            rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+            couple[3:] = rotation @ wheel_momentum
+        return couple
 
     # --- stepping ------------------------------------------------------------------------------
     def step(self, joint_velocity: JointVelocityField | None = None) -> None:
@@ -288,16 +340,43 @@ class FreeFloatingSimulator:
             SimulationDivergedError: the step produced a non-finite q, v or effort; time, state and
                 reference are left as they were before the step (the last finite state).
         """
-        before = (self.time, self.q, self._v, self.effort, self.reference)
+        before = (
+            self.time,
+            self.q,
+            self._v,
+            self.effort,
+            self.reference,
+            self.wheel_momentum,
+            self.wheel_angles,
+        )
         with np.errstate(all="ignore"):  # overflow is reported below, as SimulationDivergedError
+            if self.wheels is not None:
+                speeds_before = self.wheel_speeds
+                self.wheel_torque, self.wheel_saturated = limit_wheel_torque(
+                    self.wheel_command, speeds_before, self.wheels
+                )
             self._advance(joint_velocity)
-        bad = [
-            name
-            for name, value in (("q", self.q), ("v", self._v), ("effort", self.effort))
-            if value is not None and not np.isfinite(value).all()
-        ]
+            if self.wheels is not None:
+                self.wheel_momentum = self.wheel_momentum + self.dt * self.wheel_torque
+                self._v = None if self.mode is SimulationMode.KINEMATIC else self._v
+                # trapezoidal angle: the angles are for display; the speeds are exact
+                self.wheel_angles = self.wheel_angles + 0.5 * self.dt * (
+                    speeds_before + self.wheel_speeds
+                )
+        values = (("q", self.q), ("v", self._v), ("effort", self.effort))
+        if self.wheels is not None:
+            values += (("wheel momentum", self.wheel_momentum),)
+        bad = [name for name, value in values if value is not None and not np.isfinite(value).all()]
         if bad:
-            self.time, self.q, self._v, self.effort, self.reference = before
+            (
+                self.time,
+                self.q,
+                self._v,
+                self.effort,
+                self.reference,
+                self.wheel_momentum,
+                self.wheel_angles,
+            ) = before
             raise SimulationDivergedError(
                 f"{self.mode} simulation diverged in the step from t = {self.time:.6g} s: "
                 f"non-finite {' and '.join(bad)}; kept the last finite state"
@@ -321,10 +400,21 @@ class FreeFloatingSimulator:
             )
         self.time += self.dt
 
-    def _base_velocity(self, q: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
-        """Base twist (base frame) that keeps h_G: solve A_b v_b = h_G - A_m theta_dot, (6,)."""
+    def _base_velocity(
+        self, q: np.ndarray, theta_dot: np.ndarray, wheel_momentum: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Base twist (base frame) that keeps h_G: solve A_b v_b = h_G - A_m theta_dot, (6,)
+        (minus the wheels' couple [0; R_b H], H default the current wheel momentum)."""
         centroidal_map = pin.computeCentroidalMap(self._model, self._data, q)
-        return solve_small(centroidal_map[:, :6], self.momentum - centroidal_map[:, 6:] @ theta_dot)
+        rhs = self.momentum - centroidal_map[:, 6:] @ theta_dot
+        if self.wheels is not None:
+            momentum = self.wheel_momentum if wheel_momentum is None else wheel_momentum
+            rhs = rhs - self._wheel_couple(q, momentum)
+        return solve_small(centroidal_map[:, :6], rhs)
+
+    def _stage_wheel_momentum(self, fraction: float) -> np.ndarray:
+        """H at ``fraction`` of the step: the applied torque is held over it."""
+        return self.wheel_momentum + fraction * self.dt * self.wheel_torque
 
     def _kinematic_velocity(self, q: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
         return np.concatenate((self._base_velocity(q, theta_dot), theta_dot))
@@ -338,7 +428,9 @@ class FreeFloatingSimulator:
         def stage(fraction: float, base_rate: np.ndarray) -> np.ndarray:
             increment[:6] = fraction * dt * base_rate
             increment[6:] = fraction * dt * theta_dot
-            base = self._base_velocity(pin.integrate(model, q, increment), theta_dot)
+            base = self._base_velocity(
+                pin.integrate(model, q, increment), theta_dot, self._stage_wheel_momentum(fraction)
+            )
             return pin.Jlog6(pin.exp6(increment[:6])) @ base  # dexp^-1 pull-back
 
         k1 = self._base_velocity(q, theta_dot)
@@ -360,7 +452,7 @@ class FreeFloatingSimulator:
             theta_dot = as_vector(
                 joint_velocity(t + fraction * dt, q_stage), self.robot.n, "f(t, q)"
             )
-            base = self._base_velocity(q_stage, theta_dot)
+            base = self._base_velocity(q_stage, theta_dot, self._stage_wheel_momentum(fraction))
             return np.concatenate((pin.Jlog6(pin.exp6(increment[:6])) @ base, theta_dot))
 
         k1 = stage(0.0, np.zeros(model.nv))
@@ -402,23 +494,32 @@ class FreeFloatingSimulator:
         speed = np.max(np.abs(theta_dot) / self.velocity_limits)  # fraction of the limits
         return self.velocity_limits * (speed * np.sqrt(BIAS_SHARE / load))
 
-    def _acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    def _acceleration(
+        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, fraction: float = 0.0
+    ) -> np.ndarray:
         self._tau_full[6:] = tau - self.gains.friction * v[6:]
-        return pin.aba(self._model, self._data, q, v, self._tau_full)
+        if self.wheels is None:
+            return pin.aba(self._model, self._data, q, v, self._tau_full)
+        # the wheels push back on the base: -(tau_w + omega^B x H), a couple in base axes
+        momentum = self._stage_wheel_momentum(fraction)
+        couple = -(self.wheel_torque + np.cross(v[3:6], momentum))
+        self._fext[1] = pin.Force(np.zeros(3), couple)
+        return pin.aba(self._model, self._data, q, v, self._tau_full, self._fext)
 
     def _step_dynamic(self) -> None:
         model, q, v, dt = self._model, self.q, self.v, self.dt
         tau = self._servo_torque()
-        k1q, k1v = v, self._acceleration(q, v, tau)
+        accel = self._acceleration
+        k1q, k1v = v, accel(q, v, tau)
         v2 = v + 0.5 * dt * k1v
         q2 = 0.5 * dt * k1q
-        k2q, k2v = _pull_back(q2, v2), self._acceleration(pin.integrate(model, q, q2), v2, tau)
+        k2q, k2v = _pull_back(q2, v2), accel(pin.integrate(model, q, q2), v2, tau, 0.5)
         v3 = v + 0.5 * dt * k2v
         q3 = 0.5 * dt * k2q
-        k3q, k3v = _pull_back(q3, v3), self._acceleration(pin.integrate(model, q, q3), v3, tau)
+        k3q, k3v = _pull_back(q3, v3), accel(pin.integrate(model, q, q3), v3, tau, 0.5)
         v4 = v + dt * k3v
         q4 = dt * k3q
-        k4q, k4v = _pull_back(q4, v4), self._acceleration(pin.integrate(model, q, q4), v4, tau)
+        k4q, k4v = _pull_back(q4, v4), accel(pin.integrate(model, q, q4), v4, tau, 1.0)
         self.q = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
         self._v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
         self.effort = tau

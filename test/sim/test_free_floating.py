@@ -281,7 +281,7 @@ def test_a_diverging_step_keeps_the_last_finite_state_and_raises(robot, monkeypa
         simulator.step()
     before = simulator.snapshot()
     nan = np.full(robot.model.nv, np.nan)
-    monkeypatch.setattr(simulator, "_acceleration", lambda q, v, tau: nan)
+    monkeypatch.setattr(simulator, "_acceleration", lambda q, v, tau, fraction=0.0: nan)
     with pytest.raises(SimulationDivergedError, match=r"t = 0\.01 s: non-finite q and v"):
         simulator.step()
     after = simulator.snapshot()

@@ -113,6 +113,56 @@ def c_ratio(metric: EnergyMetric, coupling: np.ndarray, rank_tolerance: float = 
     return float(t_rns / t_min)
 
 
+class KineticEnergy(NamedTuple):
+    """Kinetic energy of the system split as in eq. (5.1) [J].
+
+    Attributes:
+        base: 1/2 V_b^T M_b V_b, the base with the wheels locked in it.
+        arm: 1/2 theta_dot^T M_m theta_dot.
+        coupling: V_b^T M_bm theta_dot, the base-arm cross term.
+        wheels: the wheels' spin relative to the base, 1/2 I_r |phi_dot|^2 + I_r phi_dot .
+            omega_b (the M~_r and M~_omega_r terms of eq. 5.1 with both = I_r E); 0 without.
+        total: the sum, = Pinocchio's kinetic energy of the locked system + the wheel term.
+    """
+
+    base: float
+    arm: float
+    coupling: float
+    wheels: float
+    total: float
+
+
+def kinetic_energy(
+    state: FreeFloatingState,
+    base_twist,
+    theta_dot,
+    wheel_speeds=None,
+    wheel_inertia: float = WHEEL_INERTIA,
+) -> KineticEnergy:
+    """Eq. (5.1) at ``state``.
+
+    Args:
+        state: the state (inertia blocks M_b, M_bm, M_m of eq. 2.7, thesis coordinates).
+        base_twist: V_b = [v_b; omega_b] in world axes [m/s, rad/s], shape (6,).
+        theta_dot: joint velocities [rad/s], shape (n,).
+        wheel_speeds: spin rates of the three wheels relative to the base about the base x, y,
+            z axes [rad/s], shape (3,); None: no wheels.
+        wheel_inertia: I_r [kg m^2].
+    """
+    twist = as_vector(base_twist, 6, "base twist")
+    theta_dot = as_vector(theta_dot, state.n, "theta_dot")
+    base = 0.5 * float(twist @ state.inertia_base @ twist)
+    arm = 0.5 * float(theta_dot @ state.manipulator_inertia @ theta_dot)
+    coupling = float(twist @ state.coupling_inertia @ theta_dot)
+    wheels = 0.0
+    if wheel_speeds is not None:
+        speeds = as_vector(wheel_speeds, 3, "wheel speeds")
+        omega_base_axes = state.base_rotation.T @ twist[3:]
+        inertia = positive(wheel_inertia, "wheel_inertia", "[kg m^2]")
+        wheels = 0.5 * inertia * float(speeds @ speeds) + inertia * float(speeds @ omega_base_axes)
+    return KineticEnergy(base, arm, coupling, wheels, base + arm + coupling + wheels)
+
+
 class EnergyCost:
     """Running costs of a motion, eqs. (5.12)-(5.13): C_max = max_t T(t) [J] and
     C_sum = integral of T dt [J s] (trapezoidal), with T = 1/2 theta_dot^T Lambda theta_dot.

@@ -16,6 +16,7 @@ from rns_ros.core.energy import (
     EnergyMetric,
     c_ratio,
     energy_metric,
+    kinetic_energy,
     tilde_manipulator_inertia,
 )
 from rns_ros.core.planar import planar_2dof_model
@@ -109,3 +110,24 @@ def test_energy_cost_is_the_peak_and_the_trapezoidal_integral():
         cost.add(1.1, math.nan)
     with pytest.raises(ValueError, match="back"):
         cost.add(0.5, 1.0)
+
+
+@settings(max_examples=20, deadline=None)
+@given(theta=ANGLES, seed=st.integers(0, 2**16))
+def test_kinetic_energy_terms_add_up_to_pinocchios(robot, theta, seed):
+    """Eq. (5.1): base + arm + coupling = Pinocchio's kinetic energy for any base twist; the
+    wheel term is the energy of rotors spinning at phi_dot relative to the turning base."""
+    state = _state(robot, theta)
+    rng = np.random.default_rng(seed)
+    twist, theta_dot, speeds = rng.normal(size=6), rng.normal(size=robot.n), rng.normal(size=3)
+    v = pinocchio_velocity(state.base_rotation, twist, theta_dot)
+    data = robot.model.createData()
+    expected = pin.computeKineticEnergy(robot.model, data, state.q, v)
+    terms = kinetic_energy(state, twist, theta_dot)
+    assert terms.total == pytest.approx(expected, rel=1e-10)
+    assert terms.wheels == 0.0
+    with_wheels = kinetic_energy(state, twist, theta_dot, speeds, 0.11)
+    omega = state.base_rotation.T @ twist[3:]  # base axes, the wheels' axes
+    spin = 0.5 * 0.11 * ((omega + speeds) @ (omega + speeds) - omega @ omega)
+    assert with_wheels.wheels == pytest.approx(spin, rel=1e-10)
+    assert with_wheels.total == pytest.approx(expected + spin, rel=1e-10)

@@ -12,6 +12,13 @@ Publishes (all remappable):
     momentum      geometry_msgs/WrenchStamped force = linear momentum p [kg m/s], torque =
                                               angular momentum about the system CoM [kg m^2/s],
                                               both in ``world_frame`` axes
+    energy        std_msgs/Float64MultiArray  kinetic energy of the true state, layout
+                                              :data:`ENERGY_LABELS` (eq. 5.1 terms, the
+                                              Lambda_m / Lambda_r cost of the joint motion,
+                                              running C_max and C_sum, sim time) [J, J s, s]
+    wheel_states  sensor_msgs/JointState      with ``reaction_wheels``: wheel_x/y/z spin angle
+                                              [rad], rate relative to the base [rad/s], applied
+                                              motor torque [N m] (after the limits)
     /clock        rosgraph_msgs/Clock         every step, when ``publish_clock`` is true
 With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simulated time) past
 the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
@@ -24,6 +31,9 @@ Subscribes:
     joint_velocities  std_msgs/Float64MultiArray (``command_interface: velocity``), one velocity
                       [rad/s] per joint in the order of the ``joints`` parameter (the
                       ros2_control forward_command_controller convention)
+    wheel_torque      geometry_msgs/Vector3Stamped (with ``reaction_wheels``): motor torques of
+                      the x, y, z wheels [N m] (frame_id empty or the base link), clipped to
+                      ``wheel_torque_limit``; older than ``command_timeout``: motors off
 Also publishes, once, ``robot_description`` (std_msgs/String, transient local, depth 1): the URDF
 text of the simulated model, for robot_state_publisher / rviz users (latched: late joiners get it).
 Service:
@@ -46,26 +56,29 @@ from __future__ import annotations
 import math
 import threading
 import time
+from typing import NamedTuple
 
 import numpy as np
 from builtin_interfaces.msg import Time as TimeMsg
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray, String
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from rns_ros.core import FreeFloatingModel, load_model_config
+from rns_ros.core import FreeFloatingModel, FreeFloatingState, load_model_config
 from rns_ros.core.commands import (
     check_reference_positions,
     check_velocity_limits,
     match_named_command,
 )
+from rns_ros.core.conventions import base_twist_to_world
+from rns_ros.core.energy import EnergyCost, energy_metric, kinetic_energy
 from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.nodes.parameters import (
     JOINTS,
@@ -79,6 +92,7 @@ from rns_ros.nodes.parameters import (
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationState
+from rns_ros.sim.reaction_wheels import WHEEL_NAMES, ReactionWheels
 
 NODE_NAME = "rns_simulator"
 SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4)."
@@ -88,6 +102,22 @@ LOCKSTEP_PATIENCE = 2.0
 #: After ~/reset, a JointTrajectory starting this close to the reset angles [rad] ends the
 #: reset hold (a resynchronized controller); the hold otherwise lasts ``reset_hold``.
 RESET_MATCH_TOLERANCE = 0.01
+#: Layout of the ``energy`` topic (Float64MultiArray; also the label of its one dimension):
+#: eq. (5.1) terms of the true state [J], the arm's motion costed with Lambda_m and Lambda_r of
+#: eq. (5.3) [J], the running C_max [J] and C_sum [J s] of eqs. (5.12)-(5.13) since the start or
+#: the last ~/reset, and the simulated time of the sample [s].
+ENERGY_LABELS = (
+    "base",
+    "arm",
+    "coupling",
+    "wheels",
+    "total",
+    "lambda_arm",
+    "lambda_wheels",
+    "c_max",
+    "c_sum",
+    "time",
+)
 SATELLITE_OBSERVATION_RAD = [math.radians(a) for a in (-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0)]
 
 PARAMETERS = (
@@ -206,6 +236,31 @@ PARAMETERS = (
         10.0,
     ),
     ParameterSpec(
+        "reaction_wheels",
+        False,
+        "Three orthogonal reaction wheels on the base (spin axes base x, y, z; their mass and "
+        "locked inertia are part of the URDF base): wheel_torque in, wheel_states out",
+    ),
+    ParameterSpec(
+        "wheel_inertia",
+        0.11,
+        "Spin inertia I_r of one wheel (also the I_r of the energy metric Lambda_r)",
+        "[kg m^2]",
+        1e-6,
+        1e3,
+    ),
+    ParameterSpec(
+        "wheel_torque_limit", 0.1, "Motor torque limit per wheel (ETS-VII: 0.1)", "[N m]", 1e-6, 1e3
+    ),
+    ParameterSpec(
+        "wheel_speed_limit",
+        200.0 * math.pi,
+        "Spin-rate limit per wheel, relative to the base (6000 rpm)",
+        "[rad/s]",
+        1e-3,
+        1e5,
+    ),
+    ParameterSpec(
         "reset_hold",
         0.2,
         "After ~/reset, joint commands are ignored for this long (simulated time) and the arm "
@@ -216,6 +271,15 @@ PARAMETERS = (
     ),
 )
 SPECS = specs_by_name(PARAMETERS)
+
+
+class WheelSnapshot(NamedTuple):
+    """Wheel state to publish: angles [rad], speeds relative to the base [rad/s] and applied
+    torques [N m], each (3,) in base x, y, z order."""
+
+    angles: np.ndarray
+    speeds: np.ndarray
+    torques: np.ndarray
 
 
 def stamp_from_seconds(seconds: float) -> TimeMsg:
@@ -256,7 +320,20 @@ class SimulatorNode(Node):
             initial_q=initial_q,
             initial_momentum=params["initial_momentum"],
             gains=gains,
+            wheels=ReactionWheels(
+                inertia=params["wheel_inertia"],
+                torque_limit=params["wheel_torque_limit"],
+                speed_limit=params["wheel_speed_limit"],
+            )
+            if params["reaction_wheels"]
+            else None,
         )
+        self._wheels = params["reaction_wheels"]
+        self._wheel_inertia = params["wheel_inertia"]
+        self._energy_cost = EnergyCost()
+        self._last_wheel_command: float | None = None  # monotonic receipt time [s]
+        self._wheel_command_sim_time = 0.0
+        self._wheel_stale_logged = False
         self._publish_every = max(1, round(1.0 / (params["publish_rate"] * params["step_size"])))
         self._real_time_factor = params["real_time_factor"]
         self._command_timeout = params["command_timeout"]
@@ -286,6 +363,10 @@ class SimulatorNode(Node):
         self._joint_pub = self.create_publisher(JointState, "joint_states", state_qos)
         self._odom_pub = self.create_publisher(Odometry, "base_odom", state_qos)
         self._momentum_pub = self.create_publisher(WrenchStamped, "momentum", state_qos)
+        self._energy_pub = self.create_publisher(Float64MultiArray, "energy", state_qos)
+        self._wheel_pub = (
+            self.create_publisher(JointState, "wheel_states", state_qos) if self._wheels else None
+        )
         self._clock_pub = (
             self.create_publisher(Clock, "/clock", QoSProfile(depth=1))
             if self._publish_clock
@@ -303,6 +384,10 @@ class SimulatorNode(Node):
             self._velocity_joints = list(params["joints"])
             self.create_subscription(
                 Float64MultiArray, "joint_velocities", self._on_velocities, command_qos
+            )
+        if self._wheels:
+            self.create_subscription(
+                Vector3Stamped, "wheel_torque", self._on_wheel_torque, command_qos
             )
         # Transient local, depth 1: the robot_state_publisher convention, so a subscriber that
         # starts later still receives the model.
@@ -374,6 +459,30 @@ class SimulatorNode(Node):
             self._reject(str(exc))
             return
         self._accept(None, velocities, None)
+
+    def _on_wheel_torque(self, msg: Vector3Stamped) -> None:
+        frame = msg.header.frame_id
+        if frame not in ("", self.robot.base_link):
+            self._reject_wheels(
+                f"frame_id {frame!r}: wheel torques are about the base axes, frame_id "
+                f"{self.robot.base_link!r} or empty"
+            )
+            return
+        v = msg.vector
+        torque = np.array([v.x, v.y, v.z])
+        if not np.isfinite(torque).all():
+            self._reject_wheels(f"torques must be finite, got {torque.tolist()}")
+            return
+        with self._lock:
+            if self._fault or self._reset_requested or self.simulator.time < self._hold_until:
+                return
+            self.simulator.set_wheel_torque(torque)  # clipped to the limits at every step
+            self._last_wheel_command = time.monotonic()
+            self._wheel_command_sim_time = self.simulator.time
+            self._wheel_stale_logged = False
+
+    def _reject_wheels(self, reason: str) -> None:
+        self.get_logger().error(f"rejected wheel torque: {reason}", throttle_duration_sec=1.0)
 
     def _ignoring_commands(self, positions: np.ndarray | None = None) -> bool:
         """True (logged) while faulted or within ``reset_hold`` after a reset. A reference whose
@@ -459,6 +568,8 @@ class SimulatorNode(Node):
                     self._command_sim_time = 0.0
                     self._hold_until = self.simulator.time + self._reset_hold
                     self._fault = False
+                    self._last_wheel_command = None
+                    self._energy_cost = EnergyCost()
                     steps = 0
                 self._expire_stale_command()
                 try:
@@ -475,10 +586,11 @@ class SimulatorNode(Node):
                 publish = steps % self._publish_every == 0 or self._pauses_here()
                 snapshot = self.simulator.snapshot() if publish else None
                 momentum = self.simulator.centroidal_momentum() if publish else None
+                wheels = self._wheel_snapshot() if publish else None
                 sim_time = self.simulator.time
             # the state first: a sim-time timer woken by this clock tick should find it there
             if snapshot is not None:
-                self._publish_state(snapshot, momentum)
+                self._publish_state(snapshot, momentum, wheels)
             if self._clock_pub is not None:
                 self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
             factor = self._real_time_factor
@@ -527,16 +639,36 @@ class SimulatorNode(Node):
         self._command_arrived.wait(0.005)
         return True
 
+    def _wheel_snapshot(self) -> WheelSnapshot | None:
+        if not self._wheels:
+            return None
+        sim = self.simulator
+        return WheelSnapshot(
+            sim.wheel_angles.copy(), sim.wheel_speeds.copy(), sim.wheel_torque.copy()
+        )
+
+    def _command_age(self, received: float, sim_received: float) -> float:
+        """Age of a command [s]: simulated time in lockstep (a paused simulation does not move,
+        so a controller busy for a while only pauses it), else wall time."""
+        if self._lockstep > 0.0:
+            return self.simulator.time - sim_received
+        return time.monotonic() - received
+
     def _expire_stale_command(self) -> None:
+        if self._last_wheel_command is not None and (
+            self._command_age(self._last_wheel_command, self._wheel_command_sim_time)
+            > self._command_timeout
+        ):
+            self.simulator.set_wheel_torque(np.zeros(3))
+            self._last_wheel_command = None
+            if not self._wheel_stale_logged:
+                self.get_logger().warn(
+                    f"no wheel torque for {self._command_timeout} s: wheel motors off"
+                )
+                self._wheel_stale_logged = True
         if self._last_command is None:
             return
-        # In lockstep a paused simulation does not move, so the age that matters is simulated
-        # time (a controller busy for a while only pauses it); otherwise wall time.
-        if self._lockstep > 0.0:
-            age = self.simulator.time - self._command_sim_time
-        else:
-            age = time.monotonic() - self._last_command
-        if age > self._command_timeout:
+        if self._command_age(self._last_command, self._command_sim_time) > self._command_timeout:
             self.simulator.set_reference(velocities=np.zeros(self.robot.n))
             self._last_command = None
             if not self._stale_logged:
@@ -551,17 +683,24 @@ class SimulatorNode(Node):
         with self._lock:
             state = self.simulator.snapshot()
             momentum = self.simulator.centroidal_momentum()
+            wheels = self._wheel_snapshot()
         n = self.robot.n
         held = SimulationState(state.time, state.q, np.zeros(6 + n), np.zeros(n))
-        self._publish_state(held, momentum)
+        if wheels is not None:
+            wheels = WheelSnapshot(wheels.angles, np.zeros(3), np.zeros(3))
+        self._publish_state(held, momentum, wheels)
 
     def _stamp(self, state: SimulationState) -> TimeMsg:
         if self._publish_clock:
             return stamp_from_seconds(state.time)
         return self.get_clock().now().to_msg()
 
-    def _publish_state(self, state: SimulationState, momentum: np.ndarray) -> None:
+    def _publish_state(
+        self, state: SimulationState, momentum: np.ndarray, wheels: WheelSnapshot | None = None
+    ) -> None:
         values = (state.q, state.v, state.effort, momentum)
+        if wheels is not None:
+            values += tuple(wheels)
         if not all(np.isfinite(value).all() for value in values):
             # the core never keeps a non-finite state; this guards the topics regardless
             self.get_logger().error(
@@ -598,6 +737,47 @@ class SimulatorNode(Node):
         force.x, force.y, force.z = momentum[:3].tolist()
         torque.x, torque.y, torque.z = momentum[3:].tolist()
         self._momentum_pub.publish(wrench)
+
+        if wheels is not None:
+            wheel_states = JointState()
+            wheel_states.header.stamp = stamp
+            wheel_states.header.frame_id = self.robot.base_link
+            wheel_states.name = list(WHEEL_NAMES)
+            wheel_states.position = wheels.angles.tolist()
+            wheel_states.velocity = wheels.speeds.tolist()
+            wheel_states.effort = wheels.torques.tolist()
+            self._wheel_pub.publish(wheel_states)
+        self._publish_energy(state, wheels)
+
+    def _publish_energy(self, state: SimulationState, wheels: WheelSnapshot | None) -> None:
+        """The ``energy`` topic (layout: :data:`ENERGY_LABELS`), from the true state."""
+        physical = FreeFloatingState.compute(self.robot, state.q)
+        twist = base_twist_to_world(physical.base_rotation, state.v[:6])
+        theta_dot = state.v[6:]
+        terms = kinetic_energy(
+            physical,
+            twist,
+            theta_dot,
+            None if wheels is None else wheels.speeds,
+            self._wheel_inertia,
+        )
+        arm, wheel = energy_metric(physical, self._wheel_inertia).energy(theta_dot)
+        self._energy_cost.add(state.time, arm + wheel)
+        values = [
+            *terms,
+            arm,
+            wheel,
+            self._energy_cost.c_max,
+            self._energy_cost.c_sum,
+            state.time,
+        ]
+        if not np.isfinite(values).all():
+            return
+        msg = Float64MultiArray(data=[float(x) for x in values])
+        msg.layout.dim = [
+            MultiArrayDimension(label=" ".join(ENERGY_LABELS), size=len(values), stride=len(values))
+        ]
+        self._energy_pub.publish(msg)
 
     def destroy_node(self) -> None:
         self._stop.set()

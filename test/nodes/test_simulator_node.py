@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
@@ -481,3 +481,116 @@ def test_a_reference_that_starts_at_the_reset_state_ends_the_reset_hold(ros):
 
     assert ros.spin_until(moving, timeout=2.0)  # long before reset_hold = 5 s
     assert _sim_seconds(joints.messages[-1]) < 1.0
+
+
+def _energy(msg: Float64MultiArray) -> dict[str, float]:
+    labels = msg.layout.dim[0].label.split()
+    return dict(zip(labels, msg.data, strict=True))
+
+
+def test_energy_topic_follows_the_moving_arm(ros):
+    """The energy terms add up, and equal Pinocchio's kinetic energy of the published state; the
+    running C_sum grows by the trapezoid of lambda_arm + lambda_wheels over sim time."""
+    node = _simulator(ros, real_time_factor=0.0, publish_clock=True)
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states")
+    odom = Recorder(probe, Odometry, "base_odom")
+    energy = Recorder(probe, Float64MultiArray, "energy")
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+    velocities = [0.2, -0.3, 0.25, 0.4, -0.5, 0.6, 0.7]
+
+    def keep_commanding():
+        command.publish(_trajectory(velocities))
+        return len(energy.messages) > 40
+
+    assert ros.spin_until(keep_commanding, timeout=20.0)
+    robot = node.robot
+    odom_by_stamp = odom.by_stamp()
+    samples = [_energy(m) for m in energy.messages]
+    checked = 0
+    for state_msg in joints.messages:
+        stamp = state_msg.header.stamp.sec + 1e-9 * state_msg.header.stamp.nanosec
+        match = [s for s in samples if abs(s["time"] - stamp) < 1e-9]
+        key = (state_msg.header.stamp.sec, state_msg.header.stamp.nanosec)
+        if not match or key not in odom_by_stamp or np.abs(state_msg.velocity).max() == 0:
+            continue
+        sample, base = match[0], odom_by_stamp[key]
+        p, o = base.pose.pose.position, base.pose.pose.orientation
+        t = base.twist.twist
+        q = robot.configuration(state_msg.position, [p.x, p.y, p.z], [o.x, o.y, o.z, o.w])
+        v = np.array([t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z])
+        v = np.concatenate((v, state_msg.velocity))
+        expected = pin.computeKineticEnergy(robot.model, robot.model.createData(), q, v)
+        assert sample["total"] == pytest.approx(expected, rel=1e-9)
+        parts = sample["base"] + sample["arm"] + sample["coupling"] + sample["wheels"]
+        assert parts == pytest.approx(sample["total"], rel=1e-12)
+        assert sample["wheels"] == 0.0
+        checked += 1
+    assert checked > 10
+    # C_sum: trapezoid of the Lambda cost between consecutive samples (published every sample)
+    cost = [s["lambda_arm"] + s["lambda_wheels"] for s in samples]
+    times = [s["time"] for s in samples]
+    gained = samples[-1]["c_sum"] - samples[0]["c_sum"]
+    assert gained == pytest.approx(np.trapezoid(cost, times), rel=1e-2)
+    assert samples[-1]["c_max"] == pytest.approx(max(cost[-30:]), rel=1e-2)
+
+
+def test_reaction_wheels_turn_the_base_and_stop_on_a_stale_command(ros):
+    """0.1 N m on the z wheel: it spins up at tau / I_r relative to the (nearly still) base and
+    the base turns the other way; total momentum stays zero. A torque above the limit is applied
+    at the limit; with no new command for command_timeout the motors go off."""
+    _simulator(
+        ros, reaction_wheels=True, command_timeout=0.3, real_time_factor=0.0, publish_clock=True
+    )
+    probe = ros.probe()
+    wheels = Recorder(probe, JointState, "wheel_states")
+    momentum = Recorder(probe, WrenchStamped, "momentum")
+    odom = Recorder(probe, Odometry, "base_odom")
+    energy = Recorder(probe, Float64MultiArray, "energy")
+    torque = probe.create_publisher(Vector3Stamped, "wheel_torque", COMMAND_QOS)
+
+    def command(z: float):
+        msg = Vector3Stamped()
+        msg.vector.z = z
+        torque.publish(msg)
+
+    def spinning():
+        command(0.5)  # above the 0.1 N m limit
+        return bool(wheels.messages) and wheels.messages[-1].velocity[2] > 0.5
+
+    assert ros.spin_until(spinning, timeout=20.0)
+    last = wheels.messages[-1]
+    assert list(last.name) == ["wheel_x", "wheel_y", "wheel_z"]
+    assert last.effort[2] == pytest.approx(0.1)  # clipped to the limit
+    assert odom.messages[-1].twist.twist.angular.z < 0.0
+    for msg in momentum.messages:
+        t = msg.wrench.torque
+        assert abs(t.z) < 1e-9
+    assert _energy(energy.messages[-1])["wheels"] > 0.0
+    # stale: stop commanding; after command_timeout the applied torque is zero
+    speed = wheels.messages[-1].velocity[2]
+    assert ros.spin_until(lambda: wheels.messages[-1].effort[2] == 0.0, timeout=10.0)
+    ros.spin_for(0.3)
+    assert wheels.messages[-1].velocity[2] == pytest.approx(
+        wheels.messages[-5].velocity[2], rel=1e-6
+    )  # coasting: constant spin
+    assert wheels.messages[-1].velocity[2] >= speed
+
+
+def test_wheel_torque_in_a_foreign_frame_is_rejected(ros):
+    _simulator(ros, reaction_wheels=True)
+    probe = ros.probe()
+    logs = Recorder(probe, Log, "/rosout")
+    wheels = Recorder(probe, JointState, "wheel_states")
+    torque = probe.create_publisher(Vector3Stamped, "wheel_torque", COMMAND_QOS)
+    msg = Vector3Stamped()
+    msg.header.frame_id = "camera"
+    msg.vector.x = 0.05
+
+    def rejected():
+        torque.publish(msg)
+        return any("rejected wheel torque" in m.msg for m in logs.messages)
+
+    assert ros.spin_until(rejected, timeout=10.0)
+    assert "frame_id 'camera'" in next(m.msg for m in logs.messages if "wheel" in m.msg)
+    assert all(m.effort[0] == 0.0 for m in wheels.messages)

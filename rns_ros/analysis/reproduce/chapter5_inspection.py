@@ -1,0 +1,523 @@
+"""Chapter 5, §5.2.1-5.2.2: energy of the inspection task, reactionless vs conventional + reaction
+wheels (Figs. 5.4-5.5).
+
+* ``fig5.4``: the Fig. 4.3(a) satellite observation (condition 1). Kinetic energy against time of
+  (i) the reactionless DLS motion (eq. 4.5) and (ii) the conventional wrist-only inverse Jacobian
+  (4.7-4.8) with three reaction wheels holding the base, split into its arm part (Lambda_m) and
+  wheel part (Lambda_r) (eq. 5.3); the wheel torque (ii) needs, eq. (5.14), against the ETS-VII
+  limit of 0.1 N m; the ratios of C_max (5.12) and C_sum (5.13).
+* ``fig5.5``: C_max and C_sum of both motions for five conditions: condition 1 and four drawn with
+  a seeded RNG (:func:`rns_ros.analysis.energy_inspection.random_conditions`), on a log scale.
+
+The numbers come from :mod:`rns_ros.analysis.energy_inspection` (see its docstring for the
+bookkeeping of the conventional run: its joint motion is costed as if the wheels held the base).
+Runs are cached per process, so both results share condition 1.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from rns_ros.analysis.energy_inspection import (
+    CONDITION_ANGLE,
+    CONDITION_DURATION,
+    CONDITION_SEED,
+    ETS_VII_WHEEL_TORQUE_LIMIT,
+    SIGMA_MIN_THRESHOLD,
+    ConditionComparison,
+    EnergyRun,
+    InspectionCondition,
+    compare,
+    fixed_condition,
+    geometric_mean,
+    random_conditions,
+)
+from rns_ros.analysis.reproduce.registry import (
+    Comparison,
+    Outcome,
+    Reproduction,
+    Status,
+    register,
+)
+from rns_ros.control.scenario import load_scenario
+from rns_ros.core import FreeFloatingModel, load_model
+from rns_ros.core.energy import WHEEL_INERTIA
+from rns_ros.resources import default_model_config, scenario_path
+
+#: Thesis §5.2.2: "almost 10^3 times reduction" of both costs [-].
+THESIS_RATIO = 1e3
+#: Full runs: controller rate [Hz] and RK4 step [s] (thesis_rest §0: RK4 at 1 ms).
+FULL_RATE, FULL_STEP = 100.0, 1e-3
+#: Quick runs (tests): 50 Hz with one 20 ms RK4 step per period, and fewer conditions.
+QUICK_RATE, QUICK_STEP = 50.0, 2e-2
+#: Conditions of Fig. 5.5 (full / quick).
+CONDITIONS, QUICK_CONDITIONS = 5, 3
+#: A run "completes the task" when the camera ends within this of the target [deg].
+TASK_TOLERANCE_DEG = 1.0
+#: Log-scale floor for energies that can be exactly zero [J].
+_FLOOR = 1e-12
+
+SATELLITE = "satellite_observation"
+REACTIONLESS, CONVENTIONAL = "reactionless", "conventional_wheels"
+_RED, _GREEN = "tab:red", "tab:green"
+
+_CHOICES = (
+    "Geometry: the identified 7-DoF URDF (config/urdf/rns_7dof_arm.urdf, docs/arm_identification"
+    ".md); the thesis prints no link lengths or masses, so the size of the energy ratio is a "
+    "property of our arm, not a target.",
+    "Simulation (thesis_rest §0): kinematic free-floating closed loop (run_scenario), theta_dot = "
+    "theta_dot_ref held per control period (midpoint hold), RK4, zero initial momentum.",
+    "Reaction wheels (§5.1): three orthogonal wheels along the base axes, I_r = 0.11 kg m^2 each, "
+    "M~_omega_r = I_r E; their 30 kg are not added to the base (thesis_rest A-3.1 [R] would add "
+    "them as point masses; the base is 2550 kg, so m_C changes by about 1 %).",
+    "Conventional + wheels (thesis_rest 3.6): the simulated conventional run lets the base turn "
+    "(the simulator has no wheels); its joint rates and joint angles are costed as if the "
+    "wheels held the base (base at its initial pose, identity attitude), with the full Lambda = "
+    "Lambda_m + Lambda_r (5.3). The joint motion of a run whose base really is held would differ "
+    "slightly, because the controller sees the turning base.",
+    "Reactionless motion: costed with the same full Lambda; its wheel part is the sampling "
+    "residual of M~_omega_m theta_dot ~ 0 (listed, not dropped).",
+    "Sampling: one energy sample per control period at the middle of the period (theta_mid = "
+    "theta_k + T/2 theta_dot, exact in kinematic mode); C_sum (5.13) is trapezoidal between the "
+    "first and last sample (the quintic starts and ends at rest).",
+    "Wheel torque (5.14): tau_r = -d/dt(M~_omega_m theta_dot) by forward differences of the "
+    "mid-period samples, world axes (= the held base's axes); the peak is reported as |tau_r| "
+    "and as the largest single-wheel component, against ETS-VII's 0.1 N m.",
+    "Inspection command (thesis_rest A-3.7): omega_ref = pi * s_dot(t) * axis, world axes, "
+    "quintic s over 20 s (a pi rad rotation), the reading of config/scenarios/*.yaml; condition "
+    "1 is config/scenarios/satellite_observation.yaml (Fig. 4.3(a)), k_g = 100.",
+)
+
+
+@functools.cache
+def _robot() -> FreeFloatingModel:
+    return load_model(default_model_config())
+
+
+def _loop(quick: bool) -> tuple[float, float]:
+    return (QUICK_RATE, QUICK_STEP) if quick else (FULL_RATE, FULL_STEP)
+
+
+@functools.cache
+def _conditions(count: int) -> tuple[InspectionCondition, ...]:
+    """Condition 1 (Fig. 4.3(a)) and count - 1 random ones (seed CONDITION_SEED)."""
+    robot = _robot()
+    first = fixed_condition(robot, load_scenario(scenario_path(SATELLITE)), "condition 1")
+    return (first, *random_conditions(robot, count - 1, seed=CONDITION_SEED))
+
+
+@functools.cache
+def _comparison(index: int, quick: bool) -> ConditionComparison:
+    """Both runs of condition ``index`` (0-based) of the quick or full condition list."""
+    count = QUICK_CONDITIONS if quick else CONDITIONS
+    rate, step = _loop(quick)
+    return compare(_robot(), _conditions(count)[index], rate=rate, simulation_step=step)
+
+
+def _completed(run: EnergyRun) -> bool:
+    return run.result.final_orientation_error_deg < TASK_TOLERANCE_DEG
+
+
+def _run_values(run: EnergyRun) -> dict:
+    series = run.series
+    total, arm, wheels = series.costs(), series.costs("arm"), series.costs("wheels")
+    return {
+        "peak_energy_J": {
+            "arm": float(series.arm_energy.max()),
+            "wheels": float(series.wheel_energy.max()),
+            "total": float(series.total_energy.max()),
+        },
+        "c_max_J": {"total": total.c_max, "arm": arm.c_max, "wheels": wheels.c_max},
+        "c_sum_Js": {"total": total.c_sum, "arm": arm.c_sum, "wheels": wheels.c_sum},
+        "max_coupling_momentum_kgm2_s": float(
+            np.linalg.norm(series.coupling_momentum, axis=1).max()
+        ),
+        "max_wheel_rate_rad_s": float(np.abs(series.wheel_rate).max()),
+        "max_joint_speed_rad_s": float(np.abs(series.theta_dot).max()),
+        "final_camera_error_deg": run.result.final_orientation_error_deg,
+        "simulated_max_base_deviation_deg": run.result.max_base_deviation_deg,
+        "min_speed_scale": run.result.min_speed_scale,
+        "min_sigma": run.result.min_sigma,
+        "task_completed": _completed(run),
+    }
+
+
+def _torque_values(run: EnergyRun) -> dict:
+    torque = run.series.wheel_torque()
+    peak = torque.peak()
+    return {
+        "peak_Nm": peak,
+        "peak_single_wheel_Nm": torque.peak_component(),
+        "limit_Nm": ETS_VII_WHEEL_TORQUE_LIMIT,
+        "peak_over_limit": peak / ETS_VII_WHEEL_TORQUE_LIMIT,
+        "time_above_limit_s": torque.time_above(),
+        "time_above_limit_any_wheel_s": torque.time_above(per_wheel=True),
+        # theta_dot ~ 1/T and tau ~ 1/T^2 when the same path is run T times slower
+        "duration_for_limit_s": CONDITION_DURATION
+        * float(np.sqrt(max(peak / ETS_VII_WHEEL_TORQUE_LIMIT, 1.0))),
+    }
+
+
+def _settings(quick: bool, count: int) -> dict:
+    rate, step = _loop(quick)
+    robot = _robot()
+    return {
+        "model": f"{robot.name} (config/urdf/rns_7dof_arm.urdf, {robot.n} joints)",
+        "controller_rate_hz": rate,
+        "simulation_step_s": step,
+        "simulation_mode": "kinematic",
+        "hold_correction": "midpoint",
+        "wheel_inertia_kgm2": WHEEL_INERTIA,
+        "wheel_torque_limit_Nm": ETS_VII_WHEEL_TORQUE_LIMIT,
+        "methods": {
+            REACTIONLESS: "dls (eq. 4.5, k_g = 100)",
+            CONVENTIONAL: "conventional (4.7-4.8)",
+        },
+        "conditions": count,
+        "condition_seed": CONDITION_SEED,
+        "sigma_min_threshold": SIGMA_MIN_THRESHOLD,
+        "rotation_angle_deg": float(np.rad2deg(CONDITION_ANGLE)),
+        "duration_s": CONDITION_DURATION,
+        "time_scaling": "quintic",
+        "task_tolerance_deg": TASK_TOLERANCE_DEG,
+        "quick": quick,
+    }
+
+
+def _quick_choice(quick: bool) -> str:
+    if quick:
+        return (
+            f"Quick run (tests): {QUICK_RATE:g} Hz controller, one {QUICK_STEP * 1e3:g} ms RK4 "
+            f"step per period, {QUICK_CONDITIONS} conditions instead of {CONDITIONS}."
+        )
+    return f"Full run: {FULL_RATE:g} Hz controller, {FULL_STEP * 1e3:g} ms RK4 step."
+
+
+def _ratio_status(ratio: dict) -> Status:
+    """QUALITATIVE when both costs drop by at least an order of magnitude."""
+    return Status.QUALITATIVE if min(ratio.values()) > 10.0 else Status.NOT_REPRODUCIBLE
+
+
+# --------------------------------------------------------------------------- Fig. 5.4
+
+
+def _compute_fig5_4(quick: bool) -> Outcome:
+    comparison = _comparison(0, quick)
+    rns, conv = comparison.reactionless, comparison.conventional
+    rns_values, conv_values = _run_values(rns), _run_values(conv)
+    torque = _torque_values(conv)
+    ratio = comparison.ratio
+    wheel_over_arm = conv_values["peak_energy_J"]["wheels"] / conv_values["peak_energy_J"]["arm"]
+    residual = float(rns.series.wheel_energy.max() / rns.series.arm_energy.max())
+    rows = [
+        Comparison(
+            "wheel_over_arm_peak_energy",
+            "'quite larger' (no number printed)",
+            wheel_over_arm,
+            "",
+            Status.QUALITATIVE if wheel_over_arm > 10.0 else Status.NOT_REPRODUCIBLE,
+            f"conventional + wheels: peak wheel energy {conv_values['peak_energy_J']['wheels']:.4g}"
+            f" J over peak arm energy {conv_values['peak_energy_J']['arm']:.4g} J; Lambda_r "
+            "scales as 1/I_r with I_r = 0.11 kg m^2.",
+        ),
+        Comparison(
+            "energy_ratio",
+            THESIS_RATIO,
+            ratio,
+            "",
+            _ratio_status(ratio),
+            f"conventional + wheels over reactionless: C_max {ratio['c_max']:.3g}, C_sum "
+            f"{ratio['c_sum']:.3g} (thesis: 'almost 10^3'). Same order-of-magnitude claim; the "
+            "size is set by our arm's masses and lengths (the thesis prints none), not tuned.",
+        ),
+        Comparison(
+            "peak_wheel_torque_Nm",
+            f"above ETS-VII's {ETS_VII_WHEEL_TORQUE_LIMIT} N m implied ('would need lower speed')",
+            torque["peak_Nm"],
+            "N m",
+            Status.QUALITATIVE
+            if torque["peak_Nm"] > ETS_VII_WHEEL_TORQUE_LIMIT
+            else Status.NOT_REPRODUCIBLE,
+            f"|tau_r| of eq. (5.14), {torque['peak_over_limit']:.3g}x the limit, above it for "
+            f"{torque['time_above_limit_s']:.2f} s of {CONDITION_DURATION:g} s (largest single "
+            f"wheel {torque['peak_single_wheel_Nm']:.3g} N m); the same motion would need about "
+            f"{torque['duration_for_limit_s']:.0f} s instead of 20 s to stay within it "
+            "(tau ~ 1/T^2).",
+        ),
+        Comparison(
+            "reactionless_wheel_over_arm_energy",
+            "~0 (M~_omega_m theta_dot ~ 0)",
+            residual,
+            "",
+            Status.QUALITATIVE if residual < 1e-6 else Status.NOT_REPRODUCIBLE,
+            "peak wheel part over peak arm part of the reactionless motion: the sampled "
+            "controller's residual coupling momentum (midpoint hold, O(T^2)).",
+        ),
+    ]
+    values = {
+        "peak_energy_J": {
+            REACTIONLESS: rns_values["peak_energy_J"],
+            CONVENTIONAL: conv_values["peak_energy_J"],
+        },
+        "c_max_J": {
+            REACTIONLESS: rns_values["c_max_J"]["total"],
+            CONVENTIONAL: conv_values["c_max_J"]["total"],
+        },
+        "c_sum_Js": {
+            REACTIONLESS: rns_values["c_sum_Js"]["total"],
+            CONVENTIONAL: conv_values["c_sum_Js"]["total"],
+        },
+        "energy_ratio": ratio,
+        "wheel_torque": torque,
+        "runs": {REACTIONLESS: rns_values, CONVENTIONAL: conv_values},
+    }
+    condition = comparison.condition
+    settings = {
+        **_settings(quick, 1),
+        "scenario": f"config/scenarios/{SATELLITE}.yaml",
+        "initial_joint_positions_deg": np.round(
+            np.rad2deg(condition.scenario.initial_theta), 6
+        ).tolist(),
+        "axis": condition.scenario.axis.tolist(),
+    }
+    return Outcome(
+        tuple(rows),
+        values,
+        settings,
+        (*_CHOICES, _quick_choice(quick)),
+        {"comparison": comparison},
+    )
+
+
+def _plot_fig5_4(outcome: Outcome, figure) -> None:
+    comparison = outcome.figure_data["comparison"]
+    rns, conv = comparison.reactionless.series, comparison.conventional.series
+    axes = figure.subplots(3, 1)
+    ax = axes[0]
+    ax.semilogy(conv.t, np.maximum(conv.wheel_energy, _FLOOR), color=_GREEN, label="RW: wheels")
+    ax.semilogy(conv.t, np.maximum(conv.arm_energy, _FLOOR), color=_GREEN, ls="--", label="RW: arm")
+    ax.semilogy(rns.t, np.maximum(rns.arm_energy, _FLOOR), color=_RED, label="RNS: arm")
+    ax.semilogy(
+        rns.t,
+        np.maximum(rns.wheel_energy, _FLOOR),
+        color=_RED,
+        ls=":",
+        lw=0.8,
+        label="RNS: wheel residual",
+    )
+    ax.set_ylim(bottom=1e-10)  # the reactionless wheel residual is ~1e-8 of its arm energy
+    ax.set_title(
+        r"kinetic energy $\frac{1}{2}\dot\theta^T\Lambda\dot\theta$, arm ($\Lambda_m$) and "
+        r"wheel ($\Lambda_r$) parts (5.3)",
+        fontsize=9,
+    )
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("energy [J]")
+    ax.legend(fontsize=7, ncol=2)
+
+    ax = axes[1]
+    torque = conv.wheel_torque()
+    for j, name in enumerate("xyz"):
+        ax.plot(torque.t, np.abs(torque.torque[:, j]), lw=0.8, label=rf"$|\tau_{{r,{name}}}|$")
+    ax.plot(torque.t, torque.magnitude, color="k", lw=1.2, label=r"$|\tau_r|$")
+    ax.axhline(ETS_VII_WHEEL_TORQUE_LIMIT, color="C3", ls="--", label="ETS-VII limit 0.1 N m")
+    ax.set_yscale("log")
+    ax.set_ylim(bottom=1e-4)
+    ax.set_title(r"wheel torque (5.14) $\tau_r = -\frac{d}{dt}(\tilde M_{\omega m}\dot\theta)$")
+    ax.title.set_fontsize(9)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("torque [N m]")
+    ax.legend(fontsize=7, ncol=3)
+
+    ax = axes[2]
+    for series, color, label in ((conv, _GREEN, "RW (conventional + wheels)"), (rns, _RED, "RNS")):
+        dt = np.diff(series.t)
+        cumulative = np.concatenate(
+            ([0.0], np.cumsum(0.5 * (series.total_energy[1:] + series.total_energy[:-1]) * dt))
+        )
+        ax.semilogy(series.t[1:], np.maximum(cumulative[1:], _FLOOR), color=color, label=label)
+    ratio = outcome.values["energy_ratio"]
+    ax.set_title(
+        f"running C_sum (5.13); ratio C_max {ratio['c_max']:.3g}, C_sum {ratio['c_sum']:.3g}",
+        fontsize=9,
+    )
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("C_sum [J s]")
+    ax.legend(fontsize=7)
+
+
+# --------------------------------------------------------------------------- Fig. 5.5
+
+
+def _condition_values(comparison: ConditionComparison) -> dict:
+    condition = comparison.condition
+    runs = {REACTIONLESS: comparison.reactionless, CONVENTIONAL: comparison.conventional}
+    costs = {label: run.series.costs() for label, run in runs.items()}
+    return {
+        "label": condition.label,
+        "initial_joint_positions_deg": np.round(
+            np.rad2deg(condition.scenario.initial_theta), 4
+        ).tolist(),
+        "axis": np.round(condition.scenario.axis, 6).tolist(),
+        "sigma_min_start": condition.sigma_min,
+        "draws": condition.draws,
+        "c_max_J": {label: cost.c_max for label, cost in costs.items()},
+        "c_sum_Js": {label: cost.c_sum for label, cost in costs.items()},
+        "energy_ratio": comparison.ratio,
+        "peak_wheel_torque_Nm": comparison.conventional.series.wheel_torque().peak(),
+        "final_camera_error_deg": {
+            label: run.result.final_orientation_error_deg for label, run in runs.items()
+        },
+        "min_speed_scale": {label: run.result.min_speed_scale for label, run in runs.items()},
+        "min_sigma": {label: run.result.min_sigma for label, run in runs.items()},
+        "task_completed": {label: _completed(run) for label, run in runs.items()},
+    }
+
+
+def _geometric_means(rows: list[dict]) -> dict:
+    return {
+        key: geometric_mean(row["energy_ratio"][key] for row in rows) for key in ("c_max", "c_sum")
+    }
+
+
+def _compute_fig5_5(quick: bool) -> Outcome:
+    count = QUICK_CONDITIONS if quick else CONDITIONS
+    comparisons = [_comparison(i, quick) for i in range(count)]
+    rows = [_condition_values(c) for c in comparisons]
+    mean = _geometric_means(rows)
+    completed = [row for row in rows if all(row["task_completed"].values())]
+    mean_completed = _geometric_means(completed) if completed else {}
+    table = []
+    for row in rows:
+        ratio = row["energy_ratio"]
+        failed = [label for label, ok in row["task_completed"].items() if not ok]
+        note = (
+            f"C_max {ratio['c_max']:.3g}, C_sum {ratio['c_sum']:.3g}; sigma_min(J-bar) at the "
+            f"start {row['sigma_min_start']:.3f}"
+        )
+        if failed:
+            errors = row["final_camera_error_deg"]
+            note += "; task not completed by " + ", ".join(
+                f"{label} (camera {errors[label]:.3g} deg off, min speed scale "
+                f"{row['min_speed_scale'][label]:.3g}, min sigma {row['min_sigma'][label]:.3g})"
+                for label in failed
+            )
+        table.append(
+            Comparison(
+                f"energy_ratio_{row['label'].replace(' ', '_')}",
+                "almost 10^3" if row["label"] != "condition 1" else THESIS_RATIO,
+                ratio,
+                "",
+                _ratio_status(ratio),
+                note + ".",
+            )
+        )
+    completed_text = (
+        f"over the {len(completed)} condition(s) both controllers complete: C_max "
+        f"{mean_completed['c_max']:.3g}, C_sum {mean_completed['c_sum']:.3g}"
+        if completed
+        else "no condition completed by both controllers"
+    )
+    table.append(
+        Comparison(
+            "energy_ratio_geometric_mean",
+            THESIS_RATIO,
+            mean,
+            "",
+            _ratio_status(mean),
+            f"geometric mean over all {count} conditions (thesis: '10^3 times smaller ... on "
+            f"average'); {completed_text}. The size depends on our arm; never tuned.",
+        )
+    )
+    values = {
+        "conditions": rows,
+        "energy_ratio": {row["label"]: row["energy_ratio"] for row in rows},
+        "energy_ratio_geometric_mean": mean,
+        "energy_ratio_geometric_mean_completed": {
+            **mean_completed,
+            "conditions": [row["label"] for row in completed],
+        },
+    }
+    choices = (
+        *_CHOICES,
+        f"Conditions (thesis_rest A-3.6): condition 1 is Fig. 4.3(a); conditions 2-{count} come "
+        f"from numpy default_rng({CONDITION_SEED}): per candidate theta0 ~ U(URDF lower, upper) "
+        "per joint (our URDF allows +-360 deg), then axis = N(0, E_3) normalised; rejected when "
+        f"a joint is outside its limits or sigma_min(J-bar_omega_e) < {SIGMA_MIN_THRESHOLD:g} "
+        "at the start. No collision check (the arm may intersect the base), no check along the "
+        "path: a run may meet a singularity and miss the target; such conditions are kept and "
+        "flagged (task_completed, camera error < 1 deg), and the geometric mean is also given "
+        "over the conditions both controllers complete.",
+        _quick_choice(quick),
+    )
+    return Outcome(
+        tuple(table),
+        values,
+        _settings(quick, count),
+        choices,
+        {"rows": rows},
+    )
+
+
+def _plot_fig5_5(outcome: Outcome, figure) -> None:
+    rows = outcome.figure_data["rows"]
+    axes = figure.subplots(1, 2)
+    x = np.arange(len(rows))
+    width = 0.38
+    for ax, key, title, unit in (
+        (axes[0], "c_max_J", "C_max (5.12)", "J"),
+        (axes[1], "c_sum_Js", "C_sum (5.13)", "J s"),
+    ):
+        ratio_key = "c_max" if key == "c_max_J" else "c_sum"
+        for offset, label, color, name in (
+            (-width / 2, REACTIONLESS, _RED, "RNS (reactionless)"),
+            (width / 2, CONVENTIONAL, _GREEN, "RW (conventional + wheels)"),
+        ):
+            heights = [max(row[key][label], _FLOOR) for row in rows]
+            hatches = ["" if row["task_completed"][label] else "//" for row in rows]
+            bars = ax.bar(x + offset, heights, width, color=color, label=name)
+            for bar, hatch in zip(bars, hatches, strict=True):
+                bar.set_hatch(hatch)
+        for i, row in enumerate(rows):
+            top = max(row[key].values())
+            ax.annotate(
+                f"x{row['energy_ratio'][ratio_key]:.3g}",
+                (x[i], top),
+                xytext=(0, 3),
+                textcoords="offset points",
+                ha="center",
+                fontsize=7,
+            )
+        ax.set_yscale("log")
+        lowest = min(max(value, _FLOOR) for row in rows for value in row[key].values())
+        ax.set_ylim(0.3 * lowest, 30.0 * max(max(row[key].values()) for row in rows))
+        ax.set_xticks(x, [row["label"].replace("condition ", "cond. ") for row in rows])
+        ax.set_ylabel(f"{title.split()[0]} [{unit}]")
+        ax.set_title(f"{title}; hatched: task not completed", fontsize=9)
+        mean = outcome.values["energy_ratio_geometric_mean"][ratio_key]
+        ax.set_xlabel(f"geometric-mean ratio RW / RNS: {mean:.3g}")
+        ax.legend(fontsize=7, loc="upper right")
+
+
+register(
+    Reproduction(
+        "fig5.4",
+        "Fig. 5.4",
+        "inspection energy: reactionless vs conventional + reaction wheels (Fig. 4.3(a) case)",
+        _compute_fig5_4,
+        _plot_fig5_4,
+        (9.0, 11.0),
+    )
+)
+register(
+    Reproduction(
+        "fig5.5",
+        "Fig. 5.5",
+        "C_max and C_sum over inspection conditions: reactionless vs reaction wheels",
+        _compute_fig5_5,
+        _plot_fig5_5,
+        (11.0, 5.5),
+    )
+)

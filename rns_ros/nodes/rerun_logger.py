@@ -19,6 +19,10 @@ of 100 Hz state while a busy logger catches up instead of dropping samples):
                               camera frame; empty: ``default_twist_frame``; others are skipped)
     <ptp_status_topic>        diagnostic_msgs/DiagnosticArray of rns_ptp: phase (code and a log
                               line per change), progress, predicted coupling momentum
+    energy                    std_msgs/Float64MultiArray of rns_simulator (labels from its
+                              layout): kinetic-energy terms, Lambda costs, C_max, C_sum; stamped
+                              with the newest joint_states stamp (published in the same step)
+    wheel_states              sensor_msgs/JointState of the reaction wheels: rates, torques
     ptp_goal                  sensor_msgs/JointState goal of rns_ptp (by joint name; joints it
                               does not name at their newest measured angle): a translucent ghost
                               arm at the goal; the ``["deploy"]`` goal clears it
@@ -39,6 +43,7 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
 
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import twist_frame_ids
@@ -144,6 +149,7 @@ class RerunLoggerNode(Node):
         urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
         self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
         self._limits = (self.robot.lower_limits, self.robot.upper_limits)
+        self._last_state_stamp: int | None = None  # [ns], of the newest joint_states
         self._frames = twist_frame_ids(
             self.robot, params["world_frame"], params["default_twist_frame"]
         )
@@ -179,6 +185,8 @@ class RerunLoggerNode(Node):
             self.create_subscription(
                 DiagnosticArray, params["ptp_status_topic"], self._on_ptp_status, qos
             )
+            self.create_subscription(Float64MultiArray, "energy", self._on_energy, qos)
+            self.create_subscription(JointState, "wheel_states", self._on_wheel_states, qos)
             # goals are rare and must not be missed by a late logger: reliable, like rns_ptp's
             self.create_subscription(JointState, "ptp_goal", self._on_ptp_goal, 10)
             # A quiet system still shows its newest samples: send the buffer periodically, by
@@ -203,9 +211,8 @@ class RerunLoggerNode(Node):
             )
             if command.positions is None:
                 raise InputError("joint_states has no positions")
-            self.recorder.joint_state(
-                self._stamp_ns(msg.header), command.positions, command.velocities
-            )
+            self._last_state_stamp = self._stamp_ns(msg.header)
+            self.recorder.joint_state(self._last_state_stamp, command.positions, command.velocities)
             self.get_logger().info("receiving joint_states", once=True)
         except InputError as exc:
             self._ignored("joint_states", exc)
@@ -233,6 +240,25 @@ class RerunLoggerNode(Node):
                     self._stamp_ns(msg.header), values, level, status.message
                 )
                 return
+
+    def _on_energy(self, msg: Float64MultiArray) -> None:
+        labels = msg.layout.dim[0].label.split() if msg.layout.dim else []
+        if len(labels) != len(msg.data):
+            self._ignored("energy", f"{len(msg.data)} values for labels {labels}")
+            return
+        stamp = self._last_state_stamp or self.get_clock().now().nanoseconds
+        try:
+            self.recorder.energy(stamp, dict(zip(labels, msg.data, strict=True)))
+        except InputError as exc:
+            self._ignored("energy", exc)
+
+    def _on_wheel_states(self, msg: JointState) -> None:
+        try:
+            if len(msg.velocity) != 3 or len(msg.effort) != 3:
+                raise InputError("wheel_states needs 3 velocities and 3 efforts")
+            self.recorder.wheel_state(self._stamp_ns(msg.header), msg.velocity, msg.effort)
+        except InputError as exc:
+            self._ignored("wheel_states", exc)
 
     def _on_ptp_status(self, msg: DiagnosticArray) -> None:
         for status in msg.status:

@@ -41,6 +41,8 @@ def default_blueprint() -> rrb.Blueprint:
         rrb.Tabs(
             rrb.TimeSeriesView(name="Controller", origin=paths.CONTROLLER),
             rrb.TextLogView(name="Controller log", origin=paths.CONTROLLER_LOG),
+            rrb.TimeSeriesView(name="Kinetic energy [J]", origin=paths.ENERGY),
+            rrb.TimeSeriesView(name="Reaction wheels", origin=paths.WHEELS),
             rrb.TimeSeriesView(name="Point-to-point (rns_ptp)", origin=paths.PTP),
             rrb.TextLogView(name="rns_ptp log", origin=paths.PTP_LOG),
             rrb.TimeSeriesView(name="System momentum", origin=paths.MOMENTUM),

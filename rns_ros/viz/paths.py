@@ -50,6 +50,13 @@ Time series (``Scalars``, one entity per series, one row per logged message):
   predicted |M~_omega_m theta_dot| of rns_ptp goes to ``plots/coupling_momentum/norm`` (the two
   commanders never run together).
 
+* ``plots/energy/{base,arm,coupling,wheels,total}`` [J]: eq. (5.1) terms of the true state
+  (rns_simulator ``energy``); ``plots/energy/lambda/{arm,wheels}`` [J]: the joint motion costed
+  with Lambda_m and Lambda_r (eq. 5.3); ``plots/energy/cost/c_max`` [J] and
+  ``plots/energy/cost/c_sum`` [J s] (eqs. 5.12-5.13, running).
+* ``plots/wheels/speed/{x,y,z}`` [rad/s] and ``plots/wheels/torque/{x,y,z}`` [N m]: reaction
+  wheel rates relative to the base and applied motor torques (``wheel_states``).
+
 Text: ``log/controller`` (TextLog): one line whenever the controller state changes;
 ``log/ptp``: one line whenever the rns_ptp state or phase changes.
 """
@@ -110,6 +117,14 @@ MOMENTUM = "plots/momentum"
 MOMENTUM_LINEAR = "plots/momentum/linear"
 MOMENTUM_ANGULAR = "plots/momentum/angular"
 
+ENERGY = "plots/energy"
+ENERGY_TERMS = ("base", "arm", "coupling", "wheels", "total")
+ENERGY_LAMBDA = ("arm", "wheels")
+ENERGY_COSTS = ("c_max", "c_sum")
+WHEELS = "plots/wheels"
+WHEEL_SPEED = "plots/wheels/speed"
+WHEEL_TORQUE = "plots/wheels/torque"
+
 PTP = "plots/ptp"
 PTP_PHASE = "plots/ptp/phase"
 PTP_PROGRESS = "plots/ptp/progress"
@@ -125,7 +140,24 @@ def axis_paths(group: str) -> tuple[str, str, str]:
     return tuple(f"{group}/{axis}" for axis in AXES)
 
 
+def energy_term(term: str) -> str:
+    """Time series of one eq. (5.1) term [J] (``ENERGY_TERMS``)."""
+    return f"{ENERGY}/{term}"
+
+
+def energy_lambda(part: str) -> str:
+    """Time series of the Lambda_m / Lambda_r cost of the joint motion [J] (``ENERGY_LAMBDA``)."""
+    return f"{ENERGY}/lambda/{part}"
+
+
+def energy_cost(name: str) -> str:
+    """Running C_max [J] or C_sum [J s] (``ENERGY_COSTS``)."""
+    return f"{ENERGY}/cost/{name}"
+
+
 COUPLING_MOMENTUM_AXES = axis_paths(COUPLING_MOMENTUM)
+WHEEL_SPEED_AXES = axis_paths(WHEEL_SPEED)
+WHEEL_TORQUE_AXES = axis_paths(WHEEL_TORQUE)
 COMMANDED_ANGULAR_VELOCITY_AXES = axis_paths(COMMANDED_ANGULAR_VELOCITY)
 ACHIEVED_ANGULAR_VELOCITY_AXES = axis_paths(ACHIEVED_ANGULAR_VELOCITY)
 BASE_ATTITUDE_SERIES = (
@@ -220,7 +252,16 @@ def series_table(joint_names: tuple[str, ...] | list[str]) -> dict[str, Series]:
         PTP_PHASE: Series("rns_ptp phase code [-]", _GREY),
         PTP_PROGRESS: Series("rns_ptp progress [-]", _RGB[2]),
     }
+    for index, term in enumerate(ENERGY_TERMS):
+        color = _GREY if term == "total" else _JOINT_RGB[index]
+        table[energy_term(term)] = Series(f"{term} [J]", color)
+    table[energy_lambda("arm")] = Series("Λ_m part [J]", _RGB[1])
+    table[energy_lambda("wheels")] = Series("Λ_r part [J]", _RGB[0])
+    table[energy_cost("c_max")] = Series("C_max [J]", _RGB[0])
+    table[energy_cost("c_sum")] = Series("C_sum [J s]", _RGB[2])
     for index, axis in enumerate(AXES):
+        table[WHEEL_SPEED_AXES[index]] = Series(f"wheel {axis} [rad/s]", _RGB[index])
+        table[WHEEL_TORQUE_AXES[index]] = Series(f"wheel {axis} [N m]", _RGB[index])
         table[COUPLING_MOMENTUM_AXES[index]] = Series(f"{axis} [kg m²/s]", _RGB[index])
         table[COMMANDED_ANGULAR_VELOCITY_AXES[index]] = Series(
             f"commanded {axis} [rad/s]", _PALE_RGB[index]

@@ -30,7 +30,7 @@ import numpy as np
 import rerun as rr
 
 from rns_ros.control.controller import TwistFrame
-from rns_ros.core.errors import ConfigError
+from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.core.validation import as_vector
@@ -53,7 +53,17 @@ SIM_TIME_LIMIT_NS = 10**18
 #: Longest wait for buffered data to reach the sink when closing [s].
 FLUSH_TIMEOUT = 10.0
 _TEXT_LEVEL = {0: rr.TextLogLevel.INFO, 1: rr.TextLogLevel.WARN, 2: rr.TextLogLevel.ERROR}
-_STREAMS = ("joints", "odom", "momentum", "status", "twist", "ptp_status", "ptp_goal")
+_STREAMS = (
+    "joints",
+    "odom",
+    "momentum",
+    "status",
+    "twist",
+    "ptp_status",
+    "ptp_goal",
+    "energy",
+    "wheels",
+)
 #: Ghost arm of a ptp goal: translucent so the real arm shows through it.
 GHOST_COLOR = (120, 170, 255, 110)
 GHOST_LINE_RADIUS = 0.03
@@ -308,6 +318,41 @@ class TelemetryRecorder:
                 self._vector(paths.COMMANDED_ANGULAR_VELOCITY_AXES, stamp_ns, omega)
                 self._send_if_due()
             return True
+
+    def energy(self, stamp_ns: int, values: Mapping[str, float]) -> None:
+        """One sample of rns_simulator's ``energy`` topic as {label: value} (labels of its
+        layout: base, arm, coupling, wheels, total [J], lambda_arm, lambda_wheels [J], c_max [J],
+        c_sum [J s]); unknown labels are skipped, a non-finite value is an InputError."""
+        paths_by_label = {term: paths.energy_term(term) for term in paths.ENERGY_TERMS}
+        paths_by_label |= {f"lambda_{p}": paths.energy_lambda(p) for p in paths.ENERGY_LAMBDA}
+        paths_by_label |= {name: paths.energy_cost(name) for name in paths.ENERGY_COSTS}
+        rows = {paths_by_label[k]: v for k, v in values.items() if k in paths_by_label}
+        if not np.isfinite(list(rows.values())).all():
+            raise InputError(f"energy values must be finite, got {dict(values)}")
+        with self._lock:
+            if not self._accept("energy", stamp_ns):
+                return
+            self.counts["energy"] += 1
+            for path, value in rows.items():
+                self._scalar(path, stamp_ns, value)
+            self._send_if_due()
+
+    def wheel_state(self, stamp_ns: int, speeds, torques) -> None:
+        """Reaction wheels: rates relative to the base [rad/s] (3,) and applied torques [N m]
+        (3,), base x y z.
+
+        Raises:
+            InputError: not finite 3-vectors.
+        """
+        speeds = as_vector(speeds, 3, "wheel speeds")
+        torques = as_vector(torques, 3, "wheel torques")
+        with self._lock:
+            if not self._accept("wheels", stamp_ns):
+                return
+            self.counts["wheels"] += 1
+            self._vector(paths.WHEEL_SPEED_AXES, stamp_ns, speeds)
+            self._vector(paths.WHEEL_TORQUE_AXES, stamp_ns, torques)
+            self._send_if_due()
 
     def ptp_status(
         self, stamp_ns: int, values: Mapping[str, str], level: int = 0, message: str = ""

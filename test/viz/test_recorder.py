@@ -54,6 +54,20 @@ def open_recorder(robot, tmp_path):
         recorder.close()
 
 
+#: One sample of rns_simulator's energy topic (its labels) [J, J s].
+ENERGY = {
+    "base": 0.1,
+    "arm": 2.0,
+    "coupling": -0.05,
+    "wheels": 0.0,
+    "total": 2.05,
+    "lambda_arm": 1.9,
+    "lambda_wheels": 40.0,
+    "c_max": 41.9,
+    "c_sum": 12.0,
+}
+
+
 def _theta(k: int) -> np.ndarray:
     return np.radians(SATELLITE_OBSERVATION_DEG) + 0.002 * k
 
@@ -73,6 +87,8 @@ def _feed(recorder, samples: int, start_ns: int = 0) -> None:
         recorder.momentum(stamp, [0.0, 0.0, 0.0], [1e-12, 0.0, 0.0])
         recorder.controller_status(stamp, STATUS, 0, "")
         recorder.commanded_twist(stamp, [0.0, 0.0, 0.1], "world")
+        recorder.energy(stamp, ENERGY | {"time": k * 0.01})
+        recorder.wheel_state(stamp, [1.0, 2.0, 3.0], [0.01, 0.0, -0.1])
 
 
 def _series_paths(robot) -> list[str]:
@@ -348,3 +364,18 @@ def test_ptp_goal_ghost_arm_stands_on_the_newest_base_pose(open_recorder, robot)
     assert any("Points3D:positions" in row for row in joints)
     # the deploy goal clears the ghost (a Clear tombstone on the entity)
     assert any(any("Clear" in key for key in row) for row in rows)
+
+
+def test_energy_and_wheel_series_come_back_by_label(open_recorder):
+    recorder = open_recorder()
+    recorder.energy(0, {**ENERGY, "unknown": 5.0})
+    recorder.wheel_state(0, [1.0, 2.0, 3.0], [0.01, 0.0, -0.1])
+    with pytest.raises(InputError, match="finite"):
+        recorder.energy(PERIOD_NS, {"total": math.nan})
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    assert read_scalars(rrd, paths.energy_term("total"))[1].tolist() == [2.05]
+    assert read_scalars(rrd, paths.energy_lambda("wheels"))[1].tolist() == [40.0]
+    assert read_scalars(rrd, paths.energy_cost("c_sum"))[1].tolist() == [12.0]
+    assert read_scalars(rrd, paths.WHEEL_SPEED_AXES[2])[1].tolist() == [3.0]
+    assert read_scalars(rrd, paths.WHEEL_TORQUE_AXES[2])[1].tolist() == [-0.1]

@@ -1,0 +1,632 @@
+r"""Chapter-5 maps of the motion-equivalence ratio C_ratio over joint space (Figs. 5.1-5.3).
+
+C_ratio (eq. 5.5) compares two ways of moving the arm at unit joint speed with the base attitude
+held: the cheapest *reactionless* motion (M~_omega_m theta_dot = 0, no wheel effort), whose energy
+is n^T Lambda_m n / 2 for the unit kernel vector n, and the cheapest motion of all when reaction
+wheels absorb the coupling momentum, sigma_min(Lambda) / 2 (eq. 5.4). Here
+
+    Lambda   = Lambda_m + Lambda_r                                   [kg m^2], (k, k)   (5.3)
+    Lambda_m = M~_m      (arm inertia, base translating with zero linear momentum)
+    Lambda_r = M~_omega_m^T M~_omega_m / I_r                         (three wheels, I_r each)
+    C_ratio  = (n^T Lambda_m n) / sigma_min(Lambda) >= 1                                 (5.5)
+
+The per-point reference is :func:`rns_ros.core.energy.c_ratio` on a Pinocchio
+:class:`~rns_ros.core.state.FreeFloatingState`. This module evaluates the same numbers on whole
+grids, fast:
+
+* Planar 2-DoF arm (Fig. 5.1, eqs. 5.6-5.7 for Fig. 5.2): the closed form of
+  :class:`rns_ros.analysis.planar_field.PlanarArm` (M~_m and the z row of M~_omega_m), so the
+  (alpha, beta) variations are just other arm parameters.
+* Spatial k-joint subchain (Fig. 5.3, eqs. 5.8-5.9): :class:`SerialChain` is the subchain read out
+  of a Pinocchio model, the held joints folded into rigid bodies. Everything is computed in the
+  frame of the first moving joint, where the arm's own quantities (M~_m, the arm's angular and
+  linear momentum matrices) do not depend on theta_1. theta_1 only moves the base CoM seen from
+  that frame, and M~_omega_m is affine in that point (see :func:`_chain_terms`), so a chunk
+  (one theta_2 value) computes the arm terms once for all (theta_3, ..., theta_k) and then every
+  theta_1 with one matrix product. The smallest eigenvalue is one batched LAPACK call per chunk.
+  Chunks run in local processes (:class:`concurrent.futures.ProcessPoolExecutor`) or, with a
+  scheduler address, on a dask.distributed cluster.
+
+Rank: where M~_omega_m loses rank the reactionless motions form a plane or more, and the cheapest
+one is sigma_min(N^T Lambda_m N) with N an orthonormal kernel basis; where M~_omega_m = 0 every
+motion is reactionless and C_ratio = 1. Points whose cofactor (kernel) vector is tiny relative to
+|M~_omega_m|^(k-1) are recomputed one by one with the reference :func:`~rns_ros.core.energy.c_ratio`
+(same rank rule), so the fast path and the reference agree everywhere.
+
+Wheels (choice A-3.1): point masses at the base CoM (they change m_C only). The planar arm gets one
+wheel (+10 kg), the spatial arm three (+30 kg, :func:`wheeled_model`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pinocchio as pin
+
+from rns_ros.analysis.planar_field import PlanarArm
+from rns_ros.core.energy import WHEEL_INERTIA, EnergyMetric, c_ratio
+from rns_ros.core.errors import ConfigError
+from rns_ros.core.model import FreeFloatingModel
+
+#: Mass of one reaction wheel [kg] (thesis section 5.2); added at the base CoM (A-3.1).
+WHEEL_MASS = 10.0
+#: Planar model of section 5.2: r [m], base mass incl. one wheel [kg], link inertia [kg m^2].
+PLANAR_ATTACH_DISTANCE = 0.945
+PLANAR_BASE_MASS = 1000.0 + WHEEL_MASS
+PLANAR_LINK_INERTIA = 8.3
+#: |cofactor vector| <= this * |M~_omega_m|_F^(k-1): recompute the point with the reference.
+CANDIDATE_RANK_LOSS = 1e-6
+#: Relative singular-value threshold of the kernel in the reference (as core.energy.c_ratio).
+RANK_TOLERANCE = 1e-9
+
+
+def periodic_grid(count: int, start: float = -math.pi, span: float = 2.0 * math.pi) -> np.ndarray:
+    """start + span k / count, k = 0..count-1 [rad], shape (count,) (choice A-3.2: the end point
+    start + span is the same angle as start and is left out)."""
+    if count < 1:
+        raise ConfigError(f"a grid needs at least one point, got {count}")
+    return start + span * np.arange(count) / count
+
+
+# --- the ratio from M~_m and M~_omega_m, batched ------------------------------------------------
+def _kernel_vectors(coupling: np.ndarray) -> np.ndarray:
+    """Cofactor vector of each (k-1, k) matrix (generalized cross product), shape (..., k).
+
+    It spans the kernel when the rank is k - 1 and its norm is the product of the singular values.
+    """
+    rows, k = coupling.shape[-2:]
+    if rows != k - 1:
+        raise ConfigError(f"M~_omega_m must be (k - 1, k) for a 1-D kernel, got {(rows, k)}")
+    if k == 2:
+        return np.stack([-coupling[..., 0, 1], coupling[..., 0, 0]], -1)
+    if k == 4:
+        g = coupling
+        # 2x2 minors of rows 1, 2 for column pairs (a, b)
+        minor = {
+            (a, b): g[..., 1, a] * g[..., 2, b] - g[..., 1, b] * g[..., 2, a]
+            for a in range(4)
+            for b in range(a + 1, 4)
+        }
+        out = np.empty((*coupling.shape[:-2], 4))
+        for j in range(4):
+            a, b, c = (col for col in range(4) if col != j)
+            det = (
+                g[..., 0, a] * minor[b, c] - g[..., 0, b] * minor[a, c] + g[..., 0, c] * minor[a, b]
+            )
+            out[..., j] = det if j % 2 == 0 else -det
+        return out
+    out = np.empty((*coupling.shape[:-2], k))
+    for j in range(k):
+        out[..., j] = (-1) ** j * np.linalg.det(np.delete(coupling, j, axis=-1))
+    return out
+
+
+def _cholesky_solve(chol: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x with L L^T x = rhs for lower-triangular L (N, k, k) and rhs (N, k)."""
+    k = rhs.shape[-1]
+    y = np.empty_like(rhs)
+    for i in range(k):
+        partial = np.einsum("nj,nj->n", chol[:, i, :i], y[:, :i])
+        y[:, i] = (rhs[:, i] - partial) / chol[:, i, i]
+    x = np.empty_like(rhs)
+    for i in range(k - 1, -1, -1):
+        partial = np.einsum("nj,nj->n", chol[:, i + 1 :, i], x[:, i + 1 :])
+        x[:, i] = (y[:, i] - partial) / chol[:, i, i]
+    return x
+
+
+def _rayleigh(vector, tilde_inertia, coupling, wheel_inertia) -> np.ndarray:
+    """v^T Lambda v / v^T v [kg m^2], (N,), evaluated as v^T M~_m v + |M~_omega_m v|^2 / I_r: two
+    non-negative terms and no assembled Lambda, so its relative accuracy stays near machine
+    epsilon."""
+    moved = np.einsum("nij,nj->ni", coupling, vector)
+    quadratic = np.einsum("ni,nij,nj->n", vector, tilde_inertia, vector)
+    wheels = np.einsum("ni,ni->n", moved, moved) / wheel_inertia
+    return (quadratic + wheels) / np.einsum("ni,ni->n", vector, vector)
+
+
+def smallest_eigenvalue(
+    tilde_inertia: np.ndarray,
+    coupling: np.ndarray,
+    wheel_inertia: float,
+    start: np.ndarray,
+    *,
+    shift: float = 1e-4,
+    steps: int = 2,
+) -> np.ndarray:
+    """sigma_min(Lambda) of eq. (5.4) [kg m^2], shape (N,), to near machine precision.
+
+    LAPACK's eigenvalue of the assembled Lambda = M~_m + M~_omega_m^T M~_omega_m / I_r is only
+    accurate to ~eps cond(Lambda) relative (cond up to ~1e7 on the 4-DoF arm: errors ~1e-9). So
+    that estimate is used as the shift of inverse iteration, (Lambda - (1 - shift) sigma E)^-1,
+    started from the reactionless direction ``start`` (N, k): each step shrinks the other
+    eigen-directions by < ``shift``, and the Rayleigh quotient of :func:`_rayleigh` (no
+    cancellation, error quadratic in the direction's) gives the eigenvalue. Points where that
+    fails (factorization or a quotient above the estimate) keep the LAPACK value.
+
+    Args:
+        tilde_inertia: M~_m, (N, k, k); coupling: M~_omega_m, (N, k - 1, k) [kg m^2].
+        wheel_inertia: I_r [kg m^2].
+    """
+    lam = tilde_inertia + np.einsum("nai,naj->nij", coupling, coupling) / wheel_inertia
+    estimate = np.linalg.eigvalsh(lam)[:, 0]
+    shifted = lam.copy()
+    diagonal = np.einsum("nii->ni", shifted)  # a writable view of the diagonals
+    diagonal -= ((1.0 - shift) * estimate)[:, None]
+    try:
+        chol = np.linalg.cholesky(shifted)
+    except np.linalg.LinAlgError:  # pragma: no cover - needs cond(Lambda) ~ shift / eps
+        return estimate
+    vector = np.array(start, dtype=float)
+    for _ in range(steps):
+        vector = _cholesky_solve(chol, vector)
+        vector /= np.linalg.norm(vector, axis=-1, keepdims=True)
+    value = _rayleigh(vector, tilde_inertia, coupling, wheel_inertia)
+    return np.where(value <= estimate * (1.0 + 1e-6), value, estimate)
+
+
+def c_ratio_batch(
+    tilde_inertia: np.ndarray, coupling: np.ndarray, wheel_inertia: float = WHEEL_INERTIA
+) -> np.ndarray:
+    """C_ratio of eq. (5.5) for a batch of points [-], >= 1.
+
+    T_RNS = n^T M~_m n / n^T n with n the cofactor (kernel) vector of M~_omega_m, and
+    T_min = :func:`smallest_eigenvalue` (both per unit joint speed, the 1/2 cancels).
+
+    Args:
+        tilde_inertia: Lambda_m = M~_m [kg m^2], shape (..., k, k), symmetric positive definite.
+        coupling: M~_omega_m [kg m^2], shape (..., k - 1, k): its nonzero rows (the planar arm's
+            z row, shape (..., 1, 2); the spatial subchain's three rows, (..., 3, 4)).
+        wheel_inertia: I_r [kg m^2].
+
+    Returns:
+        C_ratio, shape (...). Equal to :func:`rns_ros.core.energy.c_ratio`, which is used for the
+        points where M~_omega_m may have lost rank (same rank rule).
+    """
+    coupling = np.asarray(coupling, dtype=float)
+    shape, (rows, k) = coupling.shape[:-2], coupling.shape[-2:]
+    tilde_inertia = np.broadcast_to(np.asarray(tilde_inertia, dtype=float), (*shape, k, k))
+    tilde_inertia = tilde_inertia.reshape(-1, k, k)
+    coupling = coupling.reshape(-1, rows, k)
+    kernel = _kernel_vectors(coupling)
+    norm = np.linalg.norm(kernel, axis=-1)
+    scale = np.sqrt(np.einsum("nij,nij->n", coupling, coupling))
+    suspect = ~(norm > CANDIDATE_RANK_LOSS * scale ** (k - 1))  # also catches NaN
+    kernel[suspect] = 1.0  # any start vector; these points are redone below
+    unit = kernel / np.linalg.norm(kernel, axis=-1, keepdims=True)
+    t_rns = np.einsum("ni,nij,nj->n", unit, tilde_inertia, unit)
+    t_min = smallest_eigenvalue(tilde_inertia, coupling, wheel_inertia, unit)
+    ratio = t_rns / t_min
+    for index in np.flatnonzero(suspect):
+        g = coupling[index]
+        metric = EnergyMetric(tilde_inertia[index], g.T @ g / wheel_inertia)
+        ratio[index] = c_ratio(metric, g, RANK_TOLERANCE)
+    return ratio.reshape(shape)
+
+
+# --- planar 2-DoF arm (Figs. 5.1, 5.2) ----------------------------------------------------------
+def planar_arm(alpha: float = 1.0, beta: float = 1.0) -> PlanarArm:
+    """The section-5.2 planar arm with the parameter variation of eqs. (5.6)-(5.7).
+
+    alpha scales both link masses and both link inertias (m_i* = alpha m_i, I_i* = alpha I_i,
+    uniform density, choice A-3.3); beta scales both CoM distances (l_ci* = beta l_i / 2); the
+    link lengths (joint positions) stay 1 m. Base 1010 kg (1000 kg + one 10 kg wheel at its CoM).
+    """
+    return PlanarArm(
+        attach_distance=PLANAR_ATTACH_DISTANCE,
+        base_mass=PLANAR_BASE_MASS,
+        link_masses=(100.0 * alpha, 100.0 * alpha),
+        link_inertias=(PLANAR_LINK_INERTIA * alpha, PLANAR_LINK_INERTIA * alpha),
+        com_distances=(0.5 * beta, 0.5 * beta),
+    )
+
+
+def planar_c_ratio(arm: PlanarArm, theta, wheel_inertia: float = WHEEL_INERTIA) -> np.ndarray:
+    """C_ratio (5.5) of the planar arm at joint angles ``theta`` [rad], shape (..., 2) -> (...)."""
+    coupling = arm.coupling_inertia(theta)[..., None, :]  # (..., 1, 2), the z row
+    return c_ratio_batch(arm.manipulator_inertia(theta), coupling, wheel_inertia)
+
+
+def planar_c_ratio_map(
+    arm: PlanarArm | None = None, count: int = 100, wheel_inertia: float = WHEEL_INERTIA
+) -> tuple[np.ndarray, np.ndarray]:
+    """C_ratio on the periodic count x count grid of (theta_1, theta_2) (Fig. 5.1).
+
+    Returns:
+        (grid [rad] (count,), C_ratio (count, count) indexed [theta_2, theta_1], rows theta_2).
+    """
+    arm = planar_arm() if arm is None else arm
+    grid = periodic_grid(count)
+    t1, t2 = np.meshgrid(grid, grid)
+    return grid, planar_c_ratio(arm, np.stack([t1, t2], -1), wheel_inertia)
+
+
+def parameter_variation_map(
+    alphas: Sequence[float], betas: Sequence[float], count: int = 100
+) -> np.ndarray:
+    """Mean C_ratio over the count^2 mesh for each (alpha, beta) of eqs. (5.6)-(5.7) (Fig. 5.2).
+
+    Returns:
+        shape (len(alphas), len(betas)), [-].
+    """
+    return np.array(
+        [
+            [float(planar_c_ratio_map(planar_arm(a, b), count)[1].mean()) for b in betas]
+            for a in alphas
+        ]
+    )
+
+
+# --- spatial subchain (Fig. 5.3) ----------------------------------------------------------------
+def wheeled_model(
+    robot: FreeFloatingModel, wheel_mass: float = 3 * WHEEL_MASS
+) -> FreeFloatingModel:
+    """``robot`` with ``wheel_mass`` [kg] added at the base CoM (A-3.1: three 10 kg wheels).
+
+    The base's rotational inertia about its CoM is left as it is (it does not enter Lambda).
+    """
+    model = pin.Model(robot.model)
+    base = model.inertias[1]
+    model.inertias[1] = pin.Inertia(base.mass + wheel_mass, base.lever.copy(), base.inertia.copy())
+    return FreeFloatingModel(model, robot.spec, name=f"{robot.name}+{wheel_mass:g}kg wheels")
+
+
+def _rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Rodrigues: rotations by ``angles`` [rad] (N,) about the unit ``axis`` (3,), (N, 3, 3)."""
+    skew = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    return np.eye(3) + s * skew + (1.0 - c) * (skew @ skew)
+
+
+@dataclass(frozen=True)
+class SerialChain:
+    """A serial subchain of k moving joints on a free-floating base, read out of Pinocchio.
+
+    Frame i is the frame of moving joint i at theta_i = 0 relative to frame i-1 (frame 0 is the
+    base); the rotation of joint i is applied after its placement. Body i is everything rigidly
+    attached to joint i's child: its link plus the links of held joints up to the next moving
+    joint.
+
+    Attributes (all in the joint's own frame):
+        axes: joint axes, (k, 3) [-].
+        rotations: placement rotations, (k, 3, 3); translations: (k, 3) [m].
+        masses: (k,) [kg]; levers: body CoMs, (k, 3) [m]; inertias: about the CoM, (k, 3, 3)
+            [kg m^2].
+        base_mass: base incl. anything added at it (the wheels) [kg];
+        base_com: base CoM in the base frame, (3,) [m].
+    """
+
+    axes: np.ndarray
+    rotations: np.ndarray
+    translations: np.ndarray
+    masses: np.ndarray
+    levers: np.ndarray
+    inertias: np.ndarray
+    base_mass: float
+    base_com: np.ndarray
+
+    @property
+    def k(self) -> int:
+        return len(self.masses)
+
+    @property
+    def total_mass(self) -> float:
+        """m_C [kg]."""
+        return self.base_mass + float(self.masses.sum())
+
+    @classmethod
+    def from_model(cls, robot: FreeFloatingModel, joints: Sequence[int], held=None) -> SerialChain:
+        """The subchain of ``robot`` moving ``joints`` (theta indices), others held at ``held``.
+
+        Args:
+            robot: a model whose arm is one serial chain (Pinocchio joint j's parent is j - 1).
+            joints: increasing theta indices; the first arm joint must be among them.
+            held: theta [rad] (n,) giving the angles of the held joints; None: zeros.
+
+        Raises:
+            ConfigError: the arm branches, or joint 0 is held.
+        """
+        model = robot.model
+        joints = [int(j) for j in joints]
+        held = np.zeros(robot.n) if held is None else np.asarray(held, dtype=float)
+        if any(model.parents[j] != j - 1 for j in range(2, model.njoints)):
+            raise ConfigError(f"{robot.name}: the arm is not one serial chain")
+        if not joints or joints[0] != 0 or sorted(set(joints)) != joints:
+            raise ConfigError(f"moving joints must be increasing and start at 0, got {joints}")
+        data = model.createData()
+        pin.computeJointJacobians(model, data, pin.neutral(model))
+        local_axes = [
+            pin.getJointJacobian(model, data, j, pin.LOCAL)[3:, 6 + j - 2]
+            for j in range(2, model.njoints)
+        ]
+        axes, rotations, translations, bodies = [], [], [], []
+        pending = pin.SE3.Identity()  # transform from the last moving joint's frame so far
+        for index in range(robot.n):
+            placement = pending * model.jointPlacements[index + 2]
+            if index in joints:
+                axes.append(local_axes[index])
+                rotations.append(placement.rotation.copy())
+                translations.append(placement.translation.copy())
+                bodies.append(model.inertias[index + 2])
+                pending = pin.SE3.Identity()
+            else:
+                rotation = pin.exp3(local_axes[index] * held[index])
+                pending = placement * pin.SE3(rotation, np.zeros(3))
+                bodies[-1] = bodies[-1] + pending.act(model.inertias[index + 2])
+        base = model.inertias[1]
+        return cls(
+            axes=np.array(axes),
+            rotations=np.array(rotations),
+            translations=np.array(translations),
+            masses=np.array([b.mass for b in bodies]),
+            levers=np.array([b.lever for b in bodies]),
+            inertias=np.array([b.inertia for b in bodies]),
+            base_mass=float(base.mass),
+            base_com=np.array(base.lever),
+        )
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.cross(a, b, axis=-1)
+
+
+def _chain_terms(chain: SerialChain, angles: np.ndarray):
+    """The theta_1-free terms of one chunk, in frame 1 (joint 1 at theta_1 = 0 + its rotation).
+
+    Args:
+        angles: theta_2..theta_k [rad], shape (P, k - 1).
+
+    Returns:
+        (tilde_m (P, k, k), h_cm (P, 3, k), basis (3, P, 3, k)) such that for a base CoM at q (3,)
+        [m] in frame 1, M~_omega_m = h_cm - (m_b / m_C) [q^x] L = h_cm - (m_b / m_C) sum_c q_c
+        basis[c] in frame 1 (its rotation to world axes changes neither the kernel nor
+        M~_omega_m^T M~_omega_m). h_cm is the arm's angular momentum matrix about the arm's
+        share of the system CoM, L the arm's linear momentum matrix (3, k) [kg m].
+    """
+    k, count = chain.k, angles.shape[0]
+    orientation = np.broadcast_to(np.eye(3), (count, 3, 3))
+    origin = np.zeros((count, 3))
+    axes, origins, coms, inertias = [], [], [], []
+    for i in range(k):
+        if i > 0:
+            origin = origin + orientation @ chain.translations[i]
+            orientation = (
+                orientation @ chain.rotations[i] @ _rotations(chain.axes[i], angles[:, i - 1])
+            )
+        axes.append(orientation @ chain.axes[i])
+        origins.append(origin)
+        coms.append(origin + orientation @ chain.levers[i])
+        inertias.append(orientation @ chain.inertias[i] @ np.swapaxes(orientation, -1, -2))
+    eye = np.eye(3)
+
+    def spread(d):  # [d^x]^T [d^x] = |d|^2 E - d d^T
+        return np.einsum("pi,pi->p", d, d)[:, None, None] * eye - d[:, :, None] * d[:, None, :]
+
+    mass = 0.0
+    moment = np.zeros((count, 3))
+    inertia_origin = np.zeros((count, 3, 3))  # subtree inertia about the frame-1 origin
+    linear = np.empty((count, 3, k))
+    angular = np.empty((count, 3, k))
+    for j in range(k - 1, -1, -1):
+        m_j = chain.masses[j]
+        mass += m_j
+        moment = moment + m_j * coms[j]
+        inertia_origin = inertia_origin + inertias[j] + m_j * spread(coms[j])
+        centre = moment / mass
+        about_joint = inertia_origin - mass * spread(centre) + mass * spread(centre - origins[j])
+        linear[:, :, j] = _cross(axes[j], moment - mass * origins[j])
+        angular[:, :, j] = np.einsum("pab,pb->pa", about_joint, axes[j]) + _cross(
+            origins[j], linear[:, :, j]
+        )
+    # fixed-base joint-space inertia (CRBA): M[i, j] = a_i . (H_j - o_i x L_j), i <= j
+    arm = np.empty((count, k, k))
+    for i in range(k):
+        for j in range(i, k):
+            torque = angular[:, :, j] - _cross(origins[i], linear[:, :, j])
+            arm[:, i, j] = arm[:, j, i] = np.einsum("pa,pa->p", axes[i], torque)
+    total = chain.total_mass
+    tilde_m = arm - np.einsum("pai,paj->pij", linear, linear) / total
+    arm_centre = moment / total  # the arm's part of the system CoM, sum m_i c_i / m_C
+    h_cm = angular - _cross(arm_centre[:, None, :], np.swapaxes(linear, 1, 2)).swapaxes(1, 2)
+    basis = np.stack(
+        [_cross(e[None, None, :], np.swapaxes(linear, 1, 2)).swapaxes(1, 2) for e in eye]
+    )
+    return tilde_m, h_cm, basis
+
+
+def _base_com_in_frame_1(chain: SerialChain, theta1: np.ndarray) -> np.ndarray:
+    """Base CoM seen from joint 1's frame at each theta_1 [m], shape (T, 3)."""
+    at_zero = chain.rotations[0].T @ (chain.base_com - chain.translations[0])
+    return np.einsum("tab,b->ta", np.swapaxes(_rotations(chain.axes[0], theta1), 1, 2), at_zero)
+
+
+def chain_c_ratio_chunk(
+    chain: SerialChain,
+    theta1: np.ndarray,
+    theta2: float,
+    rest: Sequence[np.ndarray],
+    wheel_inertia: float = WHEEL_INERTIA,
+) -> np.ndarray:
+    """C_ratio (5.5) of the subchain on the grid theta1 x {theta2} x rest[0] x rest[1] x ...
+
+    One chunk of :func:`chain_c_ratio_map` (a plain function of arrays: it pickles for local
+    processes and dask workers).
+
+    Returns:
+        shape (len(theta1), len(rest[0]), ...) [-].
+    """
+    theta1 = np.atleast_1d(np.asarray(theta1, dtype=float))
+    mesh = np.meshgrid(*[np.asarray(r, dtype=float) for r in rest], indexing="ij")
+    shape = mesh[0].shape if mesh else ()
+    angles = np.stack(
+        [np.full(mesh[0].size if mesh else 1, float(theta2))] + [m.ravel() for m in mesh], -1
+    )
+    tilde_m, h_cm, basis = _chain_terms(chain, angles)
+    q = _base_com_in_frame_1(chain, theta1)
+    factor = chain.base_mass / chain.total_mass
+    count, k = tilde_m.shape[0], chain.k
+    shift = (q @ basis.reshape(3, -1)).reshape(len(theta1), count, 3, k)
+    coupling = h_cm[None] - factor * shift
+    ratio = c_ratio_batch(
+        np.broadcast_to(tilde_m, (*coupling.shape[:2], k, k)), coupling, wheel_inertia
+    )
+    return ratio.reshape((len(theta1), *shape))
+
+
+def _progress_line(done: int, total: int, start: float, width: int = 30) -> None:
+    filled = round(width * done / total)
+    line = f"C_ratio map [{'#' * filled}{'.' * (width - filled)}] {done}/{total} chunks "
+    line += f"({time.perf_counter() - start:.1f} s)"
+    end = "\n" if done == total or not sys.stderr.isatty() else ""
+    print(("\r" if sys.stderr.isatty() else "") + line, end=end, file=sys.stderr, flush=True)
+
+
+def _run_chunks(
+    chunk: Callable,
+    arguments: list[tuple],
+    workers: int | None,
+    dask_scheduler: str | None,
+    progress: bool,
+) -> list[np.ndarray]:
+    """``chunk(*a)`` for every a of ``arguments``, in order, with a progress line on stderr."""
+    start, total = time.perf_counter(), len(arguments)
+    results: list = [None] * total
+    done = 0
+
+    def finished(index, value):
+        nonlocal done
+        results[index] = value
+        done += 1
+        if progress:
+            _progress_line(done, total, start)
+
+    if dask_scheduler is not None:
+        client = _dask_client(dask_scheduler)
+        try:
+            from distributed import as_completed
+
+            futures = [client.submit(chunk, *a, pure=False) for a in arguments]
+            index_of = {future.key: i for i, future in enumerate(futures)}
+            for future in as_completed(futures):
+                finished(index_of[future.key], future.result())
+        finally:
+            client.close()
+        return results
+    workers = (os.cpu_count() or 1) if workers is None else int(workers)
+    if workers <= 1 or total <= 1:
+        for i, a in enumerate(arguments):
+            finished(i, chunk(*a))
+        return results
+    with ProcessPoolExecutor(max_workers=min(workers, total)) as pool:
+        futures = {pool.submit(chunk, *a): i for i, a in enumerate(arguments)}
+        from concurrent.futures import as_completed
+
+        for future in as_completed(futures):
+            finished(futures[future], future.result())
+    return results
+
+
+def _dask_client(address: str):
+    """A distributed.Client connected to ``address``; ConfigError (one line) if it cannot."""
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover - pinned in requirements.txt
+        raise ConfigError(
+            "--dask-scheduler needs the 'distributed' package (requirements.txt)"
+        ) from None
+    try:
+        return Client(address, timeout=10, set_as_default=False)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"cannot connect to the dask scheduler {address!r}: {reason}") from None
+
+
+def chain_c_ratio_map(
+    chain: SerialChain,
+    grids: Sequence[np.ndarray],
+    *,
+    wheel_inertia: float = WHEEL_INERTIA,
+    workers: int | None = None,
+    dask_scheduler: str | None = None,
+    progress: bool = False,
+) -> np.ndarray:
+    """C_ratio (5.5) of the subchain on the tensor grid ``grids[0] x grids[1] x ...`` (Fig. 5.3).
+
+    Args:
+        chain: the subchain (k joints), e.g. ``SerialChain.from_model(wheeled_model(robot),
+            robot.subchains.positioning)``.
+        grids: k 1-D arrays of joint angles [rad].
+        wheel_inertia: I_r [kg m^2].
+        workers: local processes (None: one per core; 1: in this process). Ignored with dask.
+        dask_scheduler: address of a running dask.distributed scheduler ("tcp://host:8786"), or
+            None for the local cores.
+        progress: a progress-bar line on stderr, one update per chunk (one theta_2 value).
+
+    Returns:
+        shape (len(grids[0]), ..., len(grids[k-1])) [-].
+
+    Raises:
+        ConfigError: wrong number of grids, or the scheduler cannot be reached.
+    """
+    if len(grids) != chain.k:
+        raise ConfigError(f"need {chain.k} grids (one per moving joint), got {len(grids)}")
+    grids = [np.atleast_1d(np.asarray(g, dtype=float)) for g in grids]
+    if chain.k == 1:
+        raise ConfigError("a one-joint subchain has no 1-D reactionless kernel here")
+    arguments = [(chain, grids[0], float(t2), grids[2:], wheel_inertia) for t2 in grids[1]]
+    chunks = _run_chunks(chain_c_ratio_chunk, arguments, workers, dask_scheduler, progress)
+    return np.stack(chunks, axis=1)
+
+
+def positioning_chain(robot: FreeFloatingModel | None = None) -> SerialChain:
+    """Joints 1-4 of the 7-DoF default arm with 30 kg of wheels at the base CoM and the wrist
+    (joints 5-7) held at 0 as a rigid payload (choice A-3.4)."""
+    if robot is None:
+        from rns_ros.core import load_model
+        from rns_ros.resources import default_model_config
+
+        robot = load_model(default_model_config())
+    return SerialChain.from_model(wheeled_model(robot), robot.subchains.positioning)
+
+
+def positioning_grids(count: int = 50) -> list[np.ndarray]:
+    """The Fig. 5.3 grid: theta_1, theta_3, theta_4 = -pi + 2 pi k / count, theta_2 = -pi/2 +
+    pi k / count, k = 0..count-1 [rad] (count = 50: 6.25e6 points)."""
+    full = periodic_grid(count)
+    return [full, periodic_grid(count, -0.5 * math.pi, math.pi), full, full]
+
+
+@dataclass(frozen=True)
+class MapSummary:
+    """Statistics of a C_ratio map [-] and the time it took [s]."""
+
+    mean: float
+    median: float
+    p99: float
+    maximum: float
+    minimum: float
+    points: int
+    wall_s: float
+
+    @classmethod
+    def of(cls, values: np.ndarray, wall_s: float = 0.0) -> MapSummary:
+        flat = np.asarray(values).ravel()
+        return cls(
+            mean=float(flat.mean()),
+            median=float(np.median(flat)),
+            p99=float(np.percentile(flat, 99.0)),
+            maximum=float(flat.max()),
+            minimum=float(flat.min()),
+            points=int(flat.size),
+            wall_s=float(wall_s),
+        )
+
+    def timed(self, wall_s: float) -> MapSummary:
+        return replace(self, wall_s=float(wall_s))

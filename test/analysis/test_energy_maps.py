@@ -1,0 +1,214 @@
+"""The chapter-5 C_ratio maps (eq. 5.5) against the Pinocchio reference and their identities."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from rns_ros.analysis import energy_maps as em
+from rns_ros.analysis.planar_field import fixed_points
+from rns_ros.core.energy import c_ratio, energy_metric
+from rns_ros.core.planar import planar_2dof_model
+from rns_ros.core.state import FreeFloatingState
+
+EPS = np.finfo(float).eps
+
+
+@pytest.fixture(scope="module")
+def heavy(robot):
+    return em.wheeled_model(robot)
+
+
+@pytest.fixture(scope="module")
+def chain(robot):
+    return em.positioning_chain(robot)
+
+
+def _reference(model, theta, joints=None):
+    """(C_ratio of core.energy, cond(Lambda), an independent accurate C_ratio) at theta."""
+    state = FreeFloatingState.compute(model, model.configuration(theta))
+    joints = np.arange(model.n) if joints is None else joints
+    metric = energy_metric(state, em.WHEEL_INERTIA, joints)
+    coupling = state.coupling_angular_momentum_matrix[:, joints]
+    eigenvalues = np.linalg.eigvalsh(metric.total)
+    # sigma_min(Lambda) as the squared smallest singular value of [chol(M~_m)^T; G / sqrt(I_r)]:
+    # no assembled Lambda, so accurate to ~eps sqrt(cond) instead of eps cond
+    stacked = np.vstack(
+        (np.linalg.cholesky(metric.manipulator).T, coupling / math.sqrt(em.WHEEL_INERTIA))
+    )
+    t_min = np.linalg.svd(stacked, compute_uv=False)[-1] ** 2
+    kernel = np.linalg.svd(coupling)[2][-1]
+    accurate = kernel @ metric.manipulator @ kernel / t_min
+    return c_ratio(metric, coupling), eigenvalues[-1] / eigenvalues[0], accurate
+
+
+def test_wheeled_model_adds_30_kg_at_the_base_com_only(robot, heavy):
+    assert heavy.total_mass == pytest.approx(robot.total_mass + 30.0)
+    base, heavier = robot.model.inertias[1], heavy.model.inertias[1]
+    assert np.allclose(heavier.lever, base.lever)
+    assert np.allclose(heavier.inertia, base.inertia)
+    assert robot.total_mass == 2760.0  # the original model is untouched
+
+
+def test_4dof_kernel_matches_pinocchio_at_1000_random_configurations(heavy, chain):
+    """Against core.energy.c_ratio on the Pinocchio state of the 30-kg-heavier model.
+
+    c_ratio takes sigma_min from LAPACK on the assembled Lambda, accurate to ~eps cond(Lambda)
+    (cond up to ~2e7 here, i.e. ~1e-9); our value is compared to it within 1e-9 or that bound,
+    and to an independent accurate evaluation of the same Pinocchio matrices within 1e-9."""
+    rng = np.random.default_rng(20261201)
+    joints = heavy.subchains.positioning
+    worst_reference, worst_accurate = 0.0, 0.0
+    for _ in range(1000):
+        theta = np.zeros(7)
+        theta[:4] = rng.uniform(-math.pi, math.pi, 4)
+        theta[1] *= 0.5  # the map's theta_2 range
+        reference, condition, accurate = _reference(heavy, theta, joints)
+        ours = em.chain_c_ratio_chunk(chain, [theta[0]], theta[1], [[theta[2]], [theta[3]]])
+        ours = float(ours.item())
+        error = abs(ours / reference - 1.0)
+        assert error <= max(1e-9, 4.0 * EPS * condition), (theta, ours, reference, condition)
+        worst_reference = max(worst_reference, error)
+        worst_accurate = max(worst_accurate, abs(ours / accurate - 1.0))
+        assert ours >= 1.0 - 1e-9
+    assert worst_accurate < 1e-9
+    assert worst_reference < 1e-8
+
+
+def test_wrist_held_at_other_angles_is_a_different_rigid_payload(robot):
+    """The held joints are folded in at their given angles (checked at theta_5..7 != 0)."""
+    model = em.wheeled_model(robot)
+    held = np.array([0.0, 0.0, 0.0, 0.0, 0.7, -1.1, 0.4])
+    chain = em.SerialChain.from_model(model, robot.subchains.positioning, held)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        theta = held.copy()
+        theta[:4] = rng.uniform(-math.pi, math.pi, 4)
+        _, _, accurate = _reference(model, theta, robot.subchains.positioning)
+        ours = em.chain_c_ratio_chunk(chain, [theta[0]], theta[1], [[theta[2]], [theta[3]]])
+        assert ours.item() == pytest.approx(accurate, rel=1e-9)
+
+
+def test_grid_map_equals_pointwise_chunks_and_is_at_least_one(chain):
+    grids = em.positioning_grids(6)
+    grid_map = em.chain_c_ratio_map(chain, grids, workers=1)
+    assert grid_map.shape == (6, 6, 6, 6)
+    assert np.all(np.isfinite(grid_map))
+    assert grid_map.min() >= 1.0 - 1e-9
+    i, j, k, m = 1, 4, 2, 5
+    point = em.chain_c_ratio_chunk(
+        chain, [grids[0][i]], grids[1][j], [[grids[2][k]], [grids[3][m]]]
+    )
+    assert grid_map[i, j, k, m] == pytest.approx(point.item(), rel=1e-12)
+
+
+def test_local_processes_give_the_same_numbers(chain):
+    grids = [em.periodic_grid(4), em.periodic_grid(3, -0.5 * math.pi, math.pi)] + [
+        em.periodic_grid(5)
+    ] * 2
+    inline = em.chain_c_ratio_map(chain, grids, workers=1)
+    pooled = em.chain_c_ratio_map(chain, grids, workers=2)
+    assert np.array_equal(inline, pooled)
+
+
+def test_c_ratio_is_one_where_the_coupling_vanishes():
+    """M~_omega_m = 0: every motion is reactionless and Lambda = Lambda_m, so C_ratio = 1."""
+    rng = np.random.default_rng(5)
+    for k in (2, 4):
+        a = rng.normal(size=(7, k, k))
+        tilde = a @ np.swapaxes(a, 1, 2) + np.eye(k)
+        coupling = np.zeros((7, k - 1, k))
+        coupling[3] = rng.normal(size=(k - 1, k))  # one regular point among them
+        ratio = em.c_ratio_batch(tilde, coupling)
+        assert np.all(np.delete(ratio, 3) == 1.0)
+        assert ratio[3] >= 1.0
+
+
+def test_near_a_planar_fixed_point_the_wheels_do_nothing_but_the_ratio_stays_bounded():
+    """At the fixed points of Fig. 3.2(b) M~_omega_m ~ 0 (not exactly): Lambda ~ Lambda_m, and
+    C_ratio takes the direction-dependent value n^T M~_m n / sigma_min(M~_m) in
+    [1, cond(M~_m)] (the 'large errors at specific points' of Fig. 5.1)."""
+    arm = em.planar_arm()
+    points = fixed_points(arm)
+    assert points, "r = 0.945 m lies above r*: the planar arm has fixed points"
+    for point in points:
+        assert np.linalg.norm(arm.coupling_inertia(point.theta)) < 1e-6
+        tilde = arm.manipulator_inertia(point.theta)
+        low, high = np.linalg.eigvalsh(tilde)
+        n = arm.reactionless_field(point.theta)
+        ratio = em.planar_c_ratio(arm, point.theta)
+        assert ratio == pytest.approx(n @ tilde @ n / low, rel=1e-9)
+        assert 1.0 <= ratio <= high / low
+
+
+def test_rank_two_coupling_uses_the_plane_of_reactionless_motions():
+    """Two dependent rows leave a 2-D kernel: C_ratio = sigma_min(N^T M~_m N) / sigma_min(Lambda)
+    as in core.energy.c_ratio."""
+    rng = np.random.default_rng(8)
+    a = rng.normal(size=(4, 4))
+    tilde = a @ a.T + np.eye(4)
+    coupling = rng.normal(size=(3, 4))
+    coupling[2] = 0.3 * coupling[0] - 2.0 * coupling[1]
+    from rns_ros.core.energy import EnergyMetric
+
+    expected = c_ratio(EnergyMetric(tilde, coupling.T @ coupling / 0.11), coupling)
+    assert em.c_ratio_batch(tilde, coupling) == pytest.approx(expected, rel=1e-12)
+
+
+def test_planar_map_matches_pinocchio_and_has_the_thesis_mean():
+    """Fig. 5.1: the section-5.2 arm (r = 0.945 m, 1010 kg base, I_i = 8.3 kg m^2)."""
+    model = planar_2dof_model(0.945, 0.0, base_mass=1010.0, link_inertia=8.3)
+    grid, ratio = em.planar_c_ratio_map(count=100)
+    assert ratio.shape == (100, 100)
+    assert grid[0] == -math.pi
+    assert grid[-1] < math.pi
+    for i, j in [(0, 0), (10, 73), (55, 20), (99, 42)]:
+        reference, _, _ = _reference(model, [grid[j], grid[i]])
+        assert ratio[i, j] == pytest.approx(reference, rel=1e-9)
+    assert ratio.min() >= 1.0 - 1e-12
+    assert ratio.mean() == pytest.approx(1.0015, abs=1e-4)  # thesis: 1.002
+    assert np.median(ratio) < 1.0001
+
+
+def test_parameter_variation_scales_masses_inertias_and_com_distances():
+    """alpha, beta of eqs. (5.6)-(5.7) against a Pinocchio model edited the same way."""
+    alpha, beta = 0.7, 1.3
+    arm = em.planar_arm(alpha, beta)
+    base = planar_2dof_model(0.945, 0.0, base_mass=1010.0, link_inertia=8.3)
+    model = pin.Model(base.model)
+    for j in (2, 3):
+        body = model.inertias[j]
+        model.inertias[j] = pin.Inertia(
+            alpha * body.mass, beta * body.lever, alpha * body.inertia.copy()
+        )
+    edited = type(base)(model, base.spec, name="planar_scaled")
+    for theta in ([0.3, -1.2], [2.5, 0.4], [-3.0, 2.9]):
+        reference, _, _ = _reference(edited, theta)
+        assert em.planar_c_ratio(arm, theta) == pytest.approx(reference, rel=1e-9)
+    means = em.parameter_variation_map([0.5, 1.5], [1.0], count=40)
+    assert means.shape == (2, 1)
+    assert means[1, 0] < means[0, 0]  # heavier links: closer to minimum energy (Fig. 5.2)
+
+
+def test_dask_local_cluster_gives_the_same_numbers(chain):
+    distributed = pytest.importorskip("distributed")
+    grids = [em.periodic_grid(3), em.periodic_grid(2, -0.5 * math.pi, math.pi)] + [
+        em.periodic_grid(4)
+    ] * 2
+    local = em.chain_c_ratio_map(chain, grids, workers=1)
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        remote = em.chain_c_ratio_map(chain, grids, dask_scheduler=cluster.scheduler_address)
+    assert np.array_equal(local, remote)
+
+
+def test_unreachable_dask_scheduler_is_a_config_error(chain):
+    pytest.importorskip("distributed")
+    from rns_ros.core.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="dask scheduler"):
+        em._dask_client("tcp://127.0.0.1:1", timeout=1.0)

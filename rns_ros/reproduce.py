@@ -1,8 +1,10 @@
 """``rns_reproduce``: regenerate the thesis' figures and tables next to the thesis values.
 
 ``rns_reproduce list`` prints one line per registered result (id, thesis label, title).
-``rns_reproduce run ID [ID ...] [--out DIR] [--quick]`` writes ``DIR/ID.json`` and ``DIR/ID.png``
-for each id. ``rns_reproduce all [--out DIR] [--report FILE] [--quick]`` runs every result with a
+``rns_reproduce run ID [ID ...] [--out DIR] [--quick] [--dask-scheduler ADDRESS]`` writes
+``DIR/ID.json`` and ``DIR/ID.png`` for each id; ``--dask-scheduler`` runs fig5.3's 6.25e6-point
+map on a running dask.distributed scheduler instead of the local cores (checked before anything
+runs). ``rns_reproduce all [--out DIR] [--report FILE] [--quick]`` runs every result with a
 progress bar and regenerates the report (default ``docs/reproduction.md`` with its figures in
 ``docs/reproduction/``, relative to the working directory: run it from the repository root).
 ``--quick`` uses coarse grids and short runs (what the tests use); the default is the thesis'
@@ -47,6 +49,13 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("ids", nargs="+", metavar="ID")
     run.add_argument("--out", default=DEFAULT_RUN_DIR, metavar="DIR", help="output directory")
     run.add_argument("--quick", action="store_true", help="coarse grids, short runs (tests)")
+    run.add_argument(
+        "--dask-scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="fig5.3 only: compute the 4-DoF map on this dask.distributed scheduler "
+        "(e.g. tcp://host:8786) instead of the local cores",
+    )
     everything = commands.add_parser("all", help="run every result and regenerate the report")
     everything.add_argument("--out", default=DEFAULT_ALL_DIR, metavar="DIR")
     everything.add_argument(
@@ -80,6 +89,19 @@ def _run(reproductions, out: Path, quick: bool, progress: bool):
     return records
 
 
+def _use_dask_scheduler(address: str, ids: list[str]) -> None:
+    """Check the scheduler answers, then hand its address to fig5.3 (the only result that uses
+    one) through the environment variable chapter5.DASK_SCHEDULER_ENV."""
+    from rns_ros.analysis.energy_maps import check_dask_scheduler
+    from rns_ros.analysis.reproduce.chapter5 import DASK_SCHEDULER_ENV
+    from rns_ros.core.errors import ConfigError
+
+    if "fig5.3" not in ids:
+        raise ConfigError("--dask-scheduler is only used by fig5.3, which is not among the ids")
+    check_dask_scheduler(address)
+    os.environ[DASK_SCHEDULER_ENV] = address
+
+
 def _body(argv: Sequence[str]) -> int:
     args = _parser().parse_args(list(argv))
     from rns_ros.analysis.reproduce.registry import (
@@ -95,6 +117,8 @@ def _body(argv: Sequence[str]) -> int:
         return 0
     if args.command == "run":
         reproductions = resolve(args.ids)
+        if args.dask_scheduler is not None:
+            _use_dask_scheduler(args.dask_scheduler, [r.id for r in reproductions])
         _run(reproductions, output_dir(args.out), args.quick, progress=False)
         return 0
     out = output_dir(args.out)

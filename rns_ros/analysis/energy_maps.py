@@ -535,15 +535,29 @@ def _dask_client(address: str, timeout: float = 10.0):
     line) if it cannot."""
     try:
         from distributed import Client
+        from distributed.comm import resolve_address
     except ImportError:  # pragma: no cover - pinned in requirements.txt
         raise ConfigError(
             "--dask-scheduler needs the 'distributed' package (requirements.txt)"
         ) from None
     try:
+        # a malformed address is caught here: a Client failing in __init__ on one prints a
+        # traceback from its finalizer at exit
+        address = resolve_address(address)
         return Client(address, timeout=timeout, set_as_default=False)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ConfigError(f"cannot connect to the dask scheduler {address!r}: {reason}") from None
+
+
+def check_dask_scheduler(address: str, timeout: float = 10.0) -> None:
+    """Connect to the dask.distributed scheduler at ``address`` once and disconnect.
+
+    Raises:
+        ConfigError: one line, when it cannot be reached within ``timeout`` [s] or the address is
+            malformed.
+    """
+    _dask_client(address, timeout).close()
 
 
 def chain_c_ratio_map(

@@ -246,7 +246,7 @@ def compute_fig5_3(quick: bool) -> Outcome:
     """C_ratio of the 7-DoF arm's positioning subchain over the 50^4 grid and two slices."""
     count = 8 if quick else 50
     slice_count = 24 if quick else 100
-    scheduler = None if quick else (os.environ.get(DASK_SCHEDULER_ENV) or None)
+    scheduler = os.environ.get(DASK_SCHEDULER_ENV) or None
     workers = 1 if quick else None
     chain = em.positioning_chain()
     grids = em.positioning_grids(count)
@@ -260,9 +260,9 @@ def compute_fig5_3(quick: bool) -> Outcome:
         em.chain_c_ratio_map(chain, [[t1], [t2], slice_grid, slice_grid], workers=1)[0, 0]
         for t1, t2 in SLICES
     ]
-    where = f"dask scheduler {scheduler}" if scheduler else f"{os.cpu_count()} local processes"
-    if quick:
-        where = "this process"
+    where = f"{os.cpu_count()} local processes" if workers is None else "this process"
+    if scheduler:
+        where = f"dask scheduler {scheduler}"
     comparisons = (
         Comparison(
             "c_ratio_mean",

@@ -4,6 +4,7 @@
 Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller] [--samples N]
         .venv/bin/python scripts/benchmark.py --only latency [--commands N] [--rates HZ ...]
                                               [--domain-id ID]
+        .venv/bin/python scripts/benchmark.py --only cratio [--workers N]
 
 core       median / p99 of one FreeFloatingState, the DLS and SC inverses, one P_RNS projection.
 simulator  step time (median, p99) of FreeFloatingSimulator at 1 ms RK4 in kinematic and dynamic
@@ -19,6 +20,11 @@ latency    end to end, over DDS on localhost: an operator twist's publish() on c
            Goal: p99 <= one control period + 2 ms. Opt-in (not in the default run): it starts
            ROS processes and takes ~30-40 s per rate with a responsive controller, up to ~2.5 min
            per rate when it stalls (each lost command costs MATCH_TIMEOUT).
+cratio     the chapter-5 C_ratio map of the 7-DoF positioning subchain (Fig. 5.3,
+           rns_ros.analysis.energy_maps): points per second on a 1/10 sub-grid (5 of the 50
+           theta_2 values, 625000 points) in one process and on --workers local processes
+           (default: one per core), then the wall time of the full 50^4 = 6.25e6-point map on
+           those processes. Goal: full map < 60 s on the 2-core dev VM. Opt-in (~30 s).
 
 Latency method (measure_latency):
   * rns_controller runs as a subprocess (the installed console script, its own executor as
@@ -479,15 +485,39 @@ def _cpu_seconds(pid: int) -> float:
         return float("nan")
 
 
+def cratio(workers: int | None) -> None:
+    from rns_ros.analysis import energy_maps
+
+    chain = energy_maps.positioning_chain()
+    grids = energy_maps.positioning_grids(50)
+    sub = [grids[0], grids[1][::10], grids[2], grids[3]]
+    cores = os.cpu_count() or 1
+    label = f"{workers or cores} processes"
+    print(f"\n{'C_ratio map, 4-DoF (Fig. 5.3)':<34}{'points':>12}{'wall [s]':>12}{'points/s':>12}")
+    energy_maps.chain_c_ratio_map(chain, [g[:2] for g in grids], workers=1)  # warm-up
+    runs = (
+        ("1/10 sub-grid, 1 process", sub, 1),
+        (f"1/10 sub-grid, {label}", sub, workers),
+        (f"full map, {label}", grids, workers),
+    )
+    for name, grid, count in runs:
+        start = time.perf_counter()
+        values = energy_maps.chain_c_ratio_map(chain, grid, workers=count)
+        wall = time.perf_counter() - start
+        print(f"{name:<34}{values.size:>12}{wall:>12.2f}{values.size / wall:>12.0f}")
+    print(f"full map mean C_ratio {values.mean():.6f} (goal: wall < 60 s; {cores} cores here)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__.splitlines()[0],
         epilog="Without --only: core, simulator and controller. latency is opt-in (--only "
-        "latency): it starts rns_controller subprocesses and takes ~0.5-2.5 min per rate.",
+        "latency): it starts rns_controller subprocesses and takes ~0.5-2.5 min per rate. "
+        "cratio is opt-in too (~30 s on 2 cores).",
     )
     parser.add_argument(
         "--only",
-        choices=("core", "simulator", "controller", "latency"),
+        choices=("core", "simulator", "controller", "latency", "cratio"),
         help="run one section (latency only this way)",
     )
     parser.add_argument("--samples", type=int, default=5000, help="repetitions per operation")
@@ -504,7 +534,13 @@ def main() -> None:
     parser.add_argument(
         "--domain-id", type=int, default=55, help="latency: ROS_DOMAIN_ID of every node"
     )
+    parser.add_argument(
+        "--workers", type=int, default=None, help="cratio: local processes (default: one per core)"
+    )
     args = parser.parse_args()
+    if args.only == "cratio":
+        cratio(args.workers)
+        return
     robot = load_model(default_model_config())
     if args.only in (None, "core"):
         core(robot, args.samples)

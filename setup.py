@@ -13,6 +13,7 @@ CONSOLE_SCRIPTS = [
     "rns_simulator = rns_ros.nodes.simulator:main",
     "rns_controller = rns_ros.nodes.controller:main",
     "rns_ptp = rns_ros.nodes.ptp:main",
+    "rns_attitude_control = rns_ros.nodes.attitude_control:main",
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",
     "rns_operator = rns_ros.nodes.operator:main",
     "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",

@@ -92,11 +92,13 @@ class AttitudeControlLaw:
         self.gains = gains or AttitudeGains()
         self.reference = np.array(reference, dtype=float).reshape(3, 3)
         self._previous: tuple[float, np.ndarray] | None = None  # (time [s], h_c world)
+        self._rate = np.zeros(3)  # newest d/dt h_c, world axes [N m]
 
     def reset(self, reference: np.ndarray) -> None:
         """New attitude reference; forgets the previous coupling momentum."""
         self.reference = np.array(reference, dtype=float).reshape(3, 3)
         self._previous = None
+        self._rate = np.zeros(3)
 
     def step(
         self,
@@ -109,7 +111,10 @@ class AttitudeControlLaw:
         """The wheel torques for this period.
 
         Args:
-            time: time of the sample [s] (increasing).
+            time: time of ``theta_dot_ref`` [s], e.g. its message stamp. The rate of h_c is
+                updated when it advances and held while it does not (a reference that has not
+                changed since the last period), so delivery jitter does not enter the
+                numerical derivative.
             state: the measured state (base attitude, M~_omega_m, M~_omega).
             theta_dot_ref: the arm's joint velocity reference (or measured rates) [rad/s], (n,).
             base_angular_velocity: omega_b in base axes [rad/s], (3,).
@@ -120,13 +125,15 @@ class AttitudeControlLaw:
         momentum = as_vector(wheel_momentum, 3, "wheel momentum")
         rotation = state.base_rotation
         coupling = state.coupling_angular_momentum_matrix @ theta_dot
-        feedforward = np.zeros(3)
-        if self.gains.feedforward and self._previous is not None:
+        if self._previous is None:
+            self._previous = (float(time), coupling)
+        elif time > self._previous[0]:
             last_time, last_coupling = self._previous
-            if time > last_time:
-                rate = (coupling - last_coupling) / (time - last_time)
-                feedforward = -rotation.T @ rate - np.cross(omega, momentum)
-        self._previous = (float(time), coupling)
+            self._rate = (coupling - last_coupling) / (time - last_time)
+            self._previous = (float(time), coupling)
+        feedforward = np.zeros(3)
+        if self.gains.feedforward:
+            feedforward = -rotation.T @ self._rate - np.cross(omega, momentum)
         error = pin.log3(self.reference.T @ rotation)
         inertia_base_axes = rotation.T @ state.base_rotational_inertia @ rotation
         wn, zeta = self.gains.natural_frequency, self.gains.damping_ratio

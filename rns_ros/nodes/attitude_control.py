@@ -1,0 +1,330 @@
+"""rns_attitude_control: hold the base attitude with the reaction wheels (thesis chapter 5).
+
+The conventional practice the thesis compares reactionless control against: the arm moves by
+any law (typically ``rns_controller`` with ``method: conventional``) and the wheels cancel its
+reaction. The law is :class:`rns_ros.control.attitude.AttitudeControlLaw` (eq. 5.14 feed-forward
++ PD on the attitude error, clipped to ``torque_limit``); this node only converts messages.
+
+Subscribes:
+    joint_states      sensor_msgs/JointState (by joint name): theta, and theta_dot when no fresh
+                      joint reference is there
+    base_odom         nav_msgs/Odometry: base attitude and angular velocity (base axes); the
+                      first one sets the attitude to hold (``~/hold`` sets it again)
+    wheel_states      sensor_msgs/JointState of rns_simulator: wheel rates relative to the base,
+                      for the wheels' momentum H = I_r (phi_dot + omega^B)
+    joint_references  trajectory_msgs/JointTrajectory of the arm's controller: theta_dot_ref for
+                      the feed-forward (older than ``reference_timeout``: measured rates instead)
+Publishes:
+    wheel_torque      geometry_msgs/Vector3Stamped, motor torques of the x, y, z wheels [N m],
+                      frame_id = base link, every period; zero when the state is stale and on
+                      shutdown
+    ~/status          diagnostic_msgs/DiagnosticArray every period: state (WAITING_FOR_STATE,
+                      OK, SATURATED [WARN], STALE_STATE [ERROR]), attitude error [deg], torque,
+                      feed-forward, feedback [N m], saturated time [s], coupling momentum
+Service:
+    ~/hold            std_srvs/Trigger: hold the current attitude from now on
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Vector3Stamped
+from nav_msgs.msg import Odometry
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from rns_ros.control.attitude import AttitudeControlLaw, AttitudeGains
+from rns_ros.core import FreeFloatingState, load_model
+from rns_ros.core.commands import match_named_command
+from rns_ros.core.errors import InputError
+from rns_ros.core.validation import Choice
+from rns_ros.nodes.parameters import MODEL_CONFIG, ParameterSpec, declare_parameters
+from rns_ros.nodes.robot_io import base_pose, measured_state_problem
+from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.status import status_text
+from rns_ros.resources import default_model_config
+from rns_ros.sim.reaction_wheels import WHEEL_NAMES
+
+NODE_NAME = "rns_attitude_control"
+SUMMARY = "Holds the base attitude with three reaction wheels (eq. 5.14 feed-forward + PD)."
+
+
+class AttitudeState(Choice):
+    WAITING_FOR_STATE = "WAITING_FOR_STATE"
+    OK = "OK"
+    SATURATED = "SATURATED"
+    STALE_STATE = "STALE_STATE"
+
+
+LEVELS = {
+    AttitudeState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
+    AttitudeState.SATURATED: DiagnosticStatus.WARN,
+    AttitudeState.STALE_STATE: DiagnosticStatus.ERROR,
+}
+
+PARAMETERS = (
+    MODEL_CONFIG,
+    ParameterSpec("rate", 100.0, "Control rate", "[Hz]", 1.0, 1000.0),
+    ParameterSpec(
+        "natural_frequency",
+        0.1,
+        "Attitude loop natural frequency omega_n (gains scale with the base inertia)",
+        "[rad/s]",
+        1e-4,
+        100.0,
+    ),
+    ParameterSpec("damping_ratio", 1.0, "Attitude loop damping ratio", "[-]", 0.05, 10.0),
+    ParameterSpec(
+        "torque_limit", 0.1, "Motor torque limit per wheel (ETS-VII: 0.1)", "[N m]", 1e-6, 1e3
+    ),
+    ParameterSpec(
+        "feedforward", True, "Use the eq. (5.14) feed-forward -d/dt(M~_wm theta_dot_ref)"
+    ),
+    ParameterSpec("wheel_inertia", 0.11, "Spin inertia I_r of one wheel", "[kg m^2]", 1e-6, 1e3),
+    ParameterSpec(
+        "state_timeout",
+        0.1,
+        "joint_states, base_odom or wheel_states older than this (receipt time): zero torque, "
+        "STALE_STATE",
+        "[s]",
+        0.005,
+        10.0,
+    ),
+    ParameterSpec(
+        "reference_timeout",
+        0.1,
+        "joint_references older than this: the feed-forward uses the measured joint rates",
+        "[s]",
+        0.005,
+        10.0,
+    ),
+)
+
+
+class AttitudeControlNode(Node):
+    """ROS 2 wrapper of :class:`AttitudeControlLaw` (see the module docstring)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, PARAMETERS)
+        self.robot = load_model(params["model_config"] or default_model_config())
+        self.gains = AttitudeGains(
+            natural_frequency=params["natural_frequency"],
+            damping_ratio=params["damping_ratio"],
+            torque_limit=params["torque_limit"],
+            feedforward=params["feedforward"],
+        )
+        self.law: AttitudeControlLaw | None = None  # made at the first base_odom
+        self._wheel_inertia = params["wheel_inertia"]
+        self._timeout = params["state_timeout"]
+        self._reference_timeout = params["reference_timeout"]
+        self._period = 1.0 / params["rate"]
+        self._theta: np.ndarray | None = None
+        self._theta_dot = np.zeros(self.robot.n)
+        self._pose: tuple[np.ndarray, np.ndarray] | None = None
+        self._omega = np.zeros(3)
+        self._wheel_speeds: np.ndarray | None = None
+        self._reference: np.ndarray | None = None
+        self._received = {"joints": -math.inf, "odom": -math.inf, "wheels": -math.inf}
+        self._reference_received = -math.inf
+        self._reference_time = 0.0  # [s], stamp of the newest joint_references
+        self._saturated_time = 0.0
+        self._stopped = True  # no torque is being applied
+
+        qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
+        self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
+        self.create_subscription(JointState, "wheel_states", self._on_wheels, qos)
+        self.create_subscription(JointTrajectory, "joint_references", self._on_reference, qos)
+        self._torque_pub = self.create_publisher(
+            Vector3Stamped, "wheel_torque", QoSProfile(depth=1)
+        )
+        self._status_pub = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
+        self.create_service(Trigger, "~/hold", self._on_hold)
+        self.create_timer(self._period, self._on_tick)
+        self.get_logger().info(
+            f"holding the base of {self.robot.name} with reaction wheels at {params['rate']} Hz "
+            f"(omega_n {self.gains.natural_frequency} rad/s, limit {self.gains.torque_limit} N m)"
+        )
+
+    # --- inputs ---------------------------------------------------------------------------------
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            command = match_named_command(
+                msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
+            )
+            if command.positions is None:
+                raise InputError("joint_states has no positions")
+        except InputError as exc:
+            self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
+            return
+        self._theta = command.positions
+        if command.velocities is not None:
+            self._theta_dot = command.velocities
+        self._received["joints"] = time.monotonic()
+
+    def _on_odom(self, msg: Odometry) -> None:
+        pose = base_pose(msg)
+        w = msg.twist.twist.angular
+        omega = np.array([w.x, w.y, w.z])
+        if pose is None or not np.isfinite(omega).all():
+            self.get_logger().error("ignored base_odom: not finite", throttle_duration_sec=1.0)
+            return
+        self._pose, self._omega = pose, omega
+        self._received["odom"] = time.monotonic()
+
+    def _on_wheels(self, msg: JointState) -> None:
+        try:
+            command = match_named_command(msg.name, WHEEL_NAMES, velocities=msg.velocity)
+            if command.velocities is None:
+                raise InputError("wheel_states has no velocities")
+        except InputError as exc:
+            self.get_logger().error(f"ignored wheel_states: {exc}", throttle_duration_sec=1.0)
+            return
+        self._wheel_speeds = command.velocities
+        self._received["wheels"] = time.monotonic()
+
+    def _on_reference(self, msg: JointTrajectory) -> None:
+        if not msg.points:
+            return
+        try:
+            command = match_named_command(
+                msg.joint_names, self.robot.joint_names, velocities=msg.points[0].velocities
+            )
+        except InputError as exc:
+            self.get_logger().error(f"ignored joint_references: {exc}", throttle_duration_sec=1.0)
+            return
+        if command.velocities is not None:
+            self._reference = command.velocities
+            self._reference_received = time.monotonic()
+            stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+            # the sender's stamp times the derivative of eq. (5.14); unstamped: receipt time
+            self._reference_time = stamp if stamp > 0.0 else self._now()
+
+    def _on_hold(self, _request, response):
+        if self._pose is None:
+            response.success, response.message = False, "no base_odom yet"
+            return response
+        self.law = AttitudeControlLaw(self._rotation(), self.gains)
+        response.success, response.message = True, "holding the current base attitude"
+        return response
+
+    def _now(self) -> float:
+        """Node clock [s] (sim time with use_sim_time)."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    # --- control --------------------------------------------------------------------------------
+    def _rotation(self) -> np.ndarray:
+        return FreeFloatingState.compute(
+            self.robot, self.robot.configuration(self._theta, *self._pose)
+        ).base_rotation
+
+    def _on_tick(self) -> None:
+        now = time.monotonic()
+        if self._theta is None or self._pose is None or self._wheel_speeds is None:
+            self._publish_status(AttitudeState.WAITING_FOR_STATE, "waiting for the robot state")
+            return
+        for stream, topic in (("odom", "base_odom"), ("wheels", "wheel_states")):
+            age = now - self._received[stream]
+            if age > self._timeout:
+                self._stale(f"{topic} {age:.3f} s old (state_timeout {self._timeout} s)")
+                return
+        problem = measured_state_problem(
+            now, [], "joint_states", self._received["joints"], None, self._timeout
+        )
+        if problem is not None:
+            self._stale(problem[1])
+            return
+        state = FreeFloatingState.compute(
+            self.robot, self.robot.configuration(self._theta, *self._pose)
+        )
+        if self.law is None:
+            self.law = AttitudeControlLaw(state.base_rotation, self.gains)
+        fresh = now - self._reference_received <= self._reference_timeout
+        rates = self._reference if fresh else self._theta_dot
+        wheel_momentum = self._wheel_inertia * (self._wheel_speeds + self._omega)
+        command = self.law.step(
+            self._reference_time if fresh else self._now(),
+            state,
+            rates,
+            self._omega,
+            wheel_momentum,
+        )
+        if not np.isfinite(command.torque).all():
+            self._stale("non-finite torque")  # never published
+            return
+        self._publish_torque(command.torque)
+        saturated = bool(command.saturated.any())
+        self._saturated_time += self._period if saturated else 0.0
+        self._publish_status(
+            AttitudeState.SATURATED if saturated else AttitudeState.OK,
+            f"wheels {[n for n, s in zip(WHEEL_NAMES, command.saturated, strict=True) if s]} at "
+            f"the {self.gains.torque_limit} N m limit: the base turns"
+            if saturated
+            else "holding",
+            {
+                "attitude_error_deg": math.degrees(command.attitude_error),
+                "torque": command.torque,
+                "feedforward": command.feedforward,
+                "feedback": command.feedback,
+                "coupling_momentum": command.coupling_momentum,
+                "feedforward_source": "joint_references" if fresh else "joint_states",
+            },
+        )
+
+    def _stale(self, reason: str) -> None:
+        if not self._stopped:
+            self._publish_torque(np.zeros(3))
+            self._stopped = True
+            if self.law is not None:
+                self.law.reset(self.law.reference)  # no feed-forward across the gap
+        self._publish_status(AttitudeState.STALE_STATE, f"{reason}; wheel torque zero")
+
+    def _publish_torque(self, torque: np.ndarray) -> None:
+        msg = Vector3Stamped()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = self.robot.base_link
+        msg.vector.x, msg.vector.y, msg.vector.z = (float(x) for x in torque)
+        self._torque_pub.publish(msg)
+        self._stopped = not np.any(torque)
+
+    def _publish_status(self, state: AttitudeState, detail: str, values: dict | None = None):
+        values = {"state": state.value, **(values or {})}
+        values["saturated_time_s"] = self._saturated_time
+        status = DiagnosticStatus(
+            level=LEVELS.get(state, DiagnosticStatus.OK),
+            name=f"{self.get_name()}: base attitude with reaction wheels",
+            message=f"{state.value}: {detail}",
+            hardware_id=self.robot.name,
+            values=[KeyValue(key=k, value=status_text(v)) for k, v in values.items()],
+        )
+        msg = DiagnosticArray(status=[status])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._status_pub.publish(msg)
+
+    def destroy_node(self) -> None:
+        """Motors off: one zero torque, then tear down."""
+        try:
+            self._publish_torque(np.zeros(3))
+            self._torque_pub.wait_for_all_acked(Duration(seconds=0.5))
+        except Exception as exc:  # the context may already be shut down (Ctrl-C)
+            self.get_logger().warn(f"could not publish the final zero torque: {exc}")
+        super().destroy_node()
+
+
+def main(args=None) -> int:
+    return run_node(
+        AttitudeControlNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
+    )
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

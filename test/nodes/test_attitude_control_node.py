@@ -1,0 +1,140 @@
+"""rns_attitude_control over real DDS: the wheels hold the base during a slow arm motion."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Vector3Stamped
+from nav_msgs.msg import Odometry
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rns_testing import Recorder
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from rns_ros.core.integration import attitude_deviation
+from rns_ros.nodes.attitude_control import PARAMETERS, AttitudeControlNode
+from rns_ros.nodes.simulator import SimulatorNode
+
+REPO = Path(__file__).resolve().parents[2]
+JOINTS = [f"joint_{i}" for i in range(1, 8)]
+COMMAND_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+PERIOD = 4.0  # s, of the wrist motion
+
+
+def _node(ros, cls, **overrides):
+    parameters = [Parameter(name, value=value) for name, value in overrides.items()]
+    return ros.add(cls(context=ros.context, parameter_overrides=parameters))
+
+
+def _values(msg: DiagnosticArray) -> dict[str, str]:
+    return {kv.key: kv.value for kv in msg.status[0].values}
+
+
+def _rotation(msg: Odometry) -> np.ndarray:
+    o = msg.pose.pose.orientation
+    return pin.Quaternion(o.w, o.x, o.y, o.z).toRotationMatrix()
+
+
+def _wrist_rates(t: float, speed: float) -> list[float]:
+    rates = np.zeros(7)
+    rates[4:] = speed * math.sin(2 * math.pi * t / PERIOD) * np.array([1.0, -1.0, 1.0])
+    return rates.tolist()
+
+
+def _drive(ros, speed: float, attitude: bool) -> tuple[float, list[dict]]:
+    """One wrist period on rns_simulator with wheels (and rns_attitude_control); returns the
+    max base deviation [deg] and the attitude statuses."""
+    _node(ros, SimulatorNode, reaction_wheels=True)
+    if attitude:
+        _node(ros, AttitudeControlNode)
+    probe = ros.probe()
+    odom = Recorder(probe, Odometry, "base_odom")
+    status = Recorder(probe, DiagnosticArray, "rns_attitude_control/status")
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+
+    def ready():
+        if not attitude:
+            return bool(odom.messages)
+        return bool(status.messages) and _values(status.messages[-1])["state"] == "OK"
+
+    assert ros.spin_until(ready, timeout=10.0)
+    clock = probe.get_clock()
+    start = clock.now().nanoseconds * 1e-9
+    while (t := clock.now().nanoseconds * 1e-9 - start) < PERIOD:
+        point = JointTrajectoryPoint(velocities=_wrist_rates(t, speed))
+        msg = JointTrajectory(joint_names=JOINTS, points=[point])
+        msg.header.stamp = clock.now().to_msg()  # as rns_controller stamps its references
+        command.publish(msg)
+        ros.spin_for(0.01)
+    ros.spin_for(0.3)
+    first = _rotation(odom.messages[0])
+    deviation = max(attitude_deviation(first, _rotation(m)) for m in odom.messages)
+    return math.degrees(deviation), [_values(m) for m in status.messages]
+
+
+def test_wheels_hold_the_base_during_a_slow_wrist_motion(ros):
+    """0.004 rad/s wrist motion needs < 0.1 N m: the base stays well within 1e-4 deg (1.8e-5
+    seen), against 7.6e-4 deg with idle wheels (next test)."""
+    held, statuses = _drive(ros, 0.004, attitude=True)
+    print(f"base deviation with rns_attitude_control: {held:.3e} deg")
+    assert held < 1e-4
+    states = {s["state"] for s in statuses} - {"WAITING_FOR_STATE"}
+    assert states == {"OK"}, states
+    assert max(float(s["attitude_error_deg"]) for s in statuses) < 1e-4
+    assert any(s["feedforward_source"] == "joint_references" for s in statuses)
+
+
+def test_idle_wheels_let_the_base_turn(ros):
+    free, _ = _drive(ros, 0.004, attitude=False)
+    print(f"base deviation without attitude control: {free:.3e} deg")
+    assert free > 4e-4
+
+
+def test_a_fast_motion_saturates_and_says_so(ros):
+    _, statuses = _drive(ros, 0.05, attitude=True)
+    saturated = [s for s in statuses if s["state"] == "SATURATED"]
+    assert saturated
+    assert float(statuses[-1]["saturated_time_s"]) > 0.1
+
+
+def test_stale_state_turns_the_wheels_off(ros):
+    simulator = _node(ros, SimulatorNode, reaction_wheels=True)
+    _node(ros, AttitudeControlNode)
+    probe = ros.probe()
+    torque = Recorder(probe, Vector3Stamped, "wheel_torque")
+    status = Recorder(probe, DiagnosticArray, "rns_attitude_control/status")
+    assert ros.spin_until(lambda: len(torque.messages) > 5, timeout=10.0)
+    ros.executor.remove_node(simulator)
+    ros.nodes.remove(simulator)
+    simulator.destroy_node()
+    assert ros.spin_until(
+        lambda: _values(status.messages[-1])["state"] == "STALE_STATE", timeout=5.0
+    )
+    last = torque.messages[-1].vector
+    assert (last.x, last.y, last.z) == (0.0, 0.0, 0.0)
+    message = status.messages[-1].status[0].message
+    assert any(topic in message for topic in ("base_odom", "joint_states", "wheel_states"))
+    assert "s old (state_timeout 0.1 s)" in message
+
+
+def test_config_yaml_mirrors_the_declared_defaults():
+    content = yaml.safe_load((REPO / "config" / "attitude_control.yaml").read_text())
+    values = content["/**"]["ros__parameters"]
+    assert values == {spec.name: spec.default for spec in PARAMETERS}
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [({"torque_limit": 0.0}, "torque_limit"), ({"natural_frequency": -1.0}, "natural_frequency")],
+)
+def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
+    from rns_ros.core import ConfigError
+
+    with pytest.raises(ConfigError, match=message):
+        _node(ros, AttitudeControlNode, **overrides)

@@ -28,6 +28,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
 
 from rns_ros.analysis.recorded_run import RunFigures, run_figures
 from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
@@ -42,13 +43,17 @@ from rns_ros.demo_ptp import (
     run_ptp_method,
 )
 from rns_ros.harness import Harness, TopicLog
+from rns_ros.nodes.attitude_control import AttitudeControlNode
 from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.operator import OperatorNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.resources import default_model_config, scenario_path
 
-METHODS = ("dls", "sc", "pinv", "conventional")
+#: ``conventional+wheels``: the conventional controller with rns_attitude_control holding the
+#: base with reaction wheels (thesis chapter 5's comparison); the simulator gets wheels.
+WHEELS_SUFFIX = "+wheels"
+METHODS = ("dls", "sc", "pinv", "conventional", "conventional+wheels")
 DEFAULT_METHODS = ("dls", "sc", "conventional")
 ETS_VII_ALLOWED_DEVIATION_DEG = 0.05  # thesis chapter 4, footnote 1
 #: Settling time after the operator's zeros before the run ends [s].
@@ -63,6 +68,28 @@ class DemoRow:
     figures: RunFigures
     wall_time_s: float
     recording: str | None
+    energy: EnergyFigures | None = None
+
+
+@dataclass(frozen=True)
+class EnergyFigures:
+    """Energy of one run from rns_simulator's ``energy`` topic (thesis chapter 5).
+
+    Attributes:
+        c_max: C_max of eq. (5.12): peak of 1/2 theta_dot^T Lambda theta_dot [J] (the arm's
+            motion costed as if wheels cancelled its reaction: zero for the Lambda_r part of a
+            reactionless motion).
+        c_sum: C_sum of eq. (5.13) [J s].
+        peak_wheel_energy: largest kinetic energy of the wheels' spin in the run [J] (0 without
+            wheels).
+        wheel_saturation_s: time with a wheel at its torque limit per rns_attitude_control [s]
+            (None without it).
+    """
+
+    c_max: float
+    c_sum: float
+    peak_wheel_energy: float
+    wheel_saturation_s: float | None
 
 
 def check_scenarios(files: list[Path]) -> list[Scenario]:
@@ -86,6 +113,8 @@ def non_finite_figures(rows: list[DemoRow]) -> list[str]:
     problems = []
     for row in rows:
         values = {**asdict(row.figures), "wall_time_s": row.wall_time_s}
+        if row.energy is not None:
+            values |= {k: v for k, v in asdict(row.energy).items() if v is not None}
         bad = [f"{name} = {value}" for name, value in values.items() if not np.isfinite(value)]
         if bad:
             problems.append(f"{row.method}: " + ", ".join(bad))
@@ -102,7 +131,9 @@ def run_method(
     robot = load_model(default_model_config())
     sim_time = args.real_time_factor != 1.0
     timing = {"use_sim_time": True} if sim_time else {}
-    controller_parameters = {"method": method, "rate": args.rate, **timing}
+    wheels = method.endswith(WHEELS_SUFFIX)
+    law = method.removesuffix(WHEELS_SUFFIX)
+    controller_parameters = {"method": law, "rate": args.rate, **timing}
     controller_parameters.update(
         {key: value for key, value in scenario.controller.items() if key != "method"}
     )
@@ -115,6 +146,8 @@ def run_method(
             "momentum": stack.record(WrenchStamped, "momentum"),
             "commands": stack.record(TwistStamped, "cmd_twist"),
             "status": stack.record(DiagnosticArray, "rns_controller/status"),
+            "energy": stack.record(Float64MultiArray, "energy"),
+            "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status"),
         }
         # the logger first: its subscriptions exist (like the streams above) before the first
         # robot state, so the recording holds the whole run
@@ -130,9 +163,12 @@ def run_method(
                 # off real time, the simulator waits for each control period's output, so the
                 # figures do not depend on how fast this machine is
                 "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
+                "reaction_wheels": wheels,
             },
         )
         stack.add(ControllerNode, controller_parameters)
+        if wheels:
+            stack.add(AttitudeControlNode, {"rate": args.rate, **timing})
         operator = stack.add(
             OperatorNode, {"scenario": str(scenario_file), "start_delay": 0.5, **timing}
         )
@@ -141,8 +177,28 @@ def run_method(
             raise RnsError(f"{method}: the scenario did not finish within {budget:.0f} s")
         stack.spin_for(SETTLE)
         data = robot_arrays(streams)
+        energy = energy_figures(streams["energy"], streams["attitude"] if wheels else None)
     figures = run_figures(robot, scenario, **data)
-    return DemoRow(method, figures, time.perf_counter() - start, recording)
+    return DemoRow(method, figures, time.perf_counter() - start, recording, energy)
+
+
+def energy_figures(energy: TopicLog, attitude: TopicLog | None) -> EnergyFigures | None:
+    """C_max, C_sum, peak wheel energy from the ``energy`` topic (labels from its layout), and
+    the saturation time from the newest rns_attitude_control status; None without samples."""
+    if not len(energy):
+        return None
+    labels = energy.latest().layout.dim[0].label.split()
+    rows = [dict(zip(labels, msg.data, strict=True)) for msg in energy.messages]
+    saturation = None
+    if attitude is not None and len(attitude):
+        values = {kv.key: kv.value for kv in attitude.latest().status[0].values}
+        saturation = float(values.get("saturated_time_s", "nan"))
+    return EnergyFigures(
+        c_max=rows[-1]["c_max"],
+        c_sum=rows[-1]["c_sum"],
+        peak_wheel_energy=max(row["wheels"] for row in rows),
+        wheel_saturation_s=saturation,
+    )
 
 
 def _add_logger(stack: Harness, method: str, args, timing: dict) -> str | None:
@@ -202,6 +258,10 @@ def format_table(rows: list[DemoRow]) -> str:
         ("wrist drift [m]", 17),
         ("max |θ̇| [rad/s]", 17),
         ("Δl [kg m²/s]", 14),
+        ("C_max [J]", 11),
+        ("C_sum [J s]", 13),
+        ("wheel KE [J]", 14),
+        ("wheel sat [s]", 15),
         ("wall [s]", 10),
     )
     header = "".join(
@@ -214,9 +274,20 @@ def format_table(rows: list[DemoRow]) -> str:
         lines.append(
             f"{row.method:<14}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
             f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
-            f"{f.angular_momentum_drift:>14.2e}{row.wall_time_s:>10.1f}"
+            f"{f.angular_momentum_drift:>14.2e}{_energy_columns(row.energy)}"
+            f"{row.wall_time_s:>10.1f}"
         )
     return "\n".join(lines)
+
+
+def _energy_columns(energy: EnergyFigures | None) -> str:
+    if energy is None:
+        return f"{'-':>11}{'-':>13}{'-':>14}{'-':>15}"
+    saturation = "-" if energy.wheel_saturation_s is None else f"{energy.wheel_saturation_s:.2f}"
+    return (
+        f"{energy.c_max:>11.3g}{energy.c_sum:>13.3g}{energy.peak_wheel_energy:>14.3g}"
+        f"{saturation:>15}"
+    )
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -317,6 +388,7 @@ def _main(argv: list[str] | None) -> int:
         summary = [
             {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
             | {"recording": row.recording}
+            | {"energy": None if row.energy is None else asdict(row.energy)}
             for row in rows
         ]
         args.summary.write_text(json.dumps(summary, indent=2) + "\n")

@@ -108,6 +108,23 @@ def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path):
     assert row["final_camera_error_deg"] < 0.05
 
 
+def test_conventional_with_wheels_costs_orders_of_magnitude_more_energy(tmp_path):
+    """Thesis chapter 5 over DDS: the conventional controller with rns_attitude_control and
+    reaction wheels against reactionless DLS. The Lambda cost (5.12) of the conventional motion
+    is dominated by the wheel term; the reactionless motion's is the arm's alone. The wheels
+    really spin (their kinetic energy is measured by the simulator), and the saturation time
+    of the 0.1 N m wheels is reported."""
+    _, rows = _short_demo(tmp_path, "--no-record", "--methods", "dls,conventional+wheels")
+    dls, wheels = rows["dls"]["energy"], rows["conventional+wheels"]["energy"]
+    print(f"dls {dls}\nconventional+wheels {wheels}")
+    assert dls["peak_wheel_energy"] == 0.0
+    assert dls["wheel_saturation_s"] is None
+    assert wheels["peak_wheel_energy"] > 0.0
+    assert 0.0 <= wheels["wheel_saturation_s"] <= 3.5
+    assert wheels["c_max"] > 100.0 * dls["c_max"]
+    assert wheels["c_sum"] > 100.0 * dls["c_sum"]
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [

@@ -417,9 +417,9 @@ def test_a_diverged_step_stops_the_simulation_until_reset(ros):
     healthy = simulator._acceleration
     poisoned = []
 
-    def nan_once(q, v, tau):
+    def nan_once(q, v, tau, fraction=0.0):
         if poisoned:
-            return healthy(q, v, tau)
+            return healthy(q, v, tau, fraction)
         poisoned.append(True)
         return np.full(v.shape, np.nan)
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from hypothesis import strategies as st
 
@@ -49,3 +51,16 @@ class Recorder:
 
     def by_stamp(self):
         return {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in self.messages}
+
+
+def json_finite(value) -> bool:
+    """Every number in a JSON value is finite (the report writes non-finite floats as strings)."""
+    if isinstance(value, dict):
+        return all(json_finite(v) for v in value.values())
+    if isinstance(value, list):
+        return all(json_finite(v) for v in value)
+    if isinstance(value, str):
+        return value not in ("inf", "-inf", "nan")
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return True

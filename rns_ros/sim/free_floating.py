@@ -131,6 +131,11 @@ class JointReference:
     accelerations: np.ndarray
 
 
+#: What a step changes (restored when it diverges). Each step assigns new arrays, never edits
+#: them in place, so keeping references is enough.
+_STEP_STATE = ("time", "q", "_v", "effort", "reference", "wheel_momentum", "wheel_angles")
+
+
 @dataclass(frozen=True)
 class SimulationState:
     """Snapshot after a step (copies; safe to keep).
@@ -340,15 +345,7 @@ class FreeFloatingSimulator:
             SimulationDivergedError: the step produced a non-finite q, v or effort; time, state and
                 reference are left as they were before the step (the last finite state).
         """
-        before = (
-            self.time,
-            self.q,
-            self._v,
-            self.effort,
-            self.reference,
-            self.wheel_momentum,
-            self.wheel_angles,
-        )
+        before = {name: getattr(self, name) for name in _STEP_STATE}
         with np.errstate(all="ignore"):  # overflow is reported below, as SimulationDivergedError
             if self.wheels is not None:
                 speeds_before = self.wheel_speeds
@@ -368,15 +365,8 @@ class FreeFloatingSimulator:
             values += (("wheel momentum", self.wheel_momentum),)
         bad = [name for name, value in values if value is not None and not np.isfinite(value).all()]
         if bad:
-            (
-                self.time,
-                self.q,
-                self._v,
-                self.effort,
-                self.reference,
-                self.wheel_momentum,
-                self.wheel_angles,
-            ) = before
+            for name, value in before.items():
+                setattr(self, name, value)
             raise SimulationDivergedError(
                 f"{self.mode} simulation diverged in the step from t = {self.time:.6g} s: "
                 f"non-finite {' and '.join(bad)}; kept the last finite state"

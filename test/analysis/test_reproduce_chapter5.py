@@ -8,6 +8,7 @@ import json
 import math
 
 import pytest
+from rns_testing import json_finite
 
 from rns_ros import reproduce
 from rns_ros.analysis.reproduce import chapter5, registry
@@ -32,18 +33,6 @@ def documents(tmp_path_factory):
     return written
 
 
-def _finite(value) -> bool:
-    if isinstance(value, dict):
-        return all(_finite(v) for v in value.values())
-    if isinstance(value, list):
-        return all(_finite(v) for v in value)
-    if isinstance(value, str):
-        return value not in ("inf", "-inf", "nan")
-    if isinstance(value, float):
-        return math.isfinite(value)
-    return True
-
-
 def test_registered_in_order_before_the_inspection_results():
     assert tuple(chapter5.REPRODUCTIONS) == IDS
     modules = list(registry.CHAPTER_MODULES)
@@ -56,7 +45,7 @@ def test_quick_run_writes_finite_json_with_the_documented_keys(documents, identi
     document, png = documents[identifier]
     assert document["quick"] is True
     assert tuple(document["ours"]) == KEYS[identifier]
-    assert _finite(document)
+    assert json_finite(document)
     statuses = {c["status"] for c in document["comparisons"]}
     assert statuses <= {s.value for s in Status}
     assert document["choices"]

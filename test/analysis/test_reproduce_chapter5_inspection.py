@@ -4,9 +4,9 @@ documented keys and a PNG."""
 from __future__ import annotations
 
 import json
-import math
 
 import pytest
+from rns_testing import json_finite
 
 from rns_ros.analysis.reproduce import chapter5_inspection as ch5
 from rns_ros.analysis.reproduce import registry
@@ -27,19 +27,6 @@ def documents(tmp_path_factory):
     return written
 
 
-def _finite(value) -> bool:
-    """Every number in a JSON value is finite (non-finite floats become strings)."""
-    if isinstance(value, dict):
-        return all(_finite(v) for v in value.values())
-    if isinstance(value, list):
-        return all(_finite(v) for v in value)
-    if isinstance(value, str):
-        return value not in ("inf", "-inf", "nan")
-    if isinstance(value, float):
-        return math.isfinite(value)
-    return True
-
-
 def test_the_module_comes_after_the_other_chapters_and_registers_both_results():
     modules = list(registry.CHAPTER_MODULES)
     ours = modules.index("rns_ros.analysis.reproduce.chapter5_inspection")
@@ -55,7 +42,7 @@ def test_each_result_writes_finite_json_and_a_png(documents, identifier):
     document, png = documents[identifier]
     assert document["id"] == identifier
     assert document["quick"] is True
-    assert _finite(document)
+    assert json_finite(document)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert png.stat().st_size > 10_000
     statuses = {c["status"] for c in document["comparisons"]}

@@ -140,24 +140,9 @@ class FreeFloatingModel:
                 )
 
     def _check_bodies(self) -> None:
-        """Every moving body (a joint's link plus the fixed links merged into it) must have a
-        finite mass > 0 and a finite, symmetric positive definite rotational inertia: a
-        free-flyer's mass matrix is singular otherwise."""
-        model = self.model
-        for index in range(1, model.njoints):
-            body = model.inertias[index]
-            links = [
-                frame.name
-                for frame in model.frames
-                if frame.parentJoint == index and frame.type == pin.FrameType.BODY
-            ]
-            where = f"body of joint '{model.names[index]}' (links {links})"
-            if not (math.isfinite(body.mass) and body.mass > 0.0):
-                raise ModelError(
-                    f"{self.name}: {where} has mass {body.mass} kg; must be finite and > 0 "
-                    "(a moving link needs an <inertial>)"
-                )
-            _check_inertia_matrix(np.array(body.inertia), f"{self.name}: {where}")
+        """Every moving body must be physical (:func:`check_moving_bodies`): a free-flyer's mass
+        matrix is singular otherwise."""
+        check_moving_bodies(self.model, self.name)
 
     def _frame_id(self, frame: str, what: str) -> int:
         if not self.model.existFrame(frame):
@@ -231,6 +216,29 @@ class FreeFloatingModel:
         points = [data.oMi[j].translation.copy() for j in range(1, self.model.njoints)]
         points.append(data.oMf[self.camera_frame_id].translation.copy())
         return np.array(points)
+
+
+def check_moving_bodies(model: pin.Model, name: str) -> None:
+    """Every moving body (a joint's link plus the fixed links merged into it) must have a finite
+    mass > 0 and a finite, symmetric positive definite rotational inertia.
+
+    Raises:
+        ModelError: naming the joint, its links and the bad value.
+    """
+    for index in range(1, model.njoints):
+        body = model.inertias[index]
+        links = [
+            frame.name
+            for frame in model.frames
+            if frame.parentJoint == index and frame.type == pin.FrameType.BODY
+        ]
+        where = f"body of joint '{model.names[index]}' (links {links})"
+        if not (math.isfinite(body.mass) and body.mass > 0.0):
+            raise ModelError(
+                f"{name}: {where} has mass {body.mass} kg; must be finite and > 0 "
+                "(a moving link needs an <inertial>)"
+            )
+        _check_inertia_matrix(np.array(body.inertia), f"{name}: {where}")
 
 
 # URDF inertial checks ---------------------------------------------------------------------------

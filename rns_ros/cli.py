@@ -29,6 +29,7 @@ EXECUTABLES = frozenset(
         "rns_simulator",
         "rns_controller",
         "rns_ptp",
+        "rns_attitude_control",
         "rns_rerun_logger",
         "rns_operator",
         "rns_teleop_keyboard",

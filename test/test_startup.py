@@ -30,6 +30,7 @@ BIN = Path(sys.executable).parent
 TIMEOUT_S = 20.0  # a start-up failure takes ~1 s; a node that does not fail runs until killed
 #: The executables of issue 11 (rns_param / rns_topic have their own tests).
 CHECKED = (
+    "rns_attitude_control",
     "rns_controller",
     "rns_demo",
     "rns_observer",

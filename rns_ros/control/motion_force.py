@@ -444,6 +444,42 @@ class ReversedQuantities:
     w: np.ndarray
 
 
+def _cross_motion(twist: np.ndarray, motion: np.ndarray) -> np.ndarray:
+    """Spatial motion cross product V x m, Pinocchio order [linear; angular]."""
+    v, w = twist[:3], twist[3:]
+    return np.concatenate(
+        [np.cross(w, motion[:3]) + np.cross(v, motion[3:]), np.cross(w, motion[3:])]
+    )
+
+
+def _cross_force(twist: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Spatial force cross product V x* f, Pinocchio order [force; moment]."""
+    v, w = twist[:3], twist[3:]
+    return np.concatenate([np.cross(w, force[:3]), np.cross(w, force[3:]) + np.cross(v, force[:3])])
+
+
+@dataclass(frozen=True)
+class ReversedDynamics:
+    """The control model's dynamics (6.21) M_hat q_hat_ddot + c_hat + g_hat = Q_hat +
+    J_const^T F_B at the real state, real joint coordinates, q_hat = [V_A (6); theta (n)].
+
+    Attributes:
+        mass: M_hat (6 + n, 6 + n). bias: c_hat (6 + n,). gravity: g_hat (6 + n,) (B's weight
+            included; zero with gravity off).
+        constraint: J_const (6, 6 + n), maps q_hat_dot to B's spatial twist at the world origin
+            (6.19); its root block is T_hat^T = X_A, its joint block J_B = -J_world.
+        constraint_drift: J_const_dot q_hat_dot (6,) of (6.20).
+        velocity: q_hat_dot = [J_e theta_dot; theta_dot].
+    """
+
+    mass: np.ndarray
+    bias: np.ndarray
+    gravity: np.ndarray
+    constraint: np.ndarray
+    constraint_drift: np.ndarray
+    velocity: np.ndarray
+
+
 class ReversedModel:
     """The RNS-C control model (Fig. 6.2 b) of a real fixed-base serial arm, section 6.1.2.
 
@@ -539,6 +575,54 @@ class ReversedModel:
             reduced = reduced - root[np.ix_(rows, free)] @ solve[:, : len(rows)]
             w = w - root[np.ix_(rows, free)] @ solve[:, len(rows) :]
         return ReversedQuantities(mass, root, coupling, 0.5 * (reduced + reduced.T), w)
+
+    def dynamics(self, state: FixedBaseState) -> ReversedDynamics:
+        """The control model's equation of motion (6.21) at the REAL state (B at rest).
+
+        Coordinates q_hat_dot = [V_A; theta_dot] with V_A = J_e theta_dot. With spatial twists
+        V_k = J_k q_hat_dot at the world origin and world-axes spatial inertias I_k (Featherstone):
+        c_hat = sum_k J_k^T (I_k J_k_dot q_hat_dot + V_k x* I_k V_k), g_hat = -sum_k J_k^T I_k a_g,
+        J_k_dot q_hat_dot = [v_A x omega_A; 0] - sum_{j>k} (V_j x S_j) theta_dot_j. The constraint
+        of (6.19) is V_B = J_const q_hat_dot = 0 with J_const = [X_A, -J_world] (= [T_hat^T J_B]).
+        """
+        robot, model, data = self.robot, self.robot.model, self._data
+        n = robot.n
+        if state.n != n:
+            raise InputError(f"state has {state.n} joints, the model {n}")
+        pin.computeJointJacobians(model, data, state.q)
+        pin.updateFramePlacements(model, data)
+        joint_twists = data.J.copy()
+        p_a = data.oMf[robot.ee_frame_id].translation.copy()
+        v_a = state.jacobian @ state.v  # (6,) [v_A; omega_A] at the EE point
+        velocity = np.concatenate([v_a, state.v])
+        shift = np.eye(6)
+        shift[:3, 3:] = _skew(p_a)
+        root_drift = np.concatenate([np.cross(v_a[:3], v_a[3:]), np.zeros(3)])
+        twist_a = shift @ v_a
+        # body twists V_j (j = 1..n), spatial at the origin, of the hat model at the real state
+        tail = np.cumsum((joint_twists * state.v)[:, ::-1], axis=1)[:, ::-1]  # sum_{i>=j}
+        tail = np.hstack([tail, np.zeros((6, 1))])  # tail[:, j] = sum_{i>j} (0-based j+1..)
+        gravity_acc = np.concatenate([np.asarray(model.gravity.linear, float), np.zeros(3)])
+        mass = np.zeros((6 + n, 6 + n))
+        bias, weight = np.zeros(6 + n), np.zeros(6 + n)
+        constraint = drift_b = None
+        for k in range(n + 1):
+            jac = np.zeros((6, 6 + n))
+            jac[:, :6] = shift
+            first = 0 if k == 0 else k  # 0-based index of the first joint between k and A
+            jac[:, 6 + first :] = -joint_twists[:, first:]
+            drift = root_drift.copy()
+            for j in range(first, n):  # 0-based joint j, child body twist V = X_A V_A - tail
+                body_twist = twist_a - tail[:, j + 1]
+                drift -= _cross_motion(body_twist, joint_twists[:, j]) * state.v[j]
+            twist = twist_a - tail[:, first]
+            inertia = self._b_inertia if k == 0 else data.oMi[k].act(model.inertias[k]).matrix()
+            mass += jac.T @ inertia @ jac
+            bias += jac.T @ (inertia @ drift + _cross_force(twist, inertia @ twist))
+            weight -= jac.T @ (inertia @ gravity_acc)
+            if k == 0:
+                constraint, drift_b = jac, drift
+        return ReversedDynamics(0.5 * (mass + mass.T), bias, weight, constraint, drift_b, velocity)
 
     def w(self, q) -> np.ndarray:
         """W (m, n) at q."""
@@ -687,6 +771,86 @@ def rns_control(
     return ControlCommand(torque, accel, task_accel, wrench, "rns-c/closed-form", s_min, s_max)
 
 
+@dataclass(frozen=True)
+class LiteralRnsStep:
+    """One step of the literal RNS-C loop (6.22) + (6.17) + (6.18).
+
+    Attributes:
+        command: the :class:`ControlCommand` (method "rns-c/literal"); joint_acceleration is the
+            theta_ddot_ref of (6.17), torque the tau of (6.18) for the next step.
+        constraint_force: F_B of (6.22), B's wrench at the world origin [N, N m], (6,).
+    """
+
+    command: ControlCommand
+    constraint_force: np.ndarray
+
+
+def rns_literal_step(
+    state: FixedBaseState,
+    task: TaskSpace,
+    reversed_model: ReversedModel,
+    acceleration_ref,
+    force_ref=None,
+    *,
+    previous_torque,
+    normal_acceleration=None,
+    rcond: float = DEFAULT_RCOND,
+) -> LiteralRnsStep:
+    """RNS-C as printed ([A-4.3]): the algebraic loop broken by the previous step's torque.
+
+    1. F_B of (6.22) with Q_hat = [F_A; tau_prev], F_A = -N f_ref the contact reaction on A.
+    2. theta_ddot_ref of (6.17) (constraint force substituted, non-task root rows eliminated as
+       in (6.24)-(6.25)): theta_ddot = W^+ (r_red - M_red V_dot_ref), r = F_A + T_hat F_B - c_A
+       - g_A on the root rows (exact C_A, not the momentum approximation).
+    3. tau of (6.16)/(6.18): M_Al^T V_dot_A + M_l theta_ddot + c_l + g_l - J_B^T F_B.
+
+    The fixed point of tau_prev -> tau is the closed form of :func:`rns_control` (tested).
+    """
+    if reversed_model.rows != task.rows:
+        raise ConfigError(
+            f"reversed model rows {reversed_model.rows} differ from task rows {task.rows}"
+        )
+    n = state.n
+    previous_torque = as_vector(previous_torque, n, "previous_torque")
+    task_accel = task.compose(acceleration_ref, normal_acceleration)
+    wrench = task.force_wrench(np.zeros(task.k) if force_ref is None else force_ref)
+    dyn = reversed_model.dynamics(state)
+    rows, free = list(task.rows), list(reversed_model.free_rows)
+    root_force = np.zeros(6)
+    root_force[rows] = -wrench  # the environment's reaction on A [A-4.1]
+    generalized = np.concatenate([root_force, previous_torque])
+    nonlinear = dyn.bias + dyn.gravity
+    jc = dyn.constraint
+    m_inv = np.linalg.solve(dyn.mass, np.column_stack([jc.T, nonlinear - generalized]))
+    f_b = np.linalg.solve(jc @ m_inv[:, :6], jc @ m_inv[:, 6] - dyn.constraint_drift)  # (6.22)
+    residual = root_force + jc[:, :6].T @ f_b - nonlinear[:6]
+    root, coupling = dyn.mass[:6, :6], dyn.mass[:6, 6:]
+    reduced_residual, reduced_mass, w = residual[rows], root[np.ix_(rows, rows)], coupling[rows]
+    if free:
+        solve = np.linalg.solve(
+            root[np.ix_(free, free)],
+            np.column_stack([residual[free], root[free][:, rows], coupling[free]]),
+        )
+        cross = root[np.ix_(rows, free)]
+        reduced_residual = reduced_residual - cross @ solve[:, 0]
+        reduced_mass = reduced_mass - cross @ solve[:, 1 : 1 + len(rows)]
+        w = w - cross @ solve[:, 1 + len(rows) :]
+    accel = np.linalg.lstsq(w, reduced_residual - reduced_mass @ task_accel, rcond=rcond)[0]
+    root_accel = np.zeros(6)
+    root_accel[rows] = task_accel
+    if free:
+        root_accel[free] = np.linalg.solve(
+            root[np.ix_(free, free)],
+            residual[free] - root[np.ix_(free, rows)] @ task_accel - coupling[free] @ accel,
+        )
+    torque = coupling.T @ root_accel + dyn.mass[6:, 6:] @ accel + nonlinear[6:] - jc[:, 6:].T @ f_b
+    sigma = np.linalg.svd(w, compute_uv=False)
+    command = ControlCommand(
+        torque, accel, task_accel, wrench, "rns-c/literal", sigma[-1], sigma[0]
+    )
+    return LiteralRnsStep(command, f_b)
+
+
 class VelocityTermForm(Choice):
     """Forms of (7.13): ``momentum`` = -P Wdot^T (W W^T)^-1 M_red V_A with V_A = J theta_dot
     (the printed form); ``velocity`` = +P Wdot^T W^{+T} theta_dot (equal under the zero-momentum
@@ -738,10 +902,12 @@ __all__ = [
     "PLANAR_ROWS",
     "ControlCommand",
     "ForceGains",
+    "LiteralRnsStep",
     "MotionGains",
     "NullSpaceVelocity",
     "OperationalSpace",
     "OscVariant",
+    "ReversedDynamics",
     "ReversedModel",
     "ReversedQuantities",
     "TaskSpace",
@@ -756,5 +922,6 @@ __all__ = [
     "os_control",
     "resolved_acceleration",
     "rns_control",
+    "rns_literal_step",
     "velocity_level_term",
 ]

@@ -29,6 +29,7 @@ from rns_ros.control.motion_force import (
     os_control,
     resolved_acceleration,
     rns_control,
+    rns_literal_step,
     velocity_level_term,
 )
 from rns_ros.core import ConfigError, InputError, ModelError
@@ -199,6 +200,57 @@ def test_reversed_model_momentum_equals_real_arm_momentum_about_a():
     linear, angular_com = centroidal.linear, centroidal.angular
     angular_a = angular_com + np.cross(data.com[0] - state.ee_position, linear)
     assert np.allclose(hat, np.concatenate([linear, angular_a]), atol=1e-8)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_constrained_control_model_reproduces_real_arm_dynamics(name):
+    """(6.19)-(6.22): the control model with B held by F_B IS the real arm (any m_hat)."""
+    state, task, *_ = _state(name, seed=12)
+    robot = CASES[name][0]
+    dyn = ReversedModel(robot, task.rows, virtual_mass=100.0).dynamics(state)
+    torque = np.random.default_rng(12).standard_normal(robot.n)
+    generalized = np.concatenate([np.zeros(6), torque])
+    jc = dyn.constraint
+    assert np.allclose(jc @ dyn.velocity, 0.0, atol=1e-12)  # B at rest in the real motion
+    rhs = np.column_stack([jc.T, generalized - dyn.bias - dyn.gravity])
+    m_inv = np.linalg.solve(dyn.mass, rhs)
+    f_b = np.linalg.solve(jc @ m_inv[:, :6], -jc @ m_inv[:, 6] - dyn.constraint_drift)
+    accel = m_inv[:, 6] + m_inv[:, :6] @ f_b
+    real = _free_arm_acceleration(state, torque)
+    assert np.allclose(accel[6:], real, atol=1e-6)
+    assert np.allclose(accel[:6], state.jacobian @ real + state.jacobian_dot_v, atol=1e-6)
+
+
+def test_control_model_coriolis_power_identity():
+    """q_hat_dot^T c_hat = 1/2 q_hat_dot^T M_hat_dot q_hat_dot (M_hat_dot by central difference)."""
+    state, _, rns, *_ = _state("lwr", seed=13)
+    dyn = rns.dynamics(state)
+    step = 1e-6
+    mass_dot = (
+        rns.evaluate(state.q + step * state.v).mass - rns.evaluate(state.q - step * state.v).mass
+    ) / (2 * step)
+    power = 0.5 * dyn.velocity @ mass_dot @ dyn.velocity
+    assert np.isclose(dyn.velocity @ dyn.bias, power, rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize(("virtual_mass", "contraction"), [(100.0, 0.3), (1e5, 1e-3)])
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_literal_rns_loop_converges_to_closed_form(name, virtual_mass, contraction):
+    """[A-4.3]: (6.22)+(6.17) with tau from the previous step converges to the closed form; the
+    error shrinks by about 1/m_hat per step."""
+    state, task, _, a_ref, f_ref = _state(name, seed=14)
+    robot = CASES[name][0]
+    rns = ReversedModel(robot, task.rows, virtual_mass=virtual_mass)
+    closed = rns_control(state, task, rns, a_ref, f_ref)
+    torque, errors = np.zeros(robot.n), []
+    for _ in range(12):
+        step = rns_literal_step(state, task, rns, a_ref, f_ref, previous_torque=torque)
+        torque = step.command.torque
+        errors.append(np.abs(step.command.joint_acceleration - closed.joint_acceleration).max())
+    assert step.command.method == "rns-c/literal"
+    assert errors[-1] < 1e-8
+    assert np.allclose(torque, closed.torque, atol=1e-6 * (1 + np.abs(closed.torque).max()))
+    assert errors[2] < contraction * errors[1]
 
 
 # ------------------------------------------------------------------------------------------ RNS-C

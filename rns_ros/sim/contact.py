@@ -1,0 +1,641 @@
+r"""Contact simulation of thesis Part II: a fixed-base arm whose end effector touches a rigid body.
+
+Thesis chapter 6 runs its force/motion controllers against a rigid environment it never models
+(thesis_rest A-4.8). This module is that environment: one *scalar holonomic* constraint on the
+end-effector point p_e (3,) [m],
+
+    phi(p_e) = 0,   phi > 0: p_e is inside the environment (penetration) [m],
+
+enforced exactly by a Lagrange multiplier, with Baumgarte stabilization against numerical drift.
+
+Constraints (:class:`ArcConstraint`, :class:`PlaneConstraint`) give phi(p), its gradient
+n = d phi / d p (3,) - the unit contact normal pointing INTO the environment, i.e. the direction in
+which the end effector pushes - and the curvature term kappa = p_dot^T (d^2 phi / d p^2) p_dot
+[m/s^2], so that along any motion
+
+    phi_dot  = n^T p_dot = J_c q_dot,                   J_c = n^T J_v  (1, n)
+    phi_ddot = J_c q_ddot + n^T (J_v_dot q_dot) + kappa = J_c q_ddot + J_c_dot q_dot,
+
+with J_v the top (linear) rows of the end-effector Jacobian J_e of eq. (6.3) (world axes, at the EE
+origin) and J_v_dot q_dot its classical drift.
+
+Dynamics (eq. 6.2 with the contact force of the environment on the end effector written out):
+
+    M_l q_ddot + c_l + g_l = tau - J_c^T lambda                                     (C.1)
+    J_c q_ddot = -J_c_dot q_dot - K_v phi_dot - K_p phi                            (C.2)
+
+Sign convention: ``lambda`` [N] is the normal force the end effector exerts ON the environment,
+along n; it is >= 0 while the arm pushes. The environment pushes back on the end effector with
+-lambda n, whence the minus sign in (C.1). This is the thesis' F_c (section 6.1.1 and
+thesis_rest A-4.1: "the force the EE exerts on the environment", tau contains +J_e^T n f): the
+static torque tau = J_c^T f, at rest and without gravity, gives lambda = f and q_ddot = 0.
+(C.1)-(C.2) is the KKT system [[M, J_c^T], [J_c, 0]] [q_ddot; lambda] = [tau - c - g; rhs],
+solved through the scalar Schur complement J_c M^-1 J_c^T (the one-constraint form of eq. 6.22):
+
+    lambda = (J_c M^-1 (tau - c - g) + J_c_dot q_dot + K_v phi_dot + K_p phi) / (J_c M^-1 J_c^T).
+
+The constraint is *bilateral*, like the thesis' rigid contact: a pulling force (lambda < 0) keeps
+the end effector on the surface instead of letting it lift off. Such steps are flagged
+(:attr:`ContactSimulator.pulling`) and counted (:attr:`ContactSimulator.pulling_steps`); a
+controller that is meant to keep contact should never produce one.
+
+Baumgarte stabilization (:class:`Baumgarte`): (C.2) makes the constraint error obey
+phi_ddot + K_v phi_dot + K_p phi = 0, so a residual (integration or round-off error, or an
+admitted start offset) decays instead of drifting. The defaults K_v = 100 1/s, K_p = 2500 1/s^2
+are critical damping at omega = 50 rad/s (time constant 20 ms, 50 RK4 steps at 1 ms). The
+constraint does no work as long as phi_dot = 0, so the energy balance dKE/dt + dPE/dt = tau .
+q_dot holds to the integration accuracy.
+
+Integration: classical RK4 at a fixed step (1 ms default, thesis_rest 4.7), the torque held over
+the step (zero-order hold, like a digital current loop). Fixed-base arms of one-DoF joints have
+nq = nv, so the configuration integrates as a plain vector. A step that leaves a non-finite state
+(or meets a singular constraint, J_c M^-1 J_c^T = 0) keeps the previous state and raises
+:class:`rns_ros.core.errors.SimulationDivergedError`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
+from rns_ros.core.fixed_base import FixedBaseModel
+from rns_ros.core.validation import as_vector, positive
+
+#: Default largest |phi| [m] of a start configuration, and |phi_dot| [m/s] of a start velocity.
+START_TOLERANCE = 1e-6
+#: Norm below which a direction vector (axis, normal) cannot be normalized.
+_TINY_NORM = 1e-9
+#: What a step changes (restored when it diverges); each step assigns new objects.
+_STEP_STATE = ("time", "q", "v", "work", "pulling", "pulling_steps", "_cache")
+
+
+def _point(value, name: str) -> np.ndarray:
+    """A finite (3,) vector [m] or ConfigError naming the value."""
+    array = np.asarray(value, dtype=float) if _numeric(value) else None
+    if array is None or array.shape != (3,) or not np.isfinite(array).all():
+        raise ConfigError(f"{name} must be 3 finite numbers, got {value!r}")
+    return array
+
+
+def _direction(value, name: str) -> np.ndarray:
+    """``value`` normalized to a unit (3,) vector, or ConfigError (zero or non-finite)."""
+    array = _point(value, name)
+    norm = float(np.linalg.norm(array))
+    if norm < _TINY_NORM:
+        raise ConfigError(
+            f"{name} must be a non-zero direction (norm > {_TINY_NORM:g}), got {value!r}"
+        )
+    return array / norm
+
+
+def _numeric(value) -> bool:
+    try:
+        np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+class ArcConstraint:
+    r"""The end effector on the circle of radius R about ``center`` in the plane normal to
+    ``axis``: the surface of a rigid cylinder (thesis_rest A-4.8: R = 0.707 m, centre
+    (1.91, 1.91) m for the planar arm of section 6.2.1).
+
+    With P = E - a a^T (projection on the plane normal to the unit axis a) and d = P (p - c):
+
+        phi(p)      = R - |d|                 [m], > 0 inside the cylinder
+        n(p)        = -d / |d|                (3,), unit, towards the axis (into the cylinder)
+        kappa(p, v) = -|P v - (u . v) u|^2 / |d|   [m/s^2], u = d / |d|
+
+    kappa is the centripetal term: moving along the circle at tangential speed s needs the
+    normal acceleration s^2 / R toward the centre. The end effector is outside the cylinder and
+    pushes toward its axis. Motion along the axis is free.
+
+    Args:
+        center: a point of the axis c [m], (3,).
+        radius: R [m], finite and > 0.
+        axis: the cylinder axis (3,), any non-zero length; default +z (the planar arms' normal).
+
+    Raises:
+        ConfigError: a non-finite or wrongly shaped centre/axis, a zero axis, radius <= 0.
+    """
+
+    def __init__(self, center, radius: float, axis=(0.0, 0.0, 1.0)) -> None:
+        self.center = _point(center, "arc center")
+        if not _numeric(radius) or np.ndim(radius) != 0:
+            raise ConfigError(f"arc radius must be a finite number > 0 m, got {radius!r}")
+        self.radius = positive(radius, "arc radius", "[m]")
+        self.axis = _direction(axis, "arc axis")
+        self._projector = np.eye(3) - np.outer(self.axis, self.axis)
+
+    def __repr__(self) -> str:
+        return (
+            f"ArcConstraint(center={self.center.tolist()}, radius={self.radius}, "
+            f"axis={self.axis.tolist()})"
+        )
+
+    def _offset(self, p) -> tuple[np.ndarray, float]:
+        d = self._projector @ (np.asarray(p, dtype=float) - self.center)
+        return d, float(np.linalg.norm(d))
+
+    def phi(self, p) -> float:
+        """phi = R - |P (p - c)| [m] (> 0: penetration)."""
+        return self.radius - self._offset(p)[1]
+
+    def gradient(self, p) -> np.ndarray:
+        """n = d phi / d p = -d / |d|, unit, into the cylinder (3,).
+
+        Raises:
+            InputError: p on the axis, where the normal is undefined.
+        """
+        d, distance = self._offset(p)
+        if not distance > _TINY_NORM * self.radius:
+            raise InputError(f"point {np.asarray(p).tolist()} is on the arc axis: no normal")
+        return -d / distance
+
+    def curvature(self, p, p_dot) -> float:
+        """kappa = p_dot^T (d^2 phi / d p^2) p_dot = -|tangential in-plane velocity|^2 / |d|
+        [m/s^2]."""
+        d, distance = self._offset(p)
+        planar = self._projector @ np.asarray(p_dot, dtype=float)
+        u = d / distance
+        tangential = planar - (u @ planar) * u
+        return -float(tangential @ tangential) / distance
+
+    def evaluate(self, p, p_dot) -> tuple[float, np.ndarray, float]:
+        """(phi [m], n (3,), kappa [m/s^2]) in one pass (the simulator's inner loop)."""
+        d = self._projector @ (p - self.center)
+        distance = math.sqrt(d @ d)
+        u = d / distance
+        planar = self._projector @ p_dot
+        tangential = planar - (u @ planar) * u
+        return self.radius - distance, -u, -float(tangential @ tangential) / distance
+
+
+class PlaneConstraint:
+    """The end effector on the plane through ``point`` with normal ``normal``: a rigid wall
+    (thesis section 6.2.2, the 7-DoF arm; the wall is z of the task frame {E}).
+
+        phi(p) = n . (p - p0) [m] (> 0 behind the wall surface), gradient n, kappa = 0.
+
+    Args:
+        point: a point of the wall surface p0 [m], (3,).
+        normal: the wall normal n (3,), any non-zero length, pointing INTO the wall (the
+            direction in which the end effector pushes); normalized here.
+
+    Raises:
+        ConfigError: non-finite or wrongly shaped vectors, a zero normal.
+    """
+
+    def __init__(self, point, normal) -> None:
+        self.point = _point(point, "plane point")
+        self.normal = _direction(normal, "plane normal")
+
+    def __repr__(self) -> str:
+        return f"PlaneConstraint(point={self.point.tolist()}, normal={self.normal.tolist()})"
+
+    def phi(self, p) -> float:
+        """phi = n . (p - p0) [m]."""
+        return float(self.normal @ (np.asarray(p, dtype=float) - self.point))
+
+    def gradient(self, p) -> np.ndarray:
+        """n (3,), unit, into the wall (constant)."""
+        return self.normal.copy()
+
+    def curvature(self, p, p_dot) -> float:
+        """0: a plane has no curvature [m/s^2]."""
+        return 0.0
+
+    def evaluate(self, p, p_dot) -> tuple[float, np.ndarray, float]:
+        """(phi [m], n (3,), kappa = 0) in one pass (the simulator's inner loop)."""
+        return float(self.normal @ (p - self.point)), self.normal, 0.0
+
+
+#: Any object with phi(p) [m], gradient(p) (3,) and curvature(p, p_dot) [m/s^2].
+Constraint = ArcConstraint | PlaneConstraint
+
+
+@dataclass(frozen=True)
+class Baumgarte:
+    """Baumgarte gains of the constraint error dynamics phi_ddot + K_v phi_dot + K_p phi = 0.
+
+    Attributes:
+        position_gain: K_p [1/s^2], >= 0.
+        velocity_gain: K_v [1/s], >= 0.
+
+    Defaults: critical damping at omega_n = 50 rad/s (K_p = omega_n^2, K_v = 2 omega_n).
+    """
+
+    position_gain: float = 2500.0
+    velocity_gain: float = 100.0
+
+    def __post_init__(self) -> None:
+        for name, unit in (("position_gain", "1/s^2"), ("velocity_gain", "1/s")):
+            value = getattr(self, name)
+            if not (
+                _numeric(value) and np.ndim(value) == 0 and math.isfinite(value) and value >= 0
+            ):
+                raise ConfigError(f"Baumgarte {name} must be finite and >= 0 {unit}, got {value!r}")
+
+    @classmethod
+    def critically_damped(cls, natural_frequency: float) -> Baumgarte:
+        """K_p = omega_n^2, K_v = 2 omega_n; omega_n [rad/s] > 0."""
+        omega = positive(natural_frequency, "Baumgarte natural_frequency", "[rad/s]")
+        return cls(position_gain=omega**2, velocity_gain=2.0 * omega)
+
+    def fastest_rate(self) -> float:
+        """Largest |root| [1/s] of s^2 + K_v s + K_p (0 when both gains are 0)."""
+        roots = np.roots([1.0, self.velocity_gain, self.position_gain])
+        return float(np.max(np.abs(roots))) if roots.size else 0.0
+
+
+#: Largest |eigenvalue| * dt of the Baumgarte error dynamics accepted (RK4 is stable up to about
+#: 2.78 on the negative real axis; half of it keeps the decay well resolved).
+_MAX_BAUMGARTE_RATE_DT = 1.4
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """Snapshot after a step (copies; safe to keep).
+
+    Attributes:
+        time [s]; q [rad], v [rad/s], torque [N m]: (n,); contact_force lambda [N] (>= 0
+        pushing); phi [m], phi_dot [m/s]: the constraint error.
+    """
+
+    time: float
+    q: np.ndarray
+    v: np.ndarray
+    torque: np.ndarray
+    contact_force: float
+    phi: float
+    phi_dot: float
+
+
+def project_onto_constraint(
+    robot: FixedBaseModel,
+    constraint: Constraint,
+    q,
+    v=None,
+    *,
+    tolerance: float = 1e-13,
+    max_iterations: int = 50,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest configuration on the constraint (Gauss-Newton, minimum-norm steps
+    dq = -J_c^+ phi) and the velocity with its normal part removed (v - J_c^+ J_c v).
+
+    Use it to put a rounded start configuration (e.g. the planar [106.4, -45.7, -56.2] deg, about
+    1 mm off the arc) exactly on the surface.
+
+    Args:
+        q: start configuration [rad] (n,). v: start velocity [rad/s] (n,), default zero.
+        tolerance: |phi| [m] to reach. max_iterations: Gauss-Newton iterations.
+
+    Returns:
+        (q (n,) with |phi| <= tolerance, v (n,) with phi_dot = 0 to round-off).
+
+    Raises:
+        InputError: bad q/v. ConfigError: no convergence (e.g. the surface is out of reach).
+    """
+    n = robot.n
+    q = as_vector(q, n, "q").copy()
+    v = np.zeros(n) if v is None else as_vector(v, n, "v").copy()
+    data = robot.model.createData()
+    phi = math.inf
+    for _ in range(max_iterations + 1):
+        p, J_v = _ee_point_jacobian(robot, data, q)
+        phi = constraint.phi(p)
+        J_c = constraint.gradient(p) @ J_v
+        if abs(phi) <= tolerance:
+            return q, v - J_c * (J_c @ v) / (J_c @ J_c)
+        q = q - J_c * phi / (J_c @ J_c)
+    raise ConfigError(
+        f"could not project q onto {constraint!r}: |phi| = {abs(phi):.3g} m after "
+        f"{max_iterations} iterations (is the surface within reach?)"
+    )
+
+
+def _ee_point_jacobian(
+    robot: FixedBaseModel, data: pin.Data, q: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """EE position [m] (3,) and linear Jacobian J_v (3, n), world axes."""
+    J = pin.computeFrameJacobian(robot.model, data, q, robot.ee_frame_id, pin.LOCAL_WORLD_ALIGNED)
+    return data.oMf[robot.ee_frame_id].translation.copy(), J[:3]
+
+
+@dataclass(frozen=True)
+class _Terms:
+    """The torque-independent part of (C.1)-(C.2) at one (q, v).
+
+    Attributes:
+        inverse_mass: M_l^-1 [1/(kg m^2)] (n, n); bias: c_l + g_l [N m] (n,);
+        mobility: M_l^-1 J_c^T (n,); schur: J_c M_l^-1 J_c^T (> 0 unless singular);
+        target: the constrained normal acceleration J_c q_ddot demanded by (C.2) [m/s^2];
+        J_c: n^T J_v (n,).
+    """
+
+    inverse_mass: np.ndarray
+    bias: np.ndarray
+    mobility: np.ndarray
+    schur: float
+    target: float
+    J_c: np.ndarray
+
+    def solve(self, tau: np.ndarray) -> tuple[np.ndarray, float]:
+        """(q_ddot [rad/s^2] (n,), lambda [N]) under the torque tau; NaN when singular."""
+        free = self.inverse_mass @ (tau - self.bias)  # M^-1 (tau - c - g)
+        if not self.schur > 0.0:
+            return np.full(free.shape, np.nan), math.nan
+        force = (float(self.J_c @ free) - self.target) / self.schur
+        return free - self.mobility * force, force
+
+
+class ContactSimulator:
+    """Torque-driven fixed-base arm with its end effector held on a rigid surface (RK4).
+
+    See the module docstring for the model (C.1)-(C.2) and the sign of ``lambda``.
+
+    Args:
+        robot: the fixed-base arm (:func:`rns_ros.core.fixed_base.load_fixed_base_model`).
+        constraint: :class:`ArcConstraint` or :class:`PlaneConstraint` on the EE point.
+        initial_q: start configuration [rad] (n,): must be on the constraint within
+            ``tolerance`` (see :func:`project_onto_constraint`).
+        initial_v: start joint velocity [rad/s] (n,), default zero: its normal EE velocity must
+            be below ``velocity_tolerance``.
+        dt: RK4 step [s], in (0, 0.1]; default 1 ms (thesis_rest 4.7).
+        stabilization: :class:`Baumgarte` gains; None: no stabilization (phi_ddot = 0 only).
+        clip_torque: clip every commanded torque to the URDF effort limits (limits <= 0 or
+            non-finite count as absent); default off (the torque is applied as given).
+        tolerance: largest |phi| [m] of the start configuration; velocity_tolerance: largest
+            |phi_dot| [m/s] of the start velocity.
+
+    Attributes:
+        time [s]; q [rad], v [rad/s]: (n,); torque: the torque held over the next step [N m];
+        work: the work of the joint torques since reset, sum of tau . (q_{k+1} - q_k) [J] (exact
+        for the held torque); pulling: the current contact force is < 0 (the bilateral
+        constraint pulls); pulling_steps: steps since reset that ended pulling.
+
+    Raises:
+        ConfigError: bad dt, gains, or a start state off the constraint. InputError: bad q/v.
+    """
+
+    def __init__(
+        self,
+        robot: FixedBaseModel,
+        constraint: Constraint,
+        *,
+        initial_q,
+        initial_v=None,
+        dt: float = 1e-3,
+        stabilization: Baumgarte | None = Baumgarte(),  # frozen: safe to share
+        clip_torque: bool = False,
+        tolerance: float = START_TOLERANCE,
+        velocity_tolerance: float = START_TOLERANCE,
+    ) -> None:
+        for method in ("phi", "gradient", "curvature", "evaluate"):
+            if not callable(getattr(constraint, method, None)):
+                raise ConfigError(
+                    "constraint must be an ArcConstraint or PlaneConstraint (methods phi, "
+                    f"gradient, curvature, evaluate), got {constraint!r}"
+                )
+        if robot.model.nq != robot.model.nv:
+            raise ConfigError(f"{robot.name}: nq != nv; the contact simulator needs 1-DoF joints")
+        self.robot = robot
+        self.constraint = constraint
+        self.dt = positive(dt, "dt", "[s]")
+        if self.dt > 0.1:
+            raise ConfigError(f"dt must be in (0, 0.1] s, got {dt!r}")
+        if stabilization is not None and not isinstance(stabilization, Baumgarte):
+            raise ConfigError(f"stabilization must be a Baumgarte or None, got {stabilization!r}")
+        self.stabilization = stabilization
+        gains = stabilization or Baumgarte(0.0, 0.0)
+        self._k_p, self._k_v = gains.position_gain, gains.velocity_gain
+        rate = gains.fastest_rate()
+        if rate * self.dt > _MAX_BAUMGARTE_RATE_DT:
+            raise ConfigError(
+                f"Baumgarte gains too stiff for dt = {self.dt} s: fastest error rate "
+                f"{rate:.4g} 1/s gives rate * dt = {rate * self.dt:.3g}, must be <= "
+                f"{_MAX_BAUMGARTE_RATE_DT}"
+            )
+        self.clip_torque = bool(clip_torque)
+        limits = np.array(robot.effort_limits, dtype=float)
+        limits[~(np.isfinite(limits) & (limits > 0.0))] = np.inf
+        self.effort_limits = limits
+        tolerance = positive(tolerance, "tolerance", "[m]")
+        velocity_tolerance = positive(velocity_tolerance, "velocity_tolerance", "[m/s]")
+        self._model = robot.model
+        self._data = robot.model.createData()  # own scratch: robot.data stays the caller's
+        self._zero = np.zeros(robot.n)
+        self._lower = np.tril_indices(robot.n, -1)
+        self._initial_q = as_vector(initial_q, robot.n, "initial_q").copy()
+        self._initial_v = (
+            np.zeros(robot.n)
+            if initial_v is None
+            else as_vector(initial_v, robot.n, "initial_v").copy()
+        )
+        self.q, self.v = self._initial_q, self._initial_v
+        phi, phi_dot = self.constraint_error()
+        if abs(phi) > tolerance:
+            raise ConfigError(
+                f"initial_q puts the end effector {abs(phi):.3g} m off the surface "
+                f"({'inside' if phi > 0 else 'outside'} the environment) of {constraint!r} "
+                f"(|phi| must be <= {tolerance:g} m); use project_onto_constraint"
+            )
+        if abs(phi_dot) > velocity_tolerance:
+            raise ConfigError(
+                f"initial_v moves the end effector along the contact normal at {phi_dot:.3g} m/s "
+                f"(|phi_dot| must be <= {velocity_tolerance:g} m/s); use project_onto_constraint"
+            )
+        self.reset()
+
+    # --- state ---------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Back to the initial state, zero torque, zero work, no pulling count."""
+        self.time = 0.0
+        self.q = self._initial_q.copy()
+        self.v = self._initial_v.copy()
+        self.torque = np.zeros(self.robot.n)
+        self.work = 0.0
+        self._cache: _Terms | None = None
+        self.pulling = False
+        self.pulling_steps = 0
+
+    def set_torque(self, tau) -> None:
+        """Joint torques [N m] (n,), finite, held over the following steps (zero-order hold).
+
+        With ``clip_torque`` each component is clipped to its URDF effort limit.
+
+        Raises:
+            InputError: wrong shape or non-finite.
+        """
+        tau = as_vector(tau, self.robot.n, "tau").copy()
+        if self.clip_torque:
+            tau = np.clip(tau, -self.effort_limits, self.effort_limits)
+        self.torque = tau
+
+    @property
+    def torque_clipped(self) -> np.ndarray:
+        """Joints whose held torque sits at its effort limit (bool (n,))."""
+        return np.abs(self.torque) >= self.effort_limits
+
+    def _current_terms(self) -> _Terms:
+        if self._cache is None:
+            self._cache = self._terms(self.q, self.v)
+        return self._cache
+
+    @property
+    def contact_force(self) -> float:
+        """lambda [N]: the normal force the EE exerts on the environment, along the gradient n,
+        at the current state under the held torque (after a step: the state the step reached,
+        the torque held over it). >= 0 pushing, < 0 pulling (bilateral constraint)."""
+        return self._current_terms().solve(self.torque)[1]
+
+    @property
+    def acceleration(self) -> np.ndarray:
+        """q_ddot [rad/s^2] (n,) at the current state under the held torque, (C.1)-(C.2)."""
+        return self._current_terms().solve(self.torque)[0]
+
+    def constraint_jacobian(self) -> np.ndarray:
+        """J_c = n^T J_v [m/rad] (n,) at the current configuration: phi_dot = J_c q_dot, and
+        tau = J_c^T f pushes on the environment with f [N] (at rest, without gravity)."""
+        return self._current_terms().J_c.copy()
+
+    def contact_normal(self) -> np.ndarray:
+        """The unit contact normal n at the current EE point, into the environment (3,)."""
+        return self.constraint.gradient(self.ee_position())
+
+    def ee_position(self) -> np.ndarray:
+        """EE point [m] (3,), world."""
+        return _ee_point_jacobian(self.robot, self._data, self.q)[0]
+
+    def contact_wrench(self) -> np.ndarray:
+        """[f; m] (6,) the EE exerts on the environment, world axes, about the EE point [N, N m]:
+        f = lambda n, m = 0 (point contact). The arm feels the opposite: (C.1) reads
+        M q_ddot + c + g = tau - J_e^T contact_wrench()."""
+        wrench = np.zeros(6)
+        wrench[:3] = self.contact_force * self.contact_normal()
+        return wrench
+
+    def wrist_wrench(self) -> np.ndarray:
+        """The same wrench in the EE frame's axes [N, N m] (6,): what a force/torque sensor at the
+        EE frame reports when it reads the wrench its tool side applies to the environment
+        (a sensor reporting the wrench acting on the tool reads the negative). The contact point
+        is the EE frame origin, so the moment is zero."""
+        rotation = self._placement().rotation
+        wrench = self.contact_wrench()
+        return np.concatenate((rotation.T @ wrench[:3], rotation.T @ wrench[3:]))
+
+    def _placement(self) -> pin.SE3:
+        pin.framesForwardKinematics(self._model, self._data, self.q)
+        return self._data.oMf[self.robot.ee_frame_id]
+
+    def constraint_error(self) -> tuple[float, float]:
+        """(phi [m], phi_dot [m/s]) at the current state (0, 0 on the surface)."""
+        p, J_v = _ee_point_jacobian(self.robot, self._data, self.q)
+        p_dot = J_v @ self.v
+        return self.constraint.phi(p), float(self.constraint.gradient(p) @ p_dot)
+
+    def kinetic_energy(self) -> float:
+        """1/2 q_dot^T M_l q_dot [J]."""
+        return float(pin.computeKineticEnergy(self._model, self._data, self.q, self.v))
+
+    def potential_energy(self) -> float:
+        """Gravitational potential energy [J] (0 with gravity off)."""
+        return float(pin.computePotentialEnergy(self._model, self._data, self.q))
+
+    def power(self) -> float:
+        """Joint power tau . q_dot [W] of the held torque at the current velocity."""
+        return float(self.torque @ self.v)
+
+    def snapshot(self) -> ContactState:
+        phi, phi_dot = self.constraint_error()
+        return ContactState(
+            time=self.time,
+            q=self.q.copy(),
+            v=self.v.copy(),
+            torque=self.torque.copy(),
+            contact_force=self.contact_force,
+            phi=phi,
+            phi_dot=phi_dot,
+        )
+
+    # --- stepping ------------------------------------------------------------------------------
+    def step(self) -> None:
+        """Advance by dt with the held torque (RK4); then evaluate the contact force.
+
+        Raises:
+            SimulationDivergedError: the step produced a non-finite q, v, acceleration or force,
+                or met a singular constraint (J_c M^-1 J_c^T = 0); time, state, work and the
+                pulling count are left as they were before the step (the last finite state).
+        """
+        before = {name: getattr(self, name) for name in _STEP_STATE}
+        failure = ""
+        force = math.nan
+        try:
+            with np.errstate(all="ignore"):  # reported below, as SimulationDivergedError
+                self._advance()
+                force = self.contact_force  # the state reached, under the held torque
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            failure = f"{type(exc).__name__}: {exc}"
+        if not failure:
+            if self._cache is not None and not self._cache.schur > 0.0:
+                failure = (
+                    "a singular constraint (J_c M^-1 J_c^T = 0: the end effector cannot move "
+                    "along the contact normal)"
+                )
+            else:
+                values = (("q", self.q), ("v", self.v), ("contact force", force))
+                bad = [name for name, value in values if not np.isfinite(value).all()]
+                if bad:
+                    failure = f"non-finite {' and '.join(bad)}"
+        if failure:
+            start = before["time"]
+            for name, value in before.items():
+                setattr(self, name, value)
+            raise SimulationDivergedError(
+                f"contact simulation diverged in the step from t = {start:.6g} s: {failure}; kept "
+                "the last finite state"
+            )
+        self.pulling = force < 0.0
+        self.pulling_steps += int(self.pulling)
+
+    def _advance(self) -> None:
+        """One RK4 step of (q, v) with the held torque."""
+        q, v, tau, dt = self.q, self.v, self.torque, self.dt
+        k1v = self._current_terms().solve(tau)[0]
+        v2 = v + 0.5 * dt * k1v
+        k2v = self._terms(q + 0.5 * dt * v, v2).solve(tau)[0]
+        v3 = v + 0.5 * dt * k2v
+        k3v = self._terms(q + 0.5 * dt * v2, v3).solve(tau)[0]
+        v4 = v + dt * k3v
+        k4v = self._terms(q + dt * v3, v4).solve(tau)[0]
+        new_q = q + dt / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
+        self.v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
+        self.work = self.work + float(tau @ (new_q - q))
+        self.q = new_q
+        self.time = self.time + dt
+        self._cache = None
+
+    def _terms(self, q: np.ndarray, v: np.ndarray) -> _Terms:
+        """The torque-independent terms of (C.1)-(C.2) at (q, v) (one Pinocchio pass)."""
+        model, data, frame = self._model, self._data, self.robot.ee_frame_id
+        mass = pin.crba(model, data, q).copy()
+        mass[self._lower] = mass.T[self._lower]  # crba fills the upper triangle
+        bias = pin.nonLinearEffects(model, data, q, v).copy()  # c_l + g_l [N m]
+        pin.forwardKinematics(model, data, q, v, self._zero)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        J_v = pin.getFrameJacobian(model, data, frame, pin.LOCAL_WORLD_ALIGNED)[:3]
+        drift = pin.getFrameClassicalAcceleration(model, data, frame, pin.LOCAL_WORLD_ALIGNED)
+        p_dot = J_v @ v
+        phi, normal, kappa = self.constraint.evaluate(data.oMf[frame].translation, p_dot)
+        J_c = normal @ J_v
+        J_c_dot_v = float(normal @ drift.linear) + kappa
+        target = -J_c_dot_v - self._k_v * float(normal @ p_dot) - self._k_p * phi
+        inverse_mass = np.linalg.inv(mass)
+        mobility = inverse_mass @ J_c
+        return _Terms(inverse_mass, bias, mobility, float(J_c @ mobility), target, J_c)

@@ -480,3 +480,12 @@ def test_non_serial_or_misplaced_ee_model_is_rejected():
     robot = type(PLANAR)(model.copy(), "link_2")  # EE frame on link 2, not the last link
     with pytest.raises(ModelError, match="last link"):
         ReversedModel(robot, PLANAR_ROWS)
+
+
+def test_docs_example_runs(monkeypatch, capsys):
+    """The python block of docs/part2_controllers.md runs as written (from the repository root)."""
+    text = (CONFIG.parent / "docs" / "part2_controllers.md").read_text()
+    block = text.split("```python\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(CONFIG.parent)
+    exec(compile(block, "part2_controllers.md", "exec"), {})  # our own documentation
+    assert "NullSpaceVelocity" in capsys.readouterr().out

@@ -759,6 +759,8 @@ def rns_control(
     task_accel = task.compose(acceleration_ref, normal_acceleration)
     jac = task.jacobian(state)
     w = reversed_model.w(state.q) if w is None else np.asarray(w, dtype=float)
+    if w.shape != (task.m, state.n) or not np.isfinite(w).all():
+        raise InputError(f"W must be finite with shape ({task.m}, {state.n}), got {w.shape}")
     jwt = jac @ w.T
     y, s_min, s_max = _svd_solve(jwt, task_accel - task.drift(state), rcond)
     accel = w.T @ y
@@ -891,7 +893,9 @@ def damper_term(v, gain: float = DEFAULT_DAMPER_GAIN) -> np.ndarray:
     1 ms; the RK4 limit is about 2.785 / step)."""
     gain = _gain(gain, "damper gain k_d", "[1/s]")
     v = np.asarray(v, dtype=float)
-    return -gain * as_vector(v, v.shape[0] if v.ndim == 1 else -1, "theta_dot")
+    if v.ndim != 1:
+        raise InputError(f"theta_dot must be a vector, got shape {v.shape}")
+    return -gain * as_vector(v, v.shape[0], "theta_dot")
 
 
 __all__ = [

@@ -471,6 +471,10 @@ def test_bad_references_raise_typed_errors():
         os_control(state, task, [0.0, 0.0], [float("inf")])
     with pytest.raises(ConfigError, match="rows"):
         rns_control(state, task, LWR_RNS, [0.0, 0.0])
+    with pytest.raises(InputError, match=r"W must be finite with shape \(2, 3\)"):
+        rns_control(state, task, rns, [0.0, 0.0], w=np.zeros((3, 3)))
+    with pytest.raises(InputError, match="theta_dot must be a vector"):
+        damper_term(np.zeros((2, 2)))
     with pytest.raises(InputError, match="pose_error"):
         motion_loop(MotionGains(), [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0])
 

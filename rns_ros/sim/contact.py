@@ -28,11 +28,18 @@ Sign convention: ``lambda`` [N] is the normal force the end effector exerts ON t
 along n; it is >= 0 while the arm pushes. The environment pushes back on the end effector with
 -lambda n, whence the minus sign in (C.1). This is the thesis' F_c (section 6.1.1 and
 thesis_rest A-4.1: "the force the EE exerts on the environment", tau contains +J_e^T n f): the
-static torque tau = J_c^T f, at rest and without gravity, gives lambda = f and q_ddot = 0.
-(C.1)-(C.2) is the KKT system [[M, J_c^T], [J_c, 0]] [q_ddot; lambda] = [tau - c - g; rhs],
+static torque tau = J_c^T f, at rest and without gravity, gives lambda = f and q_ddot = 0. In the
+notation of eq. (6.2), the wrench on the end effector is F_kappa = -[lambda n; 0].
+
+(C.1)-(C.2) is the KKT system [[M, J_c^T], [J_c, 0]] [q_ddot; lambda] = [tau - c - g; rhs] (the
+form [[M, -J_c^T], ...] with the multiplier of opposite sign, the force on the end effector),
 solved through the scalar Schur complement J_c M^-1 J_c^T (the one-constraint form of eq. 6.22):
 
     lambda = (J_c M^-1 (tau - c - g) + J_c_dot q_dot + K_v phi_dot + K_p phi) / (J_c M^-1 J_c^T).
+
+Pinocchio's constrained dynamics (RigidConstraintModel) holds whole 3-D or 6-D point/frame
+contacts, not one scalar normal, so the system is assembled here from CRBA, RNEA and the frame
+Jacobian (one Pinocchio pass per RK4 stage).
 
 The constraint is *bilateral*, like the thesis' rigid contact: a pulling force (lambda < 0) keeps
 the end effector on the surface instead of letting it lift off. Such steps are flagged
@@ -376,8 +383,8 @@ class ContactSimulator:
     Attributes:
         time [s]; q [rad], v [rad/s]: (n,); torque: the torque held over the next step [N m];
         work: the work of the joint torques since reset, sum of tau . (q_{k+1} - q_k) [J] (exact
-        for the held torque); pulling: the current contact force is < 0 (the bilateral
-        constraint pulls); pulling_steps: steps since reset that ended pulling.
+        for the held torque); pulling: the last step ended with contact_force < 0 (the bilateral
+        constraint pulled); pulling_steps: steps since reset that ended pulling.
 
     Raises:
         ConfigError: bad dt, gains, or a start state off the constraint. InputError: bad q/v.

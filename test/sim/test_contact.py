@@ -170,6 +170,13 @@ def test_static_push_gives_the_pushed_force_and_no_motion(name):
     assert sim.contact_force == pytest.approx(-2.0, abs=1e-7)
     assert sim.pulling
     assert sim.pulling_steps == 2
+    snapshot = sim.snapshot()
+    assert snapshot.time == pytest.approx(0.202)
+    assert snapshot.contact_force == sim.contact_force
+    np.testing.assert_array_equal(snapshot.torque, J_c * -2.0)
+    sim.reset()
+    assert (sim.time, sim.work, sim.pulling, sim.pulling_steps) == (0.0, 0.0, False, 0)
+    np.testing.assert_array_equal(sim.q, q0)
 
 
 @pytest.mark.parametrize("name", ["planar", "lwr"])

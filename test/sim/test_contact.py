@@ -335,3 +335,14 @@ def test_divergence_keeps_the_last_state():
     sim.set_torque(np.zeros(3))
     sim.step()  # still usable
     assert math.isfinite(sim.contact_force)
+
+
+def test_a_constraint_the_arm_cannot_act_on_is_reported_singular():
+    """A floor under the planar arm (normal +z): J_c = 0, J_c M^-1 J_c^T = 0, no force defined."""
+    robot, _, q0 = _setup("planar")
+    floor = PlaneConstraint(robot.frame_position(q0, "ee"), [0.0, 0.0, 1.0])
+    sim = ContactSimulator(robot, floor, initial_q=q0)
+    np.testing.assert_array_equal(sim.constraint_jacobian(), 0.0)
+    with pytest.raises(SimulationDivergedError, match="singular constraint"):
+        sim.step()
+    assert sim.time == 0.0

@@ -251,7 +251,7 @@ def robot_arrays(streams: dict[str, TopicLog]) -> dict[str, np.ndarray]:
 
 def format_table(rows: list[DemoRow]) -> str:
     columns = (
-        ("method", 14),
+        ("method", max(14, 2 + max((len(row.method) for row in rows), default=0))),
         ("max base dev [deg]", 20),
         ("camera err [deg]", 18),
         ("RMS ω err [rad/s]", 19),
@@ -272,7 +272,7 @@ def format_table(rows: list[DemoRow]) -> str:
     for row in rows:
         f = row.figures
         lines.append(
-            f"{row.method:<14}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
+            f"{row.method:<{columns[0][1]}}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
             f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
             f"{f.angular_momentum_drift:>14.2e}{_energy_columns(row.energy)}"
             f"{row.wall_time_s:>10.1f}"

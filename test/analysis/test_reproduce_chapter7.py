@@ -1,0 +1,101 @@
+"""Chapter 7 reproductions (Figs. 7.1, 7.3, 7.4): quick runs give finite JSON with the documented
+keys and a PNG."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from rns_testing import json_finite
+
+from rns_ros.analysis.reproduce import chapter7 as ch7
+from rns_ros.analysis.reproduce import registry
+from rns_ros.analysis.reproduce.registry import _REGISTRY, Status, run_one
+
+IDS = ("fig7.1", "fig7.2")
+RUN_KEYS = {
+    "peak_joint_speed_rad_s",
+    "peak_joint_speed_per_joint_rad_s",
+    "max_null_space_rns_rad_s",
+    "final_null_space_rns_rad_s",
+    "max_null_space_jacobian_rad_s",
+    "final_null_space_jacobian_rad_s",
+    "max_radial_error_m",
+    "max_tracking_error_m",
+}
+
+
+@pytest.fixture(scope="module")
+def documents(tmp_path_factory):
+    out = tmp_path_factory.mktemp("chapter7")
+    written = {}
+    for identifier in IDS:
+        record = run_one(_REGISTRY[identifier], out, quick=True)
+        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
+    return written
+
+
+def test_the_module_comes_after_the_other_chapters_and_registers_both_results():
+    modules = list(registry.CHAPTER_MODULES)
+    ours = modules.index("rns_ros.analysis.reproduce.chapter7")
+    for earlier in ("chapter3", "chapter4", "chapter4_ptp", "chapter5", "chapter5_inspection"):
+        assert modules.index(f"rns_ros.analysis.reproduce.{earlier}") < ours
+    if "rns_ros.analysis.reproduce.chapter6" in modules:
+        assert modules.index("rns_ros.analysis.reproduce.chapter6") < ours
+    assert set(IDS) <= set(registry.load_all())
+
+
+@pytest.mark.parametrize("identifier", IDS)
+def test_each_result_writes_finite_json_and_a_png(documents, identifier):
+    document, png = documents[identifier]
+    assert document["id"] == identifier
+    assert document["quick"] is True
+    assert json_finite(document)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert png.stat().st_size > 10_000
+    statuses = {c["status"] for c in document["comparisons"]}
+    assert statuses <= {status.value for status in Status}
+    assert Status.EXACT.value not in statuses  # the thesis prints no numbers here
+    settings = document["settings"]
+    assert settings["step_s"] == ch7.QUICK_STEP
+    assert settings["half_period_s"] == ch7.QUICK_HALF_PERIOD
+    assert settings["half_cycles"] == 1
+    assert settings["arc_radius_m"] == 0.707
+    assert len(document["choices"]) >= 7
+
+
+def test_fig7_1_keys(documents):
+    document = documents["fig7.1"][0]
+    masses = [f"{m:g}" for m in ch7.QUICK_SWEEP_MASSES]
+    assert set(document["runs"]) == set(masses) | {f"{m:g}" for m in ch7.QUICK_FIGURE_MASSES}
+    for values in document["runs"].values():
+        assert set(values) >= RUN_KEYS
+        assert values["rms_vs_resolved_rad"] > 0.0
+        assert values["max_radial_error_m"] < 1e-6
+    assert set(document["resolved"]) >= RUN_KEYS
+    rms = document["rms_vs_mass"]
+    assert rms["masses_kg"] == list(ch7.QUICK_SWEEP_MASSES)
+    assert len(rms["rms_rad"]) == len(masses)
+    assert rms["log_slope"] == pytest.approx(-1.0, abs=0.1)
+    assert set(document["spec_v_table"]) == {"10", "100", "1000", "10000", "100000"}
+    keys = {c["key"]: c for c in document["comparisons"]}
+    assert set(keys) == {"max_null_space_velocity_rad_s", "rms_delta_theta_rad", "rms_log_slope"}
+    assert all(c["status"] == Status.QUALITATIVE.value for c in keys.values())
+
+
+def test_fig7_2_keys(documents):
+    document = documents["fig7.2"][0]
+    labels = {ch7.VELOCITY, ch7.DAMPER, ch7.MOMENTUM}
+    assert set(document["runs"]) == labels
+    for values in document["runs"].values():
+        assert set(values) >= RUN_KEYS
+    assert set(document["peak_null_space_rns_rad_s"]) == labels
+    assert set(document["final_null_space_rns_rad_s"]) == labels
+    assert document["damper_gain_1_s"] == pytest.approx(2.77 / ch7.QUICK_STEP)
+    ratio = document["damper_over_velocity_level"]
+    assert ratio["peak"] > ch7.ORDER_RATIO
+    assert document["unstable_damper_check"]["diverged"] is True
+    keys = {c["key"]: c["status"] for c in document["comparisons"]}
+    assert keys["peak_null_space_velocity_damper_over_velocity_level"] == Status.QUALITATIVE.value
+    assert keys["damper_rk4_limit"] == Status.QUALITATIVE.value
+    assert "peak_null_space_velocity_damper_over_momentum_form" in keys

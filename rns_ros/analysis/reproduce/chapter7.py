@@ -439,14 +439,17 @@ def _plot_fig7_2(outcome: Outcome, figure) -> None:
     ax.set_ylabel("null-space velocity [rad/s]")
     ax.legend(fontsize=7)
     ax = axes[1]
-    for label in (VELOCITY, DAMPER):
-        run = runs[label]
-        color, _, name = styles[label]
-        for j in range(run.v.shape[1]):
-            ax.plot(run.t, run.v[:, j], color=color, lw=0.8, ls=("-", "--", ":")[j])
-        ax.plot([], [], color=color, label=name)
+    run, other = runs[VELOCITY], runs[DAMPER]
+    for j in range(run.v.shape[1]):
+        ax.plot(run.t, run.v[:, j], lw=0.9, label=rf"$\dot\theta_{j + 1}$")
+    difference = float(np.abs(run.v - other.v).max())
+    ax.set_title(
+        f"joint velocities, velocity-level run (the damper run differs by at most "
+        f"{difference:.2g} rad/s)",
+        fontsize=9,
+    )
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(r"$\dot\theta_{1,2,3}$ [rad/s] (solid, dashed, dotted)")
+    ax.set_ylabel("joint velocity [rad/s]")
     ax.legend(fontsize=7)
 
 

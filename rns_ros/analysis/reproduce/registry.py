@@ -35,6 +35,7 @@ CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter4_ptp",
     "rns_ros.analysis.reproduce.chapter5",
     "rns_ros.analysis.reproduce.chapter5_inspection",
+    "rns_ros.analysis.reproduce.chapter6",
     "rns_ros.analysis.reproduce.chapter7",
 )
 

@@ -1,0 +1,448 @@
+"""Chapter 6: motion/force control of fixed-base redundant arms, RNS-C vs OS-C (Figs. 6.3, 6.4,
+6.7, 6.8).
+
+* ``fig6.3``: planar 3-DoF arm on the cylinder (§6.2.1): tangential EE position error and force
+  error against time for RNS-C and both OS-C variants ("almost identical").
+* ``fig6.4``: the same runs, joint velocities: the thesis peaks 0.73 rad/s (RNS-C) vs 4.22 rad/s
+  (OS-C).
+* ``fig6.7`` / ``fig6.8``: the 7-DoF LWR4-class arm against a wall (§6.2.2): task errors and joint
+  velocities (the thesis prints no numbers).
+
+The runs come from :mod:`rns_ros.analysis.part2_runs` (torque-level closed loop on the rigid
+contact simulator, RK4 at the control period, torque held over each step). Each scenario runs once
+per controller and process (cached), so ``fig6.3`` and ``fig6.4`` share their runs, as do
+``fig6.7`` and ``fig6.8``. Every id reports the same JSON keys: ``peak_joint_speed_rad_s``,
+``max_position_error_m`` and ``max_force_error_N``, each {``RNS-C``, ``OS-C``,
+``OS-C-kinematic``}.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from rns_ros.analysis.part2_runs import (
+    CONTROL_PERIOD,
+    CONTROLLERS,
+    FORCE,
+    FORCE_RAMP,
+    PLANAR_HALF_CYCLE,
+    QUICK_PERIOD,
+    THESIS_FORCE_GAINS,
+    THESIS_MOTION_GAINS,
+    VIRTUAL_MASS,
+    WALL_STROKE,
+    WALL_STROKES,
+    ArcScenario,
+    ClosedLoopRun,
+    Controller,
+    ForceMeasurement,
+    WallScenario,
+    run_closed_loop,
+)
+from rns_ros.analysis.reproduce.registry import (
+    Comparison,
+    Outcome,
+    Reproduction,
+    Status,
+    register,
+)
+
+#: Thesis §6.2.1 peak joint speeds [rad/s] and their ratio [D].
+THESIS_PEAK_RNS, THESIS_PEAK_OSC = 0.73, 4.22
+#: Acceptance (thesis_rest 4.8): RNS-C within +-10 % of 0.73 (T_half tuned), OS-C/RNS-C > 1.5.
+PEAK_TOLERANCE, RATIO_THRESHOLD = 0.10, 1.5
+#: "Almost identical" task errors: the larger max error at most this factor of the smaller [-];
+#: force errors below FORCE_FLOOR [N] (0.1 % of 10 N) count as identical.
+ALMOST_IDENTICAL_FACTOR, FORCE_FLOOR = 2.0, 1e-2
+PLANAR, WALL = "planar_arc", "lwr_wall"
+_COLORS = {Controller.RNS_C: "tab:red", Controller.OSC: "tab:green", Controller.OSC_KINEMATIC: "C0"}
+
+_CHOICES = (
+    "Simulation (thesis_rest A-4.8): rigid bilateral contact (rns_ros.sim.contact, Lagrange "
+    "multiplier + Baumgarte 2500 1/s^2, 100 1/s), RK4 with the control period as step, the "
+    "torque computed at t_k held over [t_k, t_k + dt] (zero-order hold); gravity off (thesis "
+    "§6.2.1; also for the wall task, which the thesis does not say).",
+    "Controllers: RNS-C = closed form theta_ddot = W^T (J W^T)^-1 (V_dot_ref - J_dot theta_dot) "
+    "with the exact constraint force (thesis_rest 4.2), m_hat = 1e5 kg, I_hat = m_hat/12 "
+    "(A-4.9/A-4.10), l_hat = 0, no chapter-7 null-space term; OS-C = (6.13) literal at torque "
+    "level with tau_a = 0 (A-4.2), and the labelled kinematic variant theta_ddot = J^{M+} a'; "
+    "OS-C is never tuned. All add the real computed torque plus J^T n f_ref.",
+    "Loops: (6.33) nu_dot_ref = nu_dot_des + k_d (nu_des - nu) + k_p (x_des - x), k_d = 10, "
+    "k_p = 100, only its tangential part S nu_dot_ref is used; (6.34) f_ref = f_des + k_f (f_des "
+    "- f), k_f = 5, with f the force at the same instant: against the rigid contact f = lambda_0 "
+    "+ f_ref answers the torque at once, so (6.34) is solved, f_ref = (f_des + k_f (f_des - "
+    "lambda_0)) / (1 + k_f). A sensor one period late gives e_{k+1} = -k_f e_k and diverges for "
+    "k_f = 5 (checked: the planar run blows up at t = 0.026 s).",
+    "Force: quintic 0 -> 10 N over the first 1 s, then constant, along the contact normal, f = "
+    "the force the EE exerts on the environment (A-4.1). Errors: position p_des - p in the "
+    "contact frame {E} (x_E along the motion, z_E the normal), force f_des - f.",
+    "Peak joint speed (A-4.5): max over joints and samples of |theta_dot_i|.",
+)
+_PLANAR_CHOICES = (
+    "Planar arc (A-4.6): centre (1.91, 1.91) m, R = 0.707 m (§7.1.1), the arc facing the base, "
+    "circle angle 180 -> 270 -> 180 deg (225 +- 45 deg, one full cycle), start at the 180 deg "
+    "end (1.203, 1.91) m; start configuration = minimum-norm IK from the seed [106.4, -45.7, "
+    "-56.2] deg onto that point, [106.432, -45.706, -56.222] deg.",
+    f"Timing (A-4.7): two quintic half cycles of T_half = {PLANAR_HALF_CYCLE} s each, at rest at "
+    "the half cycle; T_half was TUNED so that the RNS-C peak is about the thesis' 0.73 rad/s "
+    "(1.5 s: 0.791, 1.55: 0.765, 1.6: 0.741, 1.65: 0.719, 1.7: 0.697 rad/s), so the RNS-C peak "
+    "is a calibration, not evidence; the OS-C peaks follow from it untuned.",
+    "Normal acceleration (A-4.8): the commanded acceleration includes the constraint-consistent "
+    "centripetal term |v_t|^2 / R toward the axis (the thesis' S V_dot drops it). Without it "
+    "RNS-C's contact force deviates by the centripetal force (2.9 N) and its peak joint speed "
+    "grows to 2.7 rad/s with a 15 mm position error (development run).",
+    "Model (A-4.4): links 1 m, 10 kg, uniform rods (I = m l^2 / 12), plane x-y (thesis x-z).",
+)
+_WALL_CHOICES = (
+    "Wall geometry (A-4.12): the LWR4-class URDF config/urdf/lwr_7dof.urdf; the thesis frame is "
+    "unknown (its target [0.24, 0.43, 0.43] m does not fit our start flange (0.515, 0.187, "
+    "0.464) m). The wall passes through the start flange point with its normal (z of {E}) along "
+    "the start flange z axis (0.883, 0.321, -0.342): the tool pushes along its axis.",
+    "Stroke (A-4.12): a horizontal line in the wall along x_E = z_world x n = (-0.342, 0.940, 0) "
+    "(= the start flange y axis; world x decreases), of length |0.24 - x0| = 0.275 m, to "
+    "(0.421, 0.446, 0.464) m. The literal -x_world stroke to x = 0.24 would leave the wall and "
+    "drive joint 4 to 136 deg, past its 120 deg limit.",
+    f"Timing (A-4.11): {WALL_STROKES} quintic strokes of {WALL_STROKE} s (out, back, out, back), "
+    "at rest between strokes; the orientation is held (task rows x, y, z, wx, wy, wz, one "
+    "redundant DoF).",
+)
+
+
+def _scenario(name: str, quick: bool) -> ArcScenario | WallScenario:
+    if name == PLANAR:
+        return ArcScenario(half_cycles=1) if quick else ArcScenario()
+    return WallScenario(strokes=1) if quick else WallScenario()
+
+
+def _period(quick: bool) -> float:
+    return QUICK_PERIOD if quick else CONTROL_PERIOD
+
+
+@functools.cache
+def _run(name: str, controller: Controller, quick: bool) -> ClosedLoopRun:
+    return run_closed_loop(_scenario(name, quick), controller, dt=_period(quick))
+
+
+def _runs(name: str, quick: bool) -> dict[Controller, ClosedLoopRun]:
+    return {controller: _run(name, controller, quick) for controller in CONTROLLERS}
+
+
+def _per_controller(runs, attribute: str) -> dict[str, float]:
+    return {c.value: float(getattr(run, attribute)) for c, run in runs.items()}
+
+
+def _values(name: str, runs) -> dict:
+    rns = runs[Controller.RNS_C].peak_joint_speed
+    values = {
+        "peak_joint_speed_rad_s": _per_controller(runs, "peak_joint_speed"),
+        "max_position_error_m": _per_controller(runs, "max_position_error"),
+        "max_force_error_N": _per_controller(runs, "max_force_error"),
+        "peak_ratio_to_rns_c": {
+            c.value: run.peak_joint_speed / rns for c, run in runs.items() if c != Controller.RNS_C
+        },
+        "runs": {c.value: run.summary() for c, run in runs.items()},
+        "scenario": runs[Controller.RNS_C].description,
+    }
+    if name == WALL:
+        values["max_orientation_error_rad"] = _per_controller(runs, "max_orientation_error")
+    return values
+
+
+def _settings(name: str, quick: bool) -> dict:
+    scenario = _scenario(name, quick)
+    return {
+        "model": f"config/{scenario.model}",
+        "control_period_s": _period(quick),
+        "simulation_step_s": _period(quick),
+        "integrator": "RK4, torque held over the step",
+        "duration_s": scenario.duration,
+        "k_p_1_s2": THESIS_MOTION_GAINS.k_p,
+        "k_d_1_s": THESIS_MOTION_GAINS.k_d,
+        "k_f": THESIS_FORCE_GAINS.k_f,
+        "force_N": FORCE,
+        "force_ramp_s": FORCE_RAMP,
+        "force_measurement": ForceMeasurement.SAME_INSTANT.value,
+        "virtual_mass_kg": VIRTUAL_MASS,
+        "virtual_inertia_kgm2": VIRTUAL_MASS / 12.0,
+        "gravity": False,
+        "controllers": [c.value for c in CONTROLLERS],
+        "quick": quick,
+    }
+
+
+def _quick_choice(name: str, quick: bool) -> str:
+    if not quick:
+        return f"Full run: {CONTROL_PERIOD * 1e3:g} ms control period and RK4 step."
+    what = "one half cycle (180 -> 270 deg)" if name == PLANAR else "one stroke"
+    return (
+        f"Quick run (tests): {what} instead of the whole task, {QUICK_PERIOD * 1e3:g} ms control "
+        "period and RK4 step."
+    )
+
+
+def _choices(name: str, quick: bool) -> tuple[str, ...]:
+    return (
+        *_CHOICES,
+        *(_PLANAR_CHOICES if name == PLANAR else _WALL_CHOICES),
+        _quick_choice(name, quick),
+    )
+
+
+def _identical(values: dict[str, float], floor: float = 0.0) -> tuple[bool, float]:
+    """(almost identical, largest / smallest) over the controllers."""
+    big, small = max(values.values()), min(values.values())
+    ratio = big / small if small > 0.0 else float("inf")
+    return big <= floor or ratio <= ALMOST_IDENTICAL_FACTOR, ratio
+
+
+# --------------------------------------------------------------------------- task errors
+
+
+def _task_outcome(name: str, quick: bool) -> Outcome:
+    runs = _runs(name, quick)
+    values = _values(name, runs)
+    position, force = values["max_position_error_m"], values["max_force_error_N"]
+    same_position, position_ratio = _identical(position)
+    same_force, force_ratio = _identical(force, FORCE_FLOOR)
+    rows = [
+        Comparison(
+            "task_position_error_spread",
+            "almost identical",
+            position_ratio,
+            "",
+            Status.QUALITATIVE if same_position else Status.NOT_REPRODUCIBLE,
+            "largest over smallest max in-plane EE position error over the three controllers "
+            f"(criterion <= {ALMOST_IDENTICAL_FACTOR:g}); "
+            + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in position.items()),
+        ),
+        Comparison(
+            "task_force_error_spread",
+            "almost identical",
+            force_ratio,
+            "",
+            Status.QUALITATIVE if same_force else Status.NOT_REPRODUCIBLE,
+            "largest over smallest max |f_des - f| (criterion <= "
+            f"{ALMOST_IDENTICAL_FACTOR:g}, or all below {FORCE_FLOOR:g} N); "
+            + ", ".join(f"{k} {v:.3g} N" for k, v in force.items())
+            + ". The force loop is solved at the same instant on a model-exact plant, so the "
+            "force error is near zero for every controller.",
+        ),
+    ]
+    final = max(abs(run.force_error[-1]) for run in runs.values())
+    rows.append(
+        Comparison(
+            "final_contact_force_N",
+            FORCE,
+            {c.value: float(run.contact_force[-1]) for c, run in runs.items()},
+            "N",
+            Status.QUALITATIVE if final < 0.1 else Status.NOT_REPRODUCIBLE,
+            "contact force at the end of the run (target 10 N after the 1 s ramp).",
+        )
+    )
+    if name == WALL:
+        orientation = values["max_orientation_error_rad"]
+        rows.append(
+            Comparison(
+                "max_orientation_error_rad",
+                None,
+                orientation,
+                "rad",
+                Status.QUALITATIVE,
+                "orientation held (thesis: 'fixed'); no number printed.",
+            )
+        )
+    return Outcome(
+        tuple(rows),
+        values,
+        {**_settings(name, quick), **values["scenario"]},
+        _choices(name, quick),
+        {"runs": runs, "name": name},
+    )
+
+
+def _plot_task(outcome: Outcome, figure) -> None:
+    runs, name = outcome.figure_data["runs"], outcome.figure_data["name"]
+    panels = 3 if name == WALL else 2
+    axes = figure.subplots(panels, 1, sharex=True)
+    for controller, run in runs.items():
+        style = {"color": _COLORS[controller], "lw": 1.0, "label": controller.value}
+        if name == PLANAR:
+            axes[0].plot(run.t, run.position_error[:, 0] * 1e3, **style)
+        else:
+            axes[0].plot(run.t, run.tangential_error * 1e3, **style)
+            axes[1].plot(run.t, np.linalg.norm(run.orientation_error, axis=1) * 1e3, **style)
+        axes[-1].plot(run.t, run.force_error, **style)
+    axes[0].set_ylabel(
+        "x_E error [mm]" if name == PLANAR else "in-plane |e| [mm]",
+    )
+    axes[0].set_title(
+        "EE position error p_des - p in the contact frame"
+        + (" (tangential x_E)" if name == PLANAR else " (in the wall plane)"),
+        fontsize=9,
+    )
+    if name == WALL:
+        axes[1].set_ylabel("|orientation error| [mrad]")
+        axes[1].set_title("orientation error |log(R_des R^T)|", fontsize=9)
+    axes[-1].set_ylabel("f_des - f [N]")
+    axes[-1].set_title("force error along the normal z_E (10 N after a 1 s ramp)", fontsize=9)
+    axes[-1].set_xlabel("t [s]")
+    for ax in axes:
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+
+
+# --------------------------------------------------------------------------- joint velocities
+
+
+def _velocity_outcome(name: str, quick: bool) -> Outcome:
+    runs = _runs(name, quick)
+    values = _values(name, runs)
+    peaks, ratios = values["peak_joint_speed_rad_s"], values["peak_ratio_to_rns_c"]
+    rns = peaks[Controller.RNS_C.value]
+    ratio_status = (
+        Status.QUALITATIVE if min(ratios.values()) > RATIO_THRESHOLD else Status.NOT_REPRODUCIBLE
+    )
+    rows = []
+    if name == PLANAR:
+        within = abs(rns - THESIS_PEAK_RNS) <= PEAK_TOLERANCE * THESIS_PEAK_RNS
+        rows.append(
+            Comparison(
+                "peak_joint_speed_rns_c_rad_s",
+                THESIS_PEAK_RNS,
+                rns,
+                "rad/s",
+                Status.QUALITATIVE if within else Status.NOT_REPRODUCIBLE,
+                f"within +-{PEAK_TOLERANCE:.0%} of 0.73 by construction: T_half = "
+                f"{PLANAR_HALF_CYCLE} s was TUNED to it (A-4.7; the thesis gives no duration)"
+                + ("." if not quick else "; quick run: one half cycle at 2 ms."),
+            )
+        )
+        for controller, thesis in (
+            (Controller.OSC, THESIS_PEAK_OSC),
+            (Controller.OSC_KINEMATIC, None),
+        ):
+            rows.append(
+                Comparison(
+                    f"peak_joint_speed_{controller.value.lower().replace('-', '_')}_rad_s",
+                    thesis,
+                    peaks[controller.value],
+                    "rad/s",
+                    Status.QUALITATIVE
+                    if ratios[controller.value] > RATIO_THRESHOLD
+                    else Status.NOT_REPRODUCIBLE,
+                    f"untuned; {ratios[controller.value]:.3g}x RNS-C (acceptance > "
+                    f"{RATIO_THRESHOLD:g}); "
+                    + (
+                        "the thesis' OS-C (literal (6.13), tau_a = 0)."
+                        if controller == Controller.OSC
+                        else "the labelled kinematic variant (not in the thesis)."
+                    ),
+                )
+            )
+        thesis_ratio = round(THESIS_PEAK_OSC / THESIS_PEAK_RNS, 2)
+        rows.append(
+            Comparison(
+                "peak_ratio_osc_over_rns_c",
+                thesis_ratio,
+                ratios,
+                "",
+                ratio_status,
+                "OS-C peak over RNS-C peak per OS-C variant (thesis 4.22 / 0.73); the size "
+                "depends on the unknown geometry, timing and OS-C details (thesis_rest 4.8).",
+            )
+        )
+    else:
+        rows.append(
+            Comparison(
+                "peak_ratio_osc_over_rns_c",
+                "larger for OS-C, 'in the same way as the planar case' (no number)",
+                ratios,
+                "",
+                ratio_status,
+                "OS-C peak over RNS-C peak per OS-C variant (criterion > "
+                f"{RATIO_THRESHOLD:g}); peaks "
+                + ", ".join(f"{k} {v:.3g} rad/s" for k, v in peaks.items())
+                + ".",
+            )
+        )
+    return Outcome(
+        tuple(rows),
+        values,
+        {**_settings(name, quick), **values["scenario"]},
+        _choices(name, quick),
+        {"runs": runs, "name": name},
+    )
+
+
+def _plot_velocity(outcome: Outcome, figure) -> None:
+    runs = outcome.figure_data["runs"]
+    axes = figure.subplots(len(runs) + 1, 1, sharex=True)
+    limit = max(run.peak_joint_speed for run in runs.values()) * 1.05
+    for ax, (controller, run) in zip(axes, runs.items(), strict=False):
+        for j in range(run.v.shape[1]):
+            ax.plot(run.t, run.v[:, j], lw=0.9, label=rf"$\dot\theta_{j + 1}$")
+        ax.set_ylim(-limit, limit)
+        ax.set_ylabel("[rad/s]")
+        ax.set_title(
+            f"{controller.value}: joint velocities, peak {run.peak_joint_speed:.3g} rad/s",
+            fontsize=9,
+        )
+        ax.legend(fontsize=7, ncol=run.v.shape[1], loc="upper right")
+        ax.grid(alpha=0.3)
+    ax = axes[-1]
+    for controller, run in runs.items():
+        ax.semilogy(
+            run.t,
+            np.maximum(run.null_space_velocity, 1e-12),
+            color=_COLORS[controller],
+            label=controller.value,
+        )
+    ax.set_title(r"null-space velocity $\|\hat P_{RNS}\dot\theta\|$ (7.14)", fontsize=9)
+    ax.set_ylabel("[rad/s]")
+    ax.set_xlabel("t [s]")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+
+
+register(
+    Reproduction(
+        "fig6.3",
+        "Fig. 6.3",
+        "planar arc: EE position and force errors, RNS-C vs OS-C",
+        functools.partial(_task_outcome, PLANAR),
+        _plot_task,
+        (8.0, 6.0),
+    )
+)
+register(
+    Reproduction(
+        "fig6.4",
+        "Fig. 6.4",
+        "planar arc: joint velocities, RNS-C vs OS-C (peaks 0.73 vs 4.22 rad/s)",
+        functools.partial(_velocity_outcome, PLANAR),
+        _plot_velocity,
+        (9.0, 10.0),
+    )
+)
+register(
+    Reproduction(
+        "fig6.7",
+        "Fig. 6.7",
+        "7-DoF wall: EE position, orientation and force errors, RNS-C vs OS-C",
+        functools.partial(_task_outcome, WALL),
+        _plot_task,
+        (8.0, 8.0),
+    )
+)
+register(
+    Reproduction(
+        "fig6.8",
+        "Fig. 6.8",
+        "7-DoF wall: joint velocities, RNS-C vs OS-C",
+        functools.partial(_velocity_outcome, WALL),
+        _plot_velocity,
+        (9.0, 10.0),
+    )
+)

@@ -1,0 +1,188 @@
+"""Chapter 6 closed loops (rns_ros.analysis.part2_runs): physics of the quick runs (one planar
+half cycle, one wall stroke, 2 ms period) and the scenario checks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rns_ros.analysis.part2_runs import (
+    CONTROLLERS,
+    FORCE,
+    QUICK_PERIOD,
+    ArcScenario,
+    ClosedLoopRun,
+    Controller,
+    WallScenario,
+    back_and_forth,
+    force_profile,
+    quick_scenarios,
+    run_closed_loop,
+)
+from rns_ros.core.errors import ConfigError, RnsError, SimulationDivergedError
+
+#: "Almost identical" task errors: max errors of OS-C within this factor of RNS-C's [-].
+SAME_FACTOR = 2.0
+
+
+@pytest.fixture(scope="module")
+def runs() -> dict[tuple[str, Controller], ClosedLoopRun]:
+    """{(scenario, controller): run} of the quick scenarios (about 5 s in all)."""
+    out = {}
+    for scenario in quick_scenarios():
+        for controller in CONTROLLERS:
+            run = run_closed_loop(scenario, controller, dt=QUICK_PERIOD)
+            out[run.scenario, controller] = run
+    return out
+
+
+SCENARIOS = ("planar_arc", "lwr_wall")
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS)
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_shapes_are_documented_and_read_only(runs, scenario, controller):
+    run = runs[scenario, controller]
+    n, r = (3, 0) if scenario == "planar_arc" else (7, 3)
+    k = run.t.shape[0]
+    duration = 1.6 if scenario == "planar_arc" else 2.5
+    assert k == round(duration / QUICK_PERIOD) + 1
+    assert run.t[1] - run.t[0] == pytest.approx(QUICK_PERIOD)
+    assert run.q.shape == run.v.shape == run.tau.shape == (k, n)
+    assert run.position_error.shape == (k, 3)
+    assert run.orientation_error.shape == (k, r)
+    for name in ("force_desired", "force_reference", "contact_force", "force_error", "phi"):
+        assert getattr(run, name).shape == (k,)
+    assert run.joint_speed.shape == run.null_space_velocity.shape == (k,)
+    assert run.controller == controller.value
+    with pytest.raises(ValueError, match="read-only"):
+        run.q[0, 0] = 1.0
+    assert np.isfinite(run.tau).all()
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS)
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_task_errors_stay_within_bounds_and_the_force_reaches_10_N(runs, scenario, controller):
+    run = runs[scenario, controller]
+    # tangential tracking: < 0.5 mm (measured 0.17-0.19 mm planar, 0.02 mm wall)
+    assert run.max_position_error < 5e-4
+    assert run.max_orientation_error < 2e-3  # measured 0.3-0.5 mrad (wall)
+    # force: the ramp is tracked to 1e-3 N and the end force is 10 N
+    assert run.max_force_error < 1e-3
+    assert run.contact_force[-1] == pytest.approx(FORCE, abs=1e-3)
+    assert run.force_desired[-1] == FORCE
+    after_ramp = run.t >= 1.0
+    assert np.abs(run.contact_force[after_ramp] - FORCE).max() < 1e-3
+    # the rigid surface holds and the arm keeps pushing (one pulling step allowed at t = 0,
+    # where the desired force is 0)
+    assert run.max_constraint_error < 1e-8
+    assert run.pulling_steps <= 1
+    assert (run.contact_force[run.t >= 0.05] > 0.0).all()
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS)
+def test_rns_c_peak_joint_speed_is_below_os_c_literal(runs, scenario):
+    """The thesis claim (Fig. 6.4: 0.73 vs 4.22 rad/s); both OS-C variants here."""
+    rns = runs[scenario, Controller.RNS_C].peak_joint_speed
+    assert rns < runs[scenario, Controller.OSC].peak_joint_speed
+    assert rns < runs[scenario, Controller.OSC_KINEMATIC].peak_joint_speed
+    if scenario == "planar_arc":  # quick: 0.71 vs 1.36 (literal) and 3.37 (kinematic) rad/s
+        assert rns == pytest.approx(0.73, rel=0.1)
+        assert runs[scenario, Controller.OSC].peak_joint_speed > 1.5 * rns
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS)
+def test_rns_c_and_os_c_give_almost_identical_task_errors(runs, scenario):
+    rns = runs[scenario, Controller.RNS_C]
+    for controller in (Controller.OSC, Controller.OSC_KINEMATIC):
+        other = runs[scenario, controller]
+        ratio = other.max_position_error / rns.max_position_error
+        assert 1.0 / SAME_FACTOR <= ratio <= SAME_FACTOR
+        # pointwise: the error curves differ by less than their own size
+        difference = np.abs(other.tangential_error - rns.tangential_error).max()
+        assert difference < rns.max_position_error
+
+
+def test_planar_run_starts_at_the_arc_end_and_sweeps_the_quarter_circle(runs):
+    run = runs["planar_arc", Controller.RNS_C]
+    assert run.description["start_point_m"] == pytest.approx([1.203, 1.91])
+    assert run.description["initial_joint_positions_deg"] == pytest.approx(
+        [106.4324, -45.7055, -56.2218], abs=1e-3
+    )
+    assert run.position_error[0] == pytest.approx(np.zeros(3), abs=1e-12)
+    # RNS-C keeps its acceleration in the row space of W: the null-space velocity stays small
+    assert run.null_space_velocity.max() < 0.1  # measured 0.040 rad/s
+    assert (
+        run.null_space_velocity.max() < runs["planar_arc", Controller.OSC].null_space_velocity.max()
+    )
+
+
+def test_wall_geometry_is_the_documented_choice(runs):
+    description = runs["lwr_wall", Controller.RNS_C].description
+    assert description["start_point_m"] == pytest.approx([0.514814, 0.187377, 0.464199], abs=1e-6)
+    assert description["wall_normal"] == pytest.approx([0.883022, 0.321394, -0.34202], abs=1e-6)
+    assert description["stroke_direction"] == pytest.approx([-0.34202, 0.939693, 0.0], abs=1e-6)
+    assert description["stroke_length_m"] == pytest.approx(0.514814 - 0.24, abs=1e-6)
+
+
+def test_profiles():
+    assert back_and_forth(0.0, 1.0, 2) == (0.0, 0.0, 0.0)
+    assert back_and_forth(1.0, 1.0, 2)[0] == pytest.approx(1.0)
+    assert back_and_forth(1.5, 1.0, 2)[0] == pytest.approx(0.5)
+    assert back_and_forth(1.5, 1.0, 2)[1] < 0.0  # on the way back
+    assert back_and_forth(5.0, 1.0, 2) == pytest.approx((0.0, 0.0, 0.0))  # held at the end
+    assert back_and_forth(5.0, 1.0, 3)[0] == pytest.approx(1.0)
+    assert force_profile(0.5, 10.0, 1.0) == pytest.approx(5.0)
+    assert force_profile(3.0, 10.0, 1.0) == 10.0
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: ArcScenario(radius=0.0),
+        lambda: ArcScenario(radius=float("nan")),
+        lambda: ArcScenario(half_cycle=-1.0),
+        lambda: ArcScenario(half_cycles=0),
+        lambda: ArcScenario(half_cycles=1.5),
+        lambda: ArcScenario(start_angle_deg=200.0, end_angle_deg=200.0),
+        lambda: ArcScenario(seed_deg=(1.0, 2.0)),
+        lambda: ArcScenario(force=-1.0),
+        lambda: ArcScenario(center=(0.0, "a")),
+        lambda: WallScenario(initial_deg=(0.0,) * 6),
+        lambda: WallScenario(normal=(0.0, 0.0, 0.0)),
+        lambda: WallScenario(stroke=0.0),
+        lambda: WallScenario(strokes=0),
+        lambda: WallScenario(length=-0.1),
+        lambda: WallScenario(force_ramp=0.0),
+    ],
+)
+def test_bad_scenario_parameters_raise_config_error(make):
+    with pytest.raises(ConfigError):
+        make()
+
+
+def test_bad_run_parameters_raise_typed_errors():
+    arc = ArcScenario(half_cycles=1)
+    with pytest.raises(ConfigError, match="controller"):
+        run_closed_loop(arc, "PD")
+    with pytest.raises(ConfigError, match="dt"):
+        run_closed_loop(arc, "RNS-C", dt=0.0)
+    with pytest.raises(ConfigError, match="force measurement"):
+        run_closed_loop(arc, "RNS-C", force_measurement="late")
+    with pytest.raises(ConfigError, match="parallel"):
+        WallScenario(normal=(1.0, 0.0, 0.0), direction=(-2.0, 0.0, 0.0)).setup()
+    with pytest.raises(ConfigError, match="out of reach"):
+        ArcScenario(center=(9.0, 9.0)).setup()
+
+
+def test_a_force_sensor_one_period_late_diverges_with_the_thesis_gain():
+    """Why the force loop is solved at the same instant: e_{k+1} = -k_f e_k, k_f = 5."""
+    with pytest.raises(SimulationDivergedError) as caught:
+        run_closed_loop(
+            ArcScenario(half_cycles=1),
+            "RNS-C",
+            dt=QUICK_PERIOD,
+            duration=0.2,
+            force_measurement="previous-step",
+        )
+    assert isinstance(caught.value, RnsError)

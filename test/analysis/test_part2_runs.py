@@ -186,3 +186,21 @@ def test_a_force_sensor_one_period_late_diverges_with_the_thesis_gain():
             force_measurement="previous-step",
         )
     assert isinstance(caught.value, RnsError)
+
+
+@pytest.mark.parametrize("controller", ["RNS-C", "OS-C"])
+def test_force_and_motion_are_decoupled_on_the_wall(controller):
+    """A 10 N force step (0.02 s ramp) with the arm holding still does not move the end
+    effector in the wall plane; a stroke with zero force keeps the contact force at zero."""
+    from rns_ros.analysis.part2_runs import WallScenario, run_closed_loop
+
+    hold = WallScenario(stroke=1e6, strokes=1, force=10.0, force_ramp=0.02)
+    run = run_closed_loop(hold, controller, dt=2e-3, duration=0.5)
+    assert run.contact_force[-1] == pytest.approx(10.0, abs=1e-3)
+    in_plane = np.abs(run.position_error[:, :2]).max()
+    print(f"{controller}: in-plane error during the force step {in_plane:.2e} m")
+    assert in_plane < 1e-6
+    stroke = WallScenario(stroke=0.5, strokes=1, length=0.05, force=0.0)
+    run = run_closed_loop(stroke, controller, dt=2e-3, duration=0.5)
+    print(f"{controller}: contact force during the stroke {np.abs(run.contact_force).max():.2e} N")
+    assert np.abs(run.contact_force).max() < 1e-3

@@ -21,7 +21,8 @@ of 100 Hz state while a busy logger catches up instead of dropping samples):
                               line per change), progress, predicted coupling momentum
     energy                    std_msgs/Float64MultiArray of rns_simulator (labels from its
                               layout): kinetic-energy terms, Lambda costs, C_max, C_sum; stamped
-                              with the newest joint_states stamp (published in the same step)
+                              with the newest joint_states stamp (published in the same step;
+                              skipped before the first joint_states)
     wheel_states              sensor_msgs/JointState of the reaction wheels: rates, torques
     ptp_goal                  sensor_msgs/JointState goal of rns_ptp (by joint name; joints it
                               does not name at their newest measured angle): a translucent ghost
@@ -246,7 +247,9 @@ class RerunLoggerNode(Node):
         if len(labels) != len(msg.data):
             self._ignored("energy", f"{len(msg.data)} values for labels {labels}")
             return
-        stamp = self._last_state_stamp or self.get_clock().now().nanoseconds
+        stamp = self._last_state_stamp
+        if stamp is None:
+            return  # no joint state yet to place it on the timeline
         try:
             self.recorder.energy(stamp, dict(zip(labels, msg.data, strict=True)))
         except InputError as exc:

@@ -12,7 +12,8 @@ Publishes (all remappable):
     momentum      geometry_msgs/WrenchStamped force = linear momentum p [kg m/s], torque =
                                               angular momentum about the system CoM [kg m^2/s],
                                               both in ``world_frame`` axes
-    energy        std_msgs/Float64MultiArray  kinetic energy of the true state, layout
+    energy        std_msgs/Float64MultiArray  at ``energy_rate`` (20 Hz): kinetic energy of the
+                                              true state, layout
                                               :data:`ENERGY_LABELS` (eq. 5.1 terms, the
                                               Lambda_m / Lambda_r cost of the joint motion,
                                               running C_max and C_sum, sim time) [J, J s, s]
@@ -236,6 +237,15 @@ PARAMETERS = (
         10.0,
     ),
     ParameterSpec(
+        "energy_rate",
+        20.0,
+        "Rate of the energy topic and of its running C_max / C_sum (sampled with the state: "
+        "rounded to a whole number of state publications; 0: no energy topic)",
+        "[Hz]",
+        0.0,
+        1000.0,
+    ),
+    ParameterSpec(
         "reaction_wheels",
         False,
         "Three orthogonal reaction wheels on the base (spin axes base x, y, z; their mass and "
@@ -331,6 +341,13 @@ class SimulatorNode(Node):
         self._wheels = params["reaction_wheels"]
         self._wheel_inertia = params["wheel_inertia"]
         self._energy_cost = EnergyCost()
+        # the energy needs one CRBA and a message (~0.4 ms): every k-th state, not every one
+        self._energy_every = (
+            0
+            if params["energy_rate"] <= 0.0
+            else max(1, round(params["publish_rate"] / params["energy_rate"]))
+        )
+        self._state_publications = 0
         self._last_wheel_command: float | None = None  # monotonic receipt time [s]
         self._wheel_command_sim_time = 0.0
         self._wheel_stale_logged = False
@@ -747,7 +764,9 @@ class SimulatorNode(Node):
             wheel_states.velocity = wheels.speeds.tolist()
             wheel_states.effort = wheels.torques.tolist()
             self._wheel_pub.publish(wheel_states)
-        self._publish_energy(state, wheels)
+        self._state_publications += 1
+        if self._energy_every and (self._state_publications - 1) % self._energy_every == 0:
+            self._publish_energy(state, wheels)
 
     def _publish_energy(self, state: SimulationState, wheels: WheelSnapshot | None) -> None:
         """The ``energy`` topic (layout: :data:`ENERGY_LABELS`), from the true state."""

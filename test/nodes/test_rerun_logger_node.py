@@ -109,8 +109,8 @@ def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
     for joint in ("joint_2", "joint_7"):
         assert summary[paths.joint_transform(joint)] == joints
         assert summary[paths.joint_velocity(joint)] == joints
-    # the simulator's energy topic, one sample per published state, on the joint_states stamps
-    assert summary[paths.energy_term("total")] >= counts["energy"] > 0.8 * counts["joints"]
+    # the simulator's energy topic (20 Hz, every 5th state), on the joint_states stamps
+    assert summary[paths.energy_term("total")] >= counts["energy"] > 0.15 * counts["joints"]
     energy_times, _ = read_scalars(rrd, paths.energy_term("total"))
     joint_times, _ = read_scalars(rrd, paths.joint_velocity("joint_1"))
     assert set(np.round(energy_times, 6)) <= set(np.round(joint_times, 6))

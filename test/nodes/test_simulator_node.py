@@ -261,7 +261,9 @@ def test_dynamic_mode_tracks_references_and_publishes_efforts(ros):
         # for 50 rad/s, settles in ~2.7 s of simulated time
         return len(joints.messages) > 350
 
-    assert ros.spin_until(moving, timeout=20.0)
+    # a correctness test, not a speed test: the in-process throughput at real_time_factor 0 is
+    # GIL-bound and varies 2x between runs (6-13 s here quiet, more on a loaded CI machine)
+    assert ros.spin_until(moving, timeout=60.0)
     last = joints.messages[-1]
     assert len(last.effort) == 7
     assert np.allclose(last.velocity, 0.2, atol=1e-2)

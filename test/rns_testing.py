@@ -64,3 +64,17 @@ def json_finite(value) -> bool:
     if isinstance(value, float):
         return math.isfinite(value)
     return True
+
+
+def quick_documents(identifiers, folder) -> dict:
+    """{id: (JSON document, PNG path)} of registered reproductions run in quick mode into
+    ``folder`` (results that share cached runs compute them once)."""
+    import json
+
+    from rns_ros.analysis.reproduce.registry import _REGISTRY, run_one
+
+    written = {}
+    for identifier in identifiers:
+        record = run_one(_REGISTRY[identifier], folder, quick=True)
+        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
+    return written

@@ -3,14 +3,12 @@ documented keys and a PNG."""
 
 from __future__ import annotations
 
-import json
-
 import pytest
-from rns_testing import json_finite
+from rns_testing import json_finite, quick_documents
 
 from rns_ros.analysis.reproduce import chapter5_inspection as ch5
 from rns_ros.analysis.reproduce import registry
-from rns_ros.analysis.reproduce.registry import _REGISTRY, Status, run_one
+from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig5.4", "fig5.5")
 RUNS = {ch5.REACTIONLESS, ch5.CONVENTIONAL}
@@ -19,12 +17,7 @@ RUNS = {ch5.REACTIONLESS, ch5.CONVENTIONAL}
 @pytest.fixture(scope="module")
 def documents(tmp_path_factory):
     """{id: (json document, png path)}; condition 1 is shared through the cache."""
-    out = tmp_path_factory.mktemp("chapter5_inspection")
-    written = {}
-    for identifier in IDS:
-        record = run_one(_REGISTRY[identifier], out, quick=True)
-        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
-    return written
+    return quick_documents(IDS, tmp_path_factory.mktemp("chapter5_inspection"))
 
 
 def test_the_module_comes_after_the_other_chapters_and_registers_both_results():

@@ -3,14 +3,12 @@ documented keys and a PNG."""
 
 from __future__ import annotations
 
-import json
-
 import pytest
-from rns_testing import json_finite
+from rns_testing import json_finite, quick_documents
 
 from rns_ros.analysis.reproduce import chapter6 as ch6
 from rns_ros.analysis.reproduce import registry
-from rns_ros.analysis.reproduce.registry import _REGISTRY, Status, run_one
+from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig6.3", "fig6.4", "fig6.7", "fig6.8")
 CONTROLLERS = {"RNS-C", "OS-C", "OS-C-kinematic"}
@@ -20,12 +18,7 @@ KEYS = ("peak_joint_speed_rad_s", "max_position_error_m", "max_force_error_N")
 @pytest.fixture(scope="module")
 def documents(tmp_path_factory):
     """{id: (json document, png path)}; fig6.3/6.4 and fig6.7/6.8 share their cached runs."""
-    out = tmp_path_factory.mktemp("chapter6")
-    written = {}
-    for identifier in IDS:
-        record = run_one(_REGISTRY[identifier], out, quick=True)
-        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
-    return written
+    return quick_documents(IDS, tmp_path_factory.mktemp("chapter6"))
 
 
 def test_the_module_comes_after_chapter5_and_registers_four_results():

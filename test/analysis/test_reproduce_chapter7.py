@@ -3,14 +3,12 @@ keys and a PNG."""
 
 from __future__ import annotations
 
-import json
-
 import pytest
-from rns_testing import json_finite
+from rns_testing import json_finite, quick_documents
 
 from rns_ros.analysis.reproduce import chapter7 as ch7
 from rns_ros.analysis.reproduce import registry
-from rns_ros.analysis.reproduce.registry import _REGISTRY, Status, run_one
+from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig7.1", "fig7.2")
 RUN_KEYS = {
@@ -27,12 +25,7 @@ RUN_KEYS = {
 
 @pytest.fixture(scope="module")
 def documents(tmp_path_factory):
-    out = tmp_path_factory.mktemp("chapter7")
-    written = {}
-    for identifier in IDS:
-        record = run_one(_REGISTRY[identifier], out, quick=True)
-        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
-    return written
+    return quick_documents(IDS, tmp_path_factory.mktemp("chapter7"))
 
 
 def test_the_module_comes_after_the_other_chapters_and_registers_both_results():

@@ -378,24 +378,36 @@ def _main(argv: list[str] | None) -> int:
     except RnsError as exc:
         print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return 2
+    summary = [
+        {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
+        | {"recording": row.recording}
+        | {"energy": None if row.energy is None else asdict(row.energy)}
+        for row in rows
+    ]
+    return _report(
+        args,
+        rows,
+        format_table(rows),
+        non_finite_figures(rows),
+        f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
+        summary,
+    )
+
+
+def _report(args, rows, table: str, problems: list[str], epilogue: str, summary: list) -> int:
+    """The end of every demo: the table; exit 1 on non-finite figures (a run that produced NaN
+    / inf failed, whatever the table shows); else the epilogue, the recordings and the JSON
+    ``summary`` to ``--summary``."""
     print()
-    print(format_table(rows))
-    problems = non_finite_figures(rows)
+    print(table)
     if problems:
-        # a run that produced NaN / inf figures failed, whatever the table shows
         print(f"rns_demo: non-finite figures: {'; '.join(problems)}", file=sys.stderr)
         return 1
-    print(f"\nETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.")
+    print(f"\n{epilogue}")
     recordings = [row.recording for row in rows if row.recording]
     if recordings:
         print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
     if args.summary:
-        summary = [
-            {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
-            | {"recording": row.recording}
-            | {"energy": None if row.energy is None else asdict(row.energy)}
-            for row in rows
-        ]
         args.summary.write_text(json.dumps(summary, indent=2) + "\n")
         print(f"summary written to {args.summary}")
     return 0
@@ -424,24 +436,15 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
     except RnsError as exc:
         print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return 2
-    print()
-    print(format_ptp_table(rows))
-    problems = non_finite_ptp_figures(rows)
-    if problems:
-        print(f"rns_demo: non-finite figures: {'; '.join(problems)}", file=sys.stderr)
-        return 1
-    print(
-        "\nratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
-        "not printed (ours is identified, docs/arm_identification.md): compare the ranking."
+    return _report(
+        args,
+        rows,
+        format_ptp_table(rows),
+        non_finite_ptp_figures(rows),
+        "ratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
+        "not printed (ours is identified, docs/arm_identification.md): compare the ranking.",
+        [asdict(row) for row in rows],
     )
-    recordings = [row.recording for row in rows if row.recording]
-    if recordings:
-        print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
-    if args.summary:
-        summary = [asdict(row) for row in rows]
-        args.summary.write_text(json.dumps(summary, indent=2) + "\n")
-        print(f"summary written to {args.summary}")
-    return 0
 
 
 if __name__ == "__main__":

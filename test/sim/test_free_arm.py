@@ -139,4 +139,4 @@ def test_explicit_damping_of_the_same_size_would_diverge():
     for _ in range(3):
         sim.set_torque(-20.0 * sim.v)
         sim.step()
-    assert np.abs(sim.v).max() > 1e6  # from 0.5 rad/s (then non-finite within two more steps)
+    assert np.abs(sim.v).max() > 1e4  # from 0.5 rad/s (non-finite two steps later)

@@ -1,30 +1,53 @@
-"""rns_operator: a scripted operator that plays a scenario file as camera twist commands.
+"""rns_operator: a scripted operator that plays a scenario file as twist (and force) commands.
 
-Publishes geometry_msgs/TwistStamped on ``cmd_twist`` at ``rate``: the scenario's angular velocity
+Part I scenario files (no ``kind`` key, :mod:`rns_ros.control.scenario`): publishes
+geometry_msgs/TwistStamped on ``cmd_twist`` at ``rate``: the scenario's angular velocity
 omega(t) = angle * s_dot(t) * axis in the scenario's frame (``header.frame_id`` = ``world_frame``,
 ``base_frame`` or ``camera_frame``), then zeros for ``zero_duration``, then nothing (a controller
 then stops on its own timeout). Time is the node clock (sim time with ``use_sim_time``); the
 profile starts once ``cmd_twist`` has a subscriber (``wait_for_subscriber``) plus ``start_delay``.
 
+Part II scenario files (``kind: motion_force``, :mod:`rns_ros.analysis.part2_scenarios`,
+docs/part2_ros.md): at ``rate`` (500 Hz suggested: the force controller runs at 1 kHz) BOTH
+``cmd_twist`` (``frame_id`` = ``world_frame``, linear = the EE reference velocity p_dot_des(t) of
+(6.33), angular = 0) and ``force_setpoint`` (geometry_msgs/WrenchStamped, ``frame_id`` =
+``world_frame``, force = f_des(t) n(t), n the contact normal at the reference point, torque 0),
+both stamped with the node clock at publication: the sample is evaluated at exactly that stamp
+(the controller differentiates consecutive twist stamps for its acceleration feed-forward). After
+the profile: zero twists for ``zero_duration`` and the force setpoint held at its final value for
+the same time, then nothing (the controller holds the last setpoint). The profile starts once
+``cmd_twist`` and ``force_setpoint`` both have a subscriber (``wait_for_subscriber``).
+
 Stopped while it plays (Ctrl-C, SIGTERM, ``destroy_node``), it publishes :data:`FINAL_ZEROS` zero
 twists :data:`FINAL_ZERO_GAP` apart before it goes: the controller stops at once instead of
 holding the last rate for its ``command_timeout`` and then ramping down. Commands are best effort
 (no acknowledgement to wait for), so a few copies stand in for one. Stopped before the profile
-starts or after it finished, it sends nothing (nothing of it is moving the arm).
+starts or after it finished, it sends nothing (nothing of it is moving the arm). A motion/force
+scenario stopped while it plays also sends, with each final zero twist, the CURRENT force
+setpoint once more: nothing jumps, and the controller keeps pushing with it (it holds the last
+setpoint) while the arm stops; releasing the push is the controller's business (its stop).
 """
 
 from __future__ import annotations
 
 import time
 
-from geometry_msgs.msg import TwistStamped
+import numpy as np
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 
+from rns_ros.analysis.part2_scenarios import (
+    MotionForceScenario,
+    OperatorSample,
+    load_operator_scenario,
+    operator_sample,
+)
 from rns_ros.control.controller import TwistFrame
-from rns_ros.control.scenario import Scenario, load_scenario
+from rns_ros.control.scenario import Scenario
+from rns_ros.core.errors import InputError
 from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import scenario_path
@@ -33,7 +56,12 @@ NODE_NAME = "rns_operator"
 #: Zero twists published when the node is stopped mid-profile, this far apart [s].
 FINAL_ZEROS = 3
 FINAL_ZERO_GAP = 0.02
-SUMMARY = "Scripted operator: plays a scenario file (config/scenarios/*.yaml) as TwistStamped."
+SUMMARY = (
+    "Scripted operator: plays a scenario file (config/scenarios/*.yaml) as TwistStamped on "
+    "cmd_twist (and, kind: motion_force, WrenchStamped on force_setpoint)."
+)
+#: Rate suggested for motion/force scenarios [Hz] (the force controller runs at 1 kHz).
+MOTION_FORCE_RATE = 500.0
 
 PARAMETERS = (
     ParameterSpec(
@@ -41,7 +69,14 @@ PARAMETERS = (
         "satellite_observation",
         "Scenario file path, or the name of a shipped one in config/scenarios/",
     ),
-    ParameterSpec("rate", 50.0, "Command publishing rate", "[Hz]", 1.0, 1000.0),
+    ParameterSpec(
+        "rate",
+        50.0,
+        f"Command publishing rate (motion_force scenarios: {MOTION_FORCE_RATE:g} Hz suggested)",
+        "[Hz]",
+        1.0,
+        1000.0,
+    ),
     ParameterSpec(
         "start_delay",
         0.5,
@@ -50,9 +85,19 @@ PARAMETERS = (
         0.0,
         3600.0,
     ),
-    ParameterSpec("wait_for_subscriber", True, "Start only once cmd_twist has a subscriber"),
     ParameterSpec(
-        "zero_duration", 1.0, "Publish zero twists this long after the profile", "[s]", 0.0, 3600.0
+        "wait_for_subscriber",
+        True,
+        "Start only once cmd_twist (motion_force: and force_setpoint) has a subscriber",
+    ),
+    ParameterSpec(
+        "zero_duration",
+        1.0,
+        "Publish zero twists (motion_force: and the held force setpoint) this long after the "
+        "profile",
+        "[s]",
+        0.0,
+        3600.0,
     ),
     WORLD_FRAME,
     ParameterSpec("base_frame", "base_link", "frame_id used for base-frame scenarios"),
@@ -61,17 +106,29 @@ PARAMETERS = (
 
 
 class OperatorNode(Node):
-    """Plays one :class:`~rns_ros.control.scenario.Scenario` (see the module docstring)."""
+    """Plays one :class:`~rns_ros.control.scenario.Scenario` or
+    :class:`~rns_ros.analysis.part2_scenarios.MotionForceScenario` (module docstring).
+
+    Attributes:
+        scenario: the loaded scenario; motion_force: True for a ``kind: motion_force`` file.
+        finished: True once the profile and its zeros were published.
+    """
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         params = declare_parameters(self, PARAMETERS)
-        self.scenario: Scenario = load_scenario(scenario_path(params["scenario"]))
-        self._frame_id = {
-            TwistFrame.WORLD: params["world_frame"],
-            TwistFrame.BASE: params["base_frame"],
-            TwistFrame.CAMERA: params["camera_frame"],
-        }[self.scenario.frame]
+        self.scenario: Scenario | MotionForceScenario = load_operator_scenario(
+            scenario_path(params["scenario"])
+        )
+        self.motion_force = isinstance(self.scenario, MotionForceScenario)
+        if self.motion_force:
+            self._frame_id = params["world_frame"]
+        else:
+            self._frame_id = {
+                TwistFrame.WORLD: params["world_frame"],
+                TwistFrame.BASE: params["base_frame"],
+                TwistFrame.CAMERA: params["camera_frame"],
+            }[self.scenario.frame]
         self._start_delay = params["start_delay"]
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
@@ -79,15 +136,27 @@ class OperatorNode(Node):
         self.finished = False
         # True while the last thing published was part of the profile (motion or its zeros).
         self._playing = False
+        # motion_force: the newest force setpoint published [N] (3,), world axes.
+        self._force = np.zeros(3)
         # Commands: best effort, depth 1 - a late twist is worth nothing (same QoS as the
         # controller's subscription).
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._publisher = self.create_publisher(TwistStamped, "cmd_twist", qos)
+        self._force_publisher = (
+            self.create_publisher(WrenchStamped, "force_setpoint", qos)
+            if self.motion_force
+            else None
+        )
         self._timer = self.create_timer(1.0 / params["rate"], self._on_tick)
         self.get_logger().info(
             f"scenario {self.scenario.name!r}: {self.scenario.description or 'no description'} "
             f"({self.scenario.duration} s, frame {self._frame_id})"
         )
+        if self.motion_force and params["rate"] < MOTION_FORCE_RATE:
+            self.get_logger().info(
+                f"motion/force scenario at {params['rate']} Hz; {MOTION_FORCE_RATE:g} Hz is "
+                "suggested (the controller runs at 1 kHz)"
+            )
 
     @property
     def started(self) -> bool:
@@ -100,10 +169,14 @@ class OperatorNode(Node):
             return 0.0
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
+    def _subscribed(self) -> bool:
+        publishers = [self._publisher, self._force_publisher]
+        return all(p.get_subscription_count() > 0 for p in publishers if p is not None)
+
     def _on_tick(self) -> None:
         now = self.get_clock().now()
         if self._start is None:
-            if self._wait and self._publisher.get_subscription_count() == 0:
+            if self._wait and not self._subscribed():
                 return
             self._start = now + Duration(nanoseconds=round(self._start_delay * 1e9))
             self.get_logger().info(f"starting in {self._start_delay} s")
@@ -118,7 +191,17 @@ class OperatorNode(Node):
                 self.get_logger().info(f"scenario {self.scenario.name!r} finished")
             return
         self._playing = True
-        self._publish(self.scenario.angular_velocity(t), now)
+        if not self.motion_force:
+            self._publish(self.scenario.angular_velocity(t), now)
+            return
+        # after the profile: zero twists, the force held at its final value
+        try:
+            sample = operator_sample(self.scenario.setup, min(t, self.scenario.duration))
+        except InputError as exc:  # never publish a non-finite value
+            self.get_logger().error(f"t = {t:.3f} s: {exc}; nothing published")
+            return
+        moving = t <= self.scenario.duration
+        self._publish_motion_force(sample if moving else None, sample.force_vector, now)
 
     def _publish(self, omega, stamp: Time) -> None:
         """One TwistStamped with angular velocity ``omega`` [rad/s], shape (3,)."""
@@ -128,8 +211,30 @@ class OperatorNode(Node):
         msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z = (float(w) for w in omega)
         self._publisher.publish(msg)
 
+    def _publish_motion_force(self, sample: OperatorSample | None, force, stamp: Time) -> None:
+        """One TwistStamped (the sample's linear/angular velocity, zeros for None) and one
+        WrenchStamped (``force`` [N] (3,), torque 0), both world-framed, both at ``stamp``."""
+        twist = TwistStamped()
+        twist.header.stamp = stamp.to_msg()
+        twist.header.frame_id = self._frame_id
+        if sample is not None:
+            v, w = sample.linear, sample.angular
+            twist.twist.linear.x, twist.twist.linear.y, twist.twist.linear.z = (float(x) for x in v)
+            twist.twist.angular.x, twist.twist.angular.y, twist.twist.angular.z = (
+                float(x) for x in w
+            )
+        wrench = WrenchStamped()
+        wrench.header = twist.header
+        wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z = (
+            float(f) for f in force
+        )
+        self._force = np.array(force, dtype=float)
+        self._publisher.publish(twist)
+        self._force_publisher.publish(wrench)
+
     def destroy_node(self) -> None:
-        """Stop the camera when the profile is playing: zero twists first (module docstring),
+        """Stop the camera / EE when the profile is playing: zero twists first (motion_force:
+        each with the current force setpoint; module docstring),
         then tear down. ``run_node`` calls this on Ctrl-C while the Context still runs."""
         if self._playing and self.context.ok():
             self._playing = False
@@ -137,7 +242,10 @@ class OperatorNode(Node):
                 for i in range(FINAL_ZEROS):
                     if i:
                         time.sleep(FINAL_ZERO_GAP)
-                    self._publish((0.0, 0.0, 0.0), self.get_clock().now())
+                    if self.motion_force:  # the current force setpoint once more
+                        self._publish_motion_force(None, self._force, self.get_clock().now())
+                    else:
+                        self._publish((0.0, 0.0, 0.0), self.get_clock().now())
             except Exception as exc:  # the Context may be going down (a second signal)
                 self.get_logger().warn(f"could not publish the final zero twist: {exc}")
         super().destroy_node()

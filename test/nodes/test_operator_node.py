@@ -1,13 +1,15 @@
-"""rns_operator plays a scenario file as TwistStamped commands over DDS."""
+"""rns_operator plays a scenario file as TwistStamped commands (and, for a Part II
+``kind: motion_force`` file, WrenchStamped force setpoints) over DDS."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import yaml
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
 
+from rns_ros.analysis.part2_scenarios import load_motion_force_scenario, operator_sample
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
 from rns_ros.nodes.operator import FINAL_ZEROS, PARAMETERS, OperatorNode
@@ -134,3 +136,147 @@ def test_unknown_scenario_is_a_clear_error(ros):
 def test_config_yaml_mirrors_the_declared_defaults():
     content = yaml.safe_load((config_dir() / "operator.yaml").read_text())
     assert content["/**"]["ros__parameters"] == {spec.name: spec.default for spec in PARAMETERS}
+
+
+# --- Part II: kind motion_force ----------------------------------------------------------------
+#: Short custom Part II scenarios: one 1 s wall stroke, one 0.5 s arc half cycle.
+SHORT_WALL = {"kind": "motion_force", "task": "wall", "stroke": 1.0, "strokes": 1,
+              "force_ramp": 0.4}  # fmt: skip
+SHORT_ARC = {"kind": "motion_force", "task": "arc", "half_cycle": 0.5, "half_cycles": 1,
+             "force": 6.0, "force_ramp": 0.3}  # fmt: skip
+
+
+def _linear(msg: TwistStamped) -> tuple[float, float, float]:
+    return (msg.twist.linear.x, msg.twist.linear.y, msg.twist.linear.z)
+
+
+def _force(msg: WrenchStamped) -> tuple[float, float, float]:
+    return (msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z)
+
+
+def _torque(msg: WrenchStamped) -> tuple[float, float, float]:
+    return (msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z)
+
+
+def _profile_times(log, operator) -> np.ndarray:
+    """Profile time t of each message's stamp [s], from integer nanoseconds (a float of the
+    absolute stamp loses ~1e-7 s)."""
+    start = operator._start.nanoseconds
+    return np.array(
+        [(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec - start) * 1e-9 for m in log.messages]
+    )
+
+
+@pytest.mark.parametrize("content", [SHORT_WALL, SHORT_ARC], ids=["wall", "arc"])
+def test_motion_force_profile_integrates_to_the_reference_and_pushes_f_des_n(
+    ros, tmp_path, content
+):
+    path = tmp_path / "short_part2.yaml"
+    path.write_text(yaml.safe_dump(content))
+    scenario = load_motion_force_scenario(path)
+    setup, duration, zero_duration = scenario.setup, scenario.duration, 0.3
+    twists = ros.record(TwistStamped, "cmd_twist")
+    wrenches = ros.record(WrenchStamped, "force_setpoint")
+    operator = ros.add(
+        OperatorNode,
+        {"scenario": str(path), "rate": 250.0, "start_delay": 0.0, "zero_duration": zero_duration},
+    )
+    assert operator.motion_force
+    assert ros.spin_until(lambda: operator.finished, timeout=20.0)
+    frames = {m.header.frame_id for m in twists.messages + wrenches.messages}
+    assert frames == {"world"}
+
+    # cmd_twist: the reference velocity sampled at its stamps, angular 0; the trapezoid integral
+    # over the stamps is the reference displacement (end point - start point)
+    t = _profile_times(twists, operator)
+    v = twists.array(_linear)
+    assert len(t) > 0.5 * 250 * duration  # most ticks arrived (best effort, one process)
+    assert np.all(np.diff(t) > 0.0)
+    assert 0.0 <= t[0] < 0.05
+    assert t[-1] > duration
+    assert np.all(twists.array(lambda m: [m.twist.angular.x, m.twist.angular.y,
+                                          m.twist.angular.z]) == 0.0)  # fmt: skip
+    expected = np.array([operator_sample(setup, min(ti, duration)).linear for ti in t])
+    np.testing.assert_allclose(v[t <= duration], expected[t <= duration], atol=1e-12)
+    assert np.all(v[t > duration] == 0.0)  # zeros after the profile
+    displacement = np.trapezoid(v, t, axis=0)
+    reference = setup.reference(duration).position - setup.reference(0.0).position
+    length = np.linalg.norm(reference)
+    assert length > 0.1  # [m]: a real stroke / chord
+    assert np.linalg.norm(displacement - reference) < 0.01 * length
+
+    # force_setpoint: f_des(t) n(t) at the stamps, n at the reference point, held after the end
+    tf = _profile_times(wrenches, operator)
+    forces = wrenches.array(_force)
+    assert len(tf) > 0.5 * 250 * duration
+    assert np.all(wrenches.array(_torque) == 0.0)
+    for ti, force in zip(tf, forces, strict=True):
+        tau = min(ti, duration)
+        f_des = setup.force(tau)
+        normal = setup.constraint.gradient(setup.reference(tau).position)
+        assert abs(np.linalg.norm(force) - f_des) <= 1e-9
+        np.testing.assert_allclose(force, f_des * normal, atol=1e-9)
+    held = forces[tf > duration]
+    assert len(held) >= 0.5 * 250 * zero_duration
+    assert np.all(held == held[-1])  # held at its final value
+    assert np.linalg.norm(held[-1]) == pytest.approx(setup.force(duration), abs=1e-9)
+    assert tf[-1] <= duration + zero_duration + 0.01
+    # then silence on both
+    counts = (len(twists), len(wrenches))
+    ros.spin_for(0.2)
+    assert (len(twists), len(wrenches)) == counts
+
+
+def test_motion_force_destroyed_mid_profile_sends_zero_twists_and_keeps_the_force(ros, tmp_path):
+    path = tmp_path / "long_wall.yaml"
+    path.write_text(yaml.safe_dump({**SHORT_WALL, "stroke": 30.0, "force_ramp": 0.2}))
+    twists = ros.record(TwistStamped, "cmd_twist")
+    wrenches = ros.record(WrenchStamped, "force_setpoint")
+    operator = ros.add(OperatorNode, {"scenario": str(path), "start_delay": 0.0, "rate": 100.0})
+    assert ros.spin_until(lambda: operator.elapsed() > 0.4 and len(twists) >= 5, timeout=20.0)
+    assert any(_linear(twists.latest()))  # moving along the wall
+    ros.detach(operator)
+    counts = (len(twists), len(wrenches))
+    current = np.array(_force(wrenches.latest()))
+    assert np.linalg.norm(current) == pytest.approx(10.0, abs=1e-9)  # ramp done: 10 N
+    operator.destroy_node()
+    ros.spin_for(0.3)
+    after_twists, after_wrenches = twists.messages[counts[0] :], wrenches.messages[counts[1] :]
+    assert after_twists, "no twist after destroy_node"
+    assert after_wrenches, "no force setpoint after destroy_node"
+    zeros = [m for m in after_twists if not any(_linear(m))]  # (a tick may still be in flight)
+    assert 1 <= len(zeros) <= FINAL_ZEROS
+    assert not any(_linear(after_twists[-1]))
+    assert {m.header.frame_id for m in zeros} == {"world"}
+    # the final force setpoints are the current one (the arm stops on the wall, pushing on):
+    # 10 N along the constant wall normal, nothing jumps
+    final = np.array([_force(m) for m in after_wrenches])
+    assert len(final) <= FINAL_ZEROS + len(after_twists) - len(zeros)
+    assert np.all(final == current)
+
+
+def test_motion_force_waits_for_both_subscribers(ros, tmp_path):
+    path = tmp_path / "wall.yaml"
+    path.write_text(yaml.safe_dump(SHORT_WALL))
+    operator = ros.add(OperatorNode, {"scenario": str(path), "start_delay": 0.0})
+    ros.record(TwistStamped, "cmd_twist")
+    ros.spin_for(0.3)
+    assert not operator.started  # no force_setpoint subscriber yet
+    ros.record(WrenchStamped, "force_setpoint")
+    assert ros.spin_until(lambda: operator.started, timeout=5.0)
+
+
+def test_shipped_part2_scenarios_are_motion_force(ros):
+    operator = ros.add(OperatorNode, {"scenario": "wall_contact", "wait_for_subscriber": False,
+                                      "start_delay": 60.0})  # fmt: skip
+    assert operator.motion_force
+    assert operator.scenario.duration == 10.0
+
+
+def test_bad_motion_force_scenario_is_a_config_error_naming_the_value(ros, tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump({**SHORT_WALL, "stroke": -1.0}))
+    with pytest.raises(ConfigError, match=r"stroke must be a finite number > 0 \[s\], got -1.0"):
+        OperatorNode(
+            context=ros.context, parameter_overrides=[Parameter("scenario", value=str(path))]
+        )

@@ -55,6 +55,7 @@ zero efforts until ``~/reset``; no non-finite value is ever published.
 from __future__ import annotations
 
 import math
+import sys
 import threading
 import time
 from typing import NamedTuple
@@ -66,6 +67,7 @@ from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
@@ -90,13 +92,16 @@ from rns_ros.nodes.parameters import (
     specs_by_name,
     velocity_joint_order,
 )
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, run_node
 from rns_ros.resources import default_model_config
 from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.sim.reaction_wheels import WHEEL_NAMES, ReactionWheels
 
 NODE_NAME = "rns_simulator"
-SUMMARY = "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4)."
+SUMMARY = (
+    "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4); contact "
+    "mode (-p mode:=contact): the fixed-base Part II arm against a wall or cylinder, below."
+)
 #: A lockstep pause longer than this [s] (wall time) is reported and ends with one step, so a
 #: controller whose sim-time timer waits for a later /clock is never deadlocked.
 LOCKSTEP_PATIENCE = 2.0
@@ -126,8 +131,11 @@ PARAMETERS = (
     ParameterSpec(
         "mode",
         "kinematic",
-        "kinematic: joints follow commanded velocities exactly; dynamic: ABA + joint servo",
-        choices=("kinematic", "dynamic"),
+        "kinematic: joints follow commanded velocities exactly; dynamic: ABA + joint servo; "
+        "contact: the fixed-base Part II arm driven by joint torques, its end effector on a "
+        "rigid wall or cylinder (its own parameters: see 'contact mode' in --help, "
+        "config/contact_simulator.yaml)",
+        choices=("kinematic", "dynamic", "contact"),
     ),
     ParameterSpec("step_size", 0.001, "Fixed RK4 integration step", "[s]", 1e-5, 0.1),
     ParameterSpec(
@@ -805,9 +813,64 @@ class SimulatorNode(Node):
         super().destroy_node()
 
 
+def requested_mode(**node_kwargs) -> object:
+    """The ``mode`` override (``-p mode:=...``, a params file) of a node named ``rns_simulator``
+    built with these rclpy Node keyword arguments, or None. A short-lived probe node reads it from
+    rcl's overrides (rclpy has no public getter; see
+    :func:`rns_ros.nodes.parameters.warn_unknown_parameters`)."""
+    probe = Node(
+        NODE_NAME, **{"enable_rosout": False, "start_parameter_services": False, **node_kwargs}
+    )
+    try:
+        override = (getattr(probe, "_parameter_overrides", None) or {}).get("mode")
+        return None if override is None else override.value
+    finally:
+        probe.destroy_node()
+
+
+def create_simulator_node(**node_kwargs) -> Node:
+    """The rns_simulator node for the requested ``mode``: :class:`ContactSimulatorNode`
+    (rns_ros.nodes.contact_simulator) for ``contact``, else the free-floating
+    :class:`SimulatorNode` (which reports an invalid mode)."""
+    if requested_mode(**node_kwargs) == "contact":
+        from rns_ros.nodes.contact_simulator import ContactSimulatorNode
+
+        return ContactSimulatorNode(**node_kwargs)
+    return SimulatorNode(**node_kwargs)
+
+
+def simulator_help() -> str:
+    """``rns_simulator --help``: the free-floating parameters, then the contact-mode ones."""
+    from rns_ros.nodes.contact_simulator import PARAMETERS as CONTACT_PARAMETERS
+
+    contact = parameter_help(
+        NODE_NAME,
+        "Contact mode (-p mode:=contact, or --params-file config/contact_simulator.yaml): the "
+        "fixed-base Part II arm driven by joint torques on joint_efforts, its end effector on a "
+        "rigid wall or cylinder; publishes wrist_wrench, contact, joint_states (docs/part2_ros.md)",
+        CONTACT_PARAMETERS,
+    ).split("\n")
+    return "\n".join([parameter_help(NODE_NAME, SUMMARY, PARAMETERS), "", "=" * 79, *contact[2:]])
+
+
+def _wants_help(argv: list[str]) -> bool:
+    try:
+        return bool({"-h", "--help"} & set(remove_ros_args(argv)[1:]))
+    except ROS_STARTUP_ERRORS:
+        return False  # run_node reports the bad ROS arguments
+
+
 def main(args=None) -> int:
+    argv = list(sys.argv if args is None else args)
+    if _wants_help(argv):
+        print(simulator_help())
+        return 0
     return run_node(
-        SimulatorNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
+        create_simulator_node,
+        executable=NODE_NAME,
+        summary=SUMMARY,
+        specs=PARAMETERS,
+        args=argv,
     )
 
 

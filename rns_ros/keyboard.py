@@ -10,8 +10,19 @@ Keys (the first key of each pair is the positive direction):
     a / d   yaw   +/-   angular z        u / o   linear z +/-
     + / -   all speeds x speed_step / ÷ speed_step ('=' and '_' also work), bounded
     f       cycle the command frame camera -> world -> base (and stop)
+    m       force mode on / off (and stop), see below
     space   stop now: zero command, held keys forgotten
     Q, Ctrl-C, Ctrl-D, Ctrl-\\   quit (a zero twist is sent first)
+
+Force mode (Part II, docs/part2_ros.md; key ``m``) drives an end effector held on a surface by
+a motion/force controller: the motion keys command the EE LINEAR velocity along the EE x / y axes
+at the linear speed (w/s or i/k: x +/-, a/d or j/l: y +/-; q/e, u/o and f do nothing: the EE z
+axis is the pushing direction and the controller holds the orientation) and the twist is sent in
+the EE frame; + / - push harder / softer: the force setpoint f changes by ``force_step`` within
+[0, ``max_force``] [N] and is sent (along EE z) at the rate for as long as force mode is on.
+Toggling the mode stops the motion like the stop key (zeros in the frame of the mode being
+left); leaving force mode keeps the force setpoint where it is (the controller holds the last
+one it received; press - down to 0 N first to release the push).
 
 The linear keys exist for completeness: a reactionless camera-pointing controller reports any
 linear command as not achievable.
@@ -30,6 +41,7 @@ not sqrt(2) times it (which a controller with the same limit would refuse).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -60,6 +72,9 @@ class Action(StrEnum):
     SLOWER = "slower"
     FRAME = "frame"
     QUIT = "quit"
+    FORCE_MODE = "force mode"
+    HARDER = "push harder"
+    SOFTER = "push softer"
 
 
 @dataclass(frozen=True)
@@ -92,8 +107,25 @@ KEY_MAP: dict[str, Binding] = {
     **dict.fromkeys("+=", Binding(Action.FASTER)),
     **dict.fromkeys("-_", Binding(Action.SLOWER)),
     "f": Binding(Action.FRAME),
+    "m": Binding(Action.FORCE_MODE),
     " ": Binding(Action.STOP),
     **dict.fromkeys(("Q", "\x03", "\x04", "\x1c"), Binding(Action.QUIT)),
+}
+
+#: Key string -> binding in force mode: EE x / y linear keys, push harder / softer; the keys of
+#: the other axes and the frame key are not bound (ignored).
+FORCE_KEY_MAP: dict[str, Binding] = {
+    **{
+        key: binding
+        for key, binding in KEY_MAP.items()
+        if binding.action not in (Action.MOVE, Action.FRAME)
+    },
+    **{key: Binding(Action.MOVE, 3, +1) for key in "wi"},
+    **{key: Binding(Action.MOVE, 3, -1) for key in "sk"},
+    **{key: Binding(Action.MOVE, 4, +1) for key in "aj"},
+    **{key: Binding(Action.MOVE, 4, -1) for key in "dl"},
+    **dict.fromkeys("+=", Binding(Action.HARDER)),
+    **dict.fromkeys("-_", Binding(Action.SOFTER)),
 }
 
 #: Key help shown at the bottom of the panel.
@@ -101,7 +133,21 @@ KEY_HELP = (
     "q/e roll +/-     w/s pitch +/-    a/d yaw +/-     (angular x/y/z)",
     "i/k x +/-        j/l y +/-        u/o z +/-       (linear: not reactionless)",
     "+/- speed        f frame          space stop      Q or Ctrl-C quit",
+    "m force mode (EE x/y motion, push along EE z)",
 )
+#: Key help in force mode.
+FORCE_KEY_HELP = (
+    "w/s or i/k EE x +/-      a/d or j/l EE y +/-      (linear, EE frame)",
+    "+/- push harder/softer   space stop               Q or Ctrl-C quit",
+    "m leave force mode (stops; the force setpoint stays what it is)",
+)
+
+
+class Mode(StrEnum):
+    """What the keys drive."""
+
+    CAMERA = "camera"  # the camera's (or EE's) twist in the command frame (Part I)
+    FORCE = "force"  # EE x / y linear velocity in the EE frame + a force setpoint (Part II)
 
 
 class Speeds(NamedTuple):
@@ -118,12 +164,15 @@ class TeleopCommand:
     Attributes:
         angular: angular velocity (x, y, z) in ``frame`` axes [rad/s].
         linear: linear velocity (x, y, z) in ``frame`` axes [m/s].
-        frame: axes of both vectors.
+        frame: axes of both vectors (camera mode).
+        force_mode: True: both vectors are in the EE frame's axes (force mode), ``frame`` is
+            not used.
     """
 
     angular: tuple[float, float, float]
     linear: tuple[float, float, float]
     frame: TwistFrame
+    force_mode: bool = False
 
     @property
     def is_zero(self) -> bool:
@@ -162,10 +211,12 @@ class KeyboardTeleop:
         max_angular_speed: bound of the angular speed [rad/s].
         max_linear_speed: bound of the linear speed [m/s].
         frame: initial command frame.
+        force_step: change of the force setpoint per push key in force mode [N] (> 0).
+        max_force: upper bound of the force setpoint [N] (> 0); the lower bound is 0.
 
     Raises:
-        ConfigError: a non-positive duration or speed, ``speed_step <= 1``, or an initial speed
-            outside [MIN_SPEED, its maximum].
+        ConfigError: a non-positive duration, speed, force step or maximum force,
+            ``speed_step <= 1``, or an initial speed outside [MIN_SPEED, its maximum].
     """
 
     def __init__(
@@ -179,6 +230,8 @@ class KeyboardTeleop:
         max_angular_speed: float,
         max_linear_speed: float,
         frame: TwistFrame | str = TwistFrame.CAMERA,
+        force_step: float = 1.0,
+        max_force: float = 20.0,
     ) -> None:
         if not key_hold > 0.0:
             raise ConfigError(f"key_hold must be > 0 [s], got {key_hold!r}")
@@ -186,6 +239,9 @@ class KeyboardTeleop:
             raise ConfigError(f"zero_duration must be >= 0 [s], got {zero_duration!r}")
         if not speed_step > 1.0:
             raise ConfigError(f"speed_step must be > 1, got {speed_step!r}")
+        for name, value in (("force_step", force_step), ("max_force", max_force)):
+            if not (math.isfinite(value) and value > 0.0):
+                raise ConfigError(f"{name} must be a finite number > 0 [N], got {value!r}")
         for name, speed, high, unit in (
             ("angular_speed", angular_speed, max_angular_speed, "[rad/s]"),
             ("linear_speed", linear_speed, max_linear_speed, "[m/s]"),
@@ -200,7 +256,13 @@ class KeyboardTeleop:
         self.max_speeds = Speeds(float(max_angular_speed), float(max_linear_speed))
         self.speeds = Speeds(float(angular_speed), float(linear_speed))
         self.frame = TwistFrame.parse(frame)
+        self.force_step, self.max_force = float(force_step), float(max_force)
+        self.mode = Mode.CAMERA
+        #: Force setpoint [N] in [0, max_force]; kept when force mode is left.
+        self.force = 0.0
         self.quit_requested = False
+        # Mode of the zeros owed (the mode the motion they stop was commanded in).
+        self._zeros_mode = Mode.CAMERA
         # axis -> (sign, time of the newest press or repeat [s]); one entry per axis, so the
         # newest direction wins when both keys of a pair were pressed within key_hold.
         self._held: dict[int, tuple[int, float]] = {}
@@ -209,12 +271,17 @@ class KeyboardTeleop:
         self._zeros_since: float | None = None
 
     # --- input ----------------------------------------------------------------------------------
+    @property
+    def force_mode(self) -> bool:
+        return self.mode is Mode.FORCE
+
     def press(self, key: str, now: float) -> KeyEvent:
-        """Apply one key (a press or an auto-repeat) at monotonic time ``now`` [s]."""
-        binding = KEY_MAP.get(key)
+        """Apply one key (a press or an auto-repeat) at monotonic time ``now`` [s]; the key's
+        meaning depends on the mode (:data:`KEY_MAP`, :data:`FORCE_KEY_MAP`)."""
+        binding = (FORCE_KEY_MAP if self.force_mode else KEY_MAP).get(key)
         if binding is None:
             return KeyEvent(key, None, False)
-        before = self.command(now)
+        before = (self.command(now), self.force)
         action = binding.action
         if action is Action.MOVE:
             self._held[binding.axis] = (binding.sign, now)
@@ -228,15 +295,24 @@ class KeyboardTeleop:
             self.speeds = self._scaled(self.speed_step)
         elif action is Action.SLOWER:
             self.speeds = self._scaled(1.0 / self.speed_step)
+        elif action is Action.FORCE_MODE:
+            # the motion stops (zeros in the frame of the mode left); the force stays
+            self._release_all()
+            self.mode = Mode.CAMERA if self.force_mode else Mode.FORCE
+        elif action is Action.HARDER:
+            self.force = min(self.force + self.force_step, self.max_force)
+        elif action is Action.SOFTER:
+            self.force = max(self.force - self.force_step, 0.0)
         else:
             self.quit_requested = True
             self._release_all()
-        after = self.command(now)
+        after = (self.command(now), self.force)
         urgent = after != before or action is Action.STOP
         return KeyEvent(key, binding, urgent)
 
     def _release_all(self) -> None:
         self._held.clear()
+        self._zeros_mode = self.mode  # the zeros stop what was commanded in this mode
         # Always owe zeros after a stop, even when idle: the operator asked for a stop.
         self._zeros_since = float("-inf")
 
@@ -264,11 +340,14 @@ class KeyboardTeleop:
             limit_norm(values[:3], self.max_speeds.angular),
             limit_norm(values[3:], self.max_speeds.linear),
             self.frame,
+            self.force_mode,
         )
 
     def tick(self, now: float) -> TeleopCommand | None:
         """What to publish at a rate tick at ``now`` [s]: the command while a key is held, then
-        zeros for ``zero_duration``, then None (nothing) until the next key."""
+        zeros for ``zero_duration``, then None (nothing) until the next key. The zeros are in
+        the frame of the mode the stopped motion was commanded in (leaving force mode: the EE
+        frame)."""
         self._held = {
             axis: entry
             for axis, entry in self._held.items()
@@ -277,9 +356,11 @@ class KeyboardTeleop:
         command = self.command(now)
         if not command.is_zero:
             self._zeros_since = float("-inf")
+            self._zeros_mode = self.mode
             return command
         if self._zeros_since is None:
             return None
+        command = dataclasses.replace(command, force_mode=self._zeros_mode is Mode.FORCE)
         if self._zeros_since == float("-inf"):
             self._zeros_since = now
         if now - self._zeros_since <= self.zero_duration:
@@ -291,6 +372,11 @@ class KeyboardTeleop:
     def sending(self) -> bool:
         """True while :meth:`tick` returns commands (motion or trailing zeros)."""
         return self._zeros_since is not None
+
+    def force_setpoint(self) -> float | None:
+        """The force setpoint to publish at a tick [N]: :attr:`force` in force mode, else None
+        (nothing: the controller holds the last one)."""
+        return self.force if self.force_mode else None
 
 
 def limit_norm(vector: Sequence[float], limit: float) -> tuple[float, ...]:
@@ -395,12 +481,15 @@ def split_keys(text: str) -> list[str]:
 _LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
 
 
-def status_line(status: ControllerStatus | None, now: float, topic: str) -> str:
-    """One line describing the controller's newest status at monotonic time ``now`` [s]."""
+def status_line(
+    status: ControllerStatus | None, now: float, topic: str, label: str = "controller"
+) -> str:
+    """One line describing a controller's newest status at monotonic time ``now`` [s],
+    starting with ``label`` (``"controller"``; the force controller's: ``"force ctrl"``)."""
     if status is None:
-        return f"controller  no status yet on {topic}"
+        return f"{label}  no status yet on {topic}"
     detail = status.message.removeprefix(f"{status.state}:").strip()
-    text = f"controller  {status.state} [{_LEVELS.get(status.level, status.level)}]"
+    text = f"{label}  {status.state} [{_LEVELS.get(status.level, status.level)}]"
     if detail and detail != status.state:
         text += f"  {detail}"
     age = now - status.received
@@ -421,18 +510,25 @@ def render_panel(
     frame_id: str = "",
     sending: bool = False,
     last_key: KeyEvent | None = None,
-    help_lines: Sequence[str] = KEY_HELP,
+    help_lines: Sequence[str] | None = None,
+    force: float | None = None,
+    force_step: float = 1.0,
+    max_force: float = 20.0,
+    force_status: str | None = None,
 ) -> list[str]:
     """Panel text, one string per line (no escape codes, at most 80 columns plus the status).
 
     Args:
-        command: the command now (its frame is shown).
+        command: the command now (its frame, or force mode, is shown).
         speeds: current speeds.
         status: the controller line (:func:`status_line`).
-        frame_id: header.frame_id sent for ``command.frame``.
+        frame_id: header.frame_id sent for ``command`` (the EE frame in force mode).
         sending: whether twists are being published.
         last_key: the newest key, shown with what it did.
-        help_lines: key help.
+        help_lines: key help; default :data:`KEY_HELP`, :data:`FORCE_KEY_HELP` in force mode.
+        force: the force setpoint [N] (None: no force line); sent while in force mode.
+        force_step, max_force: the push key step and the upper bound [N], shown.
+        force_status: the force controller line (:func:`status_line`), or None (not shown).
     """
     frames = " -> ".join(frame.value for frame in FRAME_CYCLE)
     if last_key is None:
@@ -446,16 +542,33 @@ def render_panel(
         activity = "sending zero"
     else:
         activity = "sending"
-    return [
-        "rns_teleop_keyboard  reactionless camera teleop",
+    if command.force_mode:
+        title = "rns_teleop_keyboard  FORCE MODE: EE motion + force setpoint"
+        mode = "force (m: back to camera mode)"
+        frame = f"EE (frame_id '{frame_id}')   keys move along EE x / y"
+        help_lines = FORCE_KEY_HELP if help_lines is None else help_lines
+    else:
+        title = "rns_teleop_keyboard  reactionless camera teleop"
+        mode = "camera (m: force mode)"
+        frame = f"{command.frame.value} (frame_id '{frame_id}')   f cycles {frames}"
+        help_lines = KEY_HELP if help_lines is None else help_lines
+    lines = [
+        title,
         "",
-        f"frame     {command.frame.value} (frame_id '{frame_id}')   f cycles {frames}",
+        f"mode      {mode}",
+        f"frame     {frame}",
         f"speed     angular {speeds.angular:.3f} rad/s   linear {speeds.linear:.3f} m/s",
         f"angular   {_vector(command.angular)}  [rad/s]",
         f"linear    {_vector(command.linear)}  [m/s]",
         f"cmd_twist {activity}",
-        f"last key  {key_text}",
-        status,
-        "",
-        *help_lines,
     ]
+    if force is not None:
+        limits = f"(+/- {force_step:g} N, 0..{max_force:g} N)"
+        if command.force_mode:
+            lines.append(f"force     setpoint {force:.3f} N along EE z {limits}, sending")
+        else:
+            lines.append(f"force     setpoint {force:.3f} N, not sent (held by the controller)")
+    lines += [f"last key  {key_text}", status]
+    if force_status is not None:
+        lines.append(force_status)
+    return [*lines, "", *help_lines]

@@ -13,12 +13,16 @@ from hypothesis import strategies as st
 from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
 from rns_ros.keyboard import (
+    FORCE_KEY_HELP,
+    FORCE_KEY_MAP,
     KEY_HELP,
     KEY_MAP,
     MIN_SPEED,
     Action,
+    Binding,
     ControllerStatus,
     KeyboardTeleop,
+    Mode,
     Speeds,
     TeleopCommand,
     limit_norm,
@@ -282,6 +286,8 @@ def test_commands_are_immutable():
         ({"angular_speed": 2.0}, "angular_speed"),
         ({"linear_speed": 0.0}, "linear_speed"),
         ({"frame": "tool"}, "twist frame"),
+        ({"force_step": 0.0}, r"force_step must be a finite number > 0 \[N\], got 0.0"),
+        ({"max_force": math.nan}, "max_force must be a finite number > 0"),
     ],
 )
 def test_bad_settings_are_config_errors(overrides, message):
@@ -340,3 +346,153 @@ def test_panel_shows_command_frame_speeds_status_and_help():
     assert max(len(line) for line in lines) <= 80
     idle = render_panel(keys.command(5.0), keys.speeds, "", sending=False)
     assert "cmd_twist idle (nothing published)" in idle
+
+
+# --- force mode (Part II) -----------------------------------------------------------------------
+def force_teleop(**overrides) -> KeyboardTeleop:
+    keys = teleop(force_step=1.0, max_force=3.0, **overrides)
+    event = keys.press("m", 0.0)
+    assert event.binding.action is Action.FORCE_MODE
+    assert keys.mode is Mode.FORCE
+    keys.tick(0.0)
+    return keys
+
+
+@pytest.mark.parametrize(
+    ("key", "linear"),
+    [
+        ("w", (0.05, 0, 0)),
+        ("i", (0.05, 0, 0)),
+        ("s", (-0.05, 0, 0)),
+        ("k", (-0.05, 0, 0)),
+        ("a", (0, 0.05, 0)),
+        ("j", (0, 0.05, 0)),
+        ("d", (0, -0.05, 0)),
+        ("l", (0, -0.05, 0)),
+    ],
+)
+def test_force_mode_motion_keys_drive_the_ee_x_y_linear_velocity(key, linear):
+    keys = force_teleop()
+    event = keys.press(key, 1.0)
+    assert event.binding == Binding(
+        Action.MOVE, 3 if linear[0] else 4, 1 if sum(linear) > 0 else -1
+    )
+    assert event.urgent
+    command = keys.tick(1.0)
+    assert command == TeleopCommand(ZERO3, linear, TwistFrame.CAMERA, force_mode=True)
+    # key hold and the zeros after release are those of camera mode
+    assert keys.tick(1.0 + HOLD + 0.01).is_zero
+    assert keys.tick(1.0 + HOLD + 0.01).force_mode
+    assert keys.tick(1.0 + HOLD + ZEROS + 0.05) is None
+
+
+@pytest.mark.parametrize("key", ["q", "e", "u", "o", "f"])
+def test_force_mode_ignores_the_other_axes_and_the_frame_key(key):
+    keys = force_teleop()
+    event = keys.press(key, 1.0)
+    assert event.binding is None
+    assert keys.command(1.0).is_zero
+    assert keys.frame is TwistFrame.CAMERA
+
+
+def test_push_keys_step_the_force_within_its_bounds_and_leave_the_speed():
+    keys = teleop(force_step=1.5, max_force=4.0)
+    assert keys.force_setpoint() is None  # camera mode: no force setpoint
+    keys.press("m", 0.0)
+    assert keys.force_setpoint() == 0.0
+    event = keys.press("+", 0.1)
+    assert event.binding.action is Action.HARDER
+    assert event.urgent  # a push goes out at once
+    assert keys.force_setpoint() == 1.5
+    keys.press("=", 0.2)
+    keys.press("+", 0.3)  # 4.5 > max_force
+    assert keys.force_setpoint() == 4.0
+    assert keys.speeds == Speeds(0.1, 0.05)  # +/- push in force mode, the speeds stay
+    event = keys.press("-", 0.4)
+    assert event.binding.action is Action.SOFTER
+    assert keys.force_setpoint() == 2.5
+    for _ in range(5):
+        keys.press("_", 0.5)
+    assert keys.force_setpoint() == 0.0
+    assert not keys.press("-", 0.6).urgent  # nothing changed
+
+
+def test_leaving_force_mode_stops_in_the_ee_frame_and_keeps_the_force():
+    keys = force_teleop()
+    keys.press("+", 0.1)
+    keys.press("+", 0.2)
+    keys.press("w", 0.3)
+    assert keys.tick(0.35).linear == (0.05, 0.0, 0.0)
+    event = keys.press("m", 0.4)
+    assert event.urgent
+    assert keys.mode is Mode.CAMERA
+    zero = keys.tick(0.4)  # published at once: the final zero twist, in the EE frame
+    assert zero.is_zero
+    assert zero.force_mode
+    assert keys.tick(0.4 + ZEROS).force_mode
+    assert keys.tick(0.4 + ZEROS + 0.05) is None
+    assert keys.force == 2.0  # kept; no longer sent
+    assert keys.force_setpoint() is None
+    assert keys.press("+", 1.0).binding.action is Action.FASTER  # camera mode keys again
+    assert keys.force == 2.0
+    keys.press("m", 2.0)
+    assert keys.force_setpoint() == 2.0  # back in force mode: the same push
+
+
+def test_entering_force_mode_stops_the_camera_in_its_frame():
+    keys = teleop()
+    keys.press("f", 0.0)  # world
+    keys.press("a", 0.1)
+    keys.press("m", 0.2)
+    zero = keys.tick(0.2)
+    assert zero.is_zero
+    assert not zero.force_mode
+    assert zero.frame is TwistFrame.WORLD
+    assert keys.command(0.2).force_mode  # what the keys drive now
+
+
+def test_force_key_help_names_every_force_mode_motion_key():
+    help_text = " ".join(FORCE_KEY_HELP)
+    for key, binding in FORCE_KEY_MAP.items():
+        if binding.action is Action.MOVE:
+            assert f"{key}/" in help_text or f"/{key}" in help_text, key
+    assert "m force mode" in " ".join(KEY_HELP)
+
+
+def test_panel_in_force_mode_shows_mode_frame_force_and_force_status():
+    keys = force_teleop()
+    keys.press("+", 0.1)
+    keys.press("+", 0.1)
+    event = keys.press("j", 0.2)
+    force_status = status_line(
+        ControllerStatus("CONTACT", 0, "CONTACT: force error +0.012 N", 0.2),
+        0.3,
+        "/rns_force_controller/status",
+        "force ctrl",
+    )
+    lines = render_panel(
+        keys.command(0.3),
+        keys.speeds,
+        "controller  no status yet on /rns_controller/status",
+        frame_id="ee",
+        sending=True,
+        last_key=event,
+        force=keys.force,
+        force_step=keys.force_step,
+        max_force=keys.max_force,
+        force_status=force_status,
+    )
+    text = "\n".join(lines)
+    assert "mode      force (m: back to camera mode)" in text
+    assert "frame     EE (frame_id 'ee')" in text
+    assert "linear    x +0.000  y +0.050  z +0.000  [m/s]" in text
+    assert "force     setpoint 2.000 N along EE z (+/- 1 N, 0..3 N), sending" in text
+    assert "force ctrl  CONTACT [OK]  force error +0.012 N" in lines
+    assert "last key  'j' y +" in text
+    assert lines[-len(FORCE_KEY_HELP) :] == list(FORCE_KEY_HELP)
+    assert max(len(line) for line in lines) <= 80
+    keys.press("m", 1.0)
+    camera = render_panel(keys.command(1.0), keys.speeds, "", force=keys.force)
+    assert "mode      camera (m: force mode)" in camera
+    assert "force     setpoint 2.000 N, not sent (held by the controller)" in camera
+    assert camera[-len(KEY_HELP) :] == list(KEY_HELP)

@@ -8,10 +8,22 @@ Publishes:
                 held, the command at ``rate``; after release or the stop key, zeros at ``rate``
                 for ``zero_duration``; then nothing until the next key (the controller idles on
                 its own timeout). A few zeros are also sent on quit, Ctrl-C, SIGTERM and when the
-                terminal goes away (SIGHUP, end of file or EIO on stdin).
+                terminal goes away (SIGHUP, end of file or EIO on stdin). In force mode (key m)
+                the twist is the EE linear velocity along EE x / y at ``linear_speed``,
+                ``frame_id`` = ``ee_frame``; toggling the mode stops like the stop key (zeros in
+                the frame of the mode left: leaving force mode sends EE-frame zeros).
+    force_setpoint  geometry_msgs/WrenchStamped, best effort depth 1, force mode only: at
+                ``rate`` (and at once on a push key), ``frame_id`` = ``ee_frame``, force =
+                (0, 0, f) [N], f the setpoint in [0, ``max_force``] changed by ``force_step``
+                per +/- key (docs/part2_ros.md: the force the EE exerts on the environment).
+                Not sent outside force mode: the controller holds the last one (leaving force
+                mode, or quitting, keeps the push; press - down to 0 N first to release it).
 Subscribes:
     <controller_status_topic>  diagnostic_msgs/DiagnosticArray of rns_controller; the entry with
                 a ``state`` value is shown in the panel.
+    <force_status_topic>  diagnostic_msgs/DiagnosticArray of rns_force_controller; the entry with
+                a ``state`` value (and its ``force_error`` [N], when given) is shown in the panel
+                while in force mode or once one arrived.
 
 Why ``key_hold`` (0.7 s) may exceed the controller's ``command_timeout`` (0.5 s): the timeout is
 judged on the age of the newest message, and this node republishes the held command every
@@ -41,7 +53,7 @@ from collections.abc import Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -73,7 +85,8 @@ from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, start_node
 NODE_NAME = "rns_teleop_keyboard"
 SUMMARY = (
     "Keyboard teleop: held keys -> TwistStamped on cmd_twist (q/e roll, w/s pitch, a/d yaw, "
-    "i/k j/l u/o linear, +/- speed, f frame, space stop, Q or Ctrl-C quit). Needs a terminal."
+    "i/k j/l u/o linear, +/- speed, f frame, space stop, Q or Ctrl-C quit; m force mode: EE x/y "
+    "twist + force_setpoint, +/- push). Needs a terminal."
 )
 #: Exit code when the terminal went away (a zero twist was still sent).
 EXIT_TERMINAL_LOST = 1
@@ -97,7 +110,14 @@ PARAMETERS = (
         0.001,
         10.0,
     ),
-    ParameterSpec("linear_speed", 0.05, "Initial linear speed of a held key", "[m/s]", 0.001, 1.0),
+    ParameterSpec(
+        "linear_speed",
+        0.05,
+        "Initial linear speed of a held key (force mode: the EE speed along EE x / y)",
+        "[m/s]",
+        0.001,
+        1.0,
+    ),
     ParameterSpec(
         "max_linear_speed",
         0.5,
@@ -140,6 +160,25 @@ PARAMETERS = (
         "rns_controller/status",
         "DiagnosticArray status of the controller, shown in the panel",
     ),
+    ParameterSpec(
+        "ee_frame", "ee", "frame_id of force-mode twists and force setpoints (the EE frame)"
+    ),
+    ParameterSpec(
+        "force_step",
+        1.0,
+        "Force setpoint change per push key (+/-) in force mode",
+        "[N]",
+        0.01,
+        100.0,
+    ),
+    ParameterSpec(
+        "max_force", 20.0, "Upper bound of the force setpoint (lower bound 0)", "[N]", 0.1, 1000.0
+    ),
+    ParameterSpec(
+        "force_status_topic",
+        "/rns_force_controller/status",
+        "DiagnosticArray status of the force controller, shown in the panel (force mode)",
+    ),
 )
 
 
@@ -166,7 +205,10 @@ class TeleopKeyboardNode(Node):
             max_angular_speed=params["max_angular_speed"],
             max_linear_speed=params["max_linear_speed"],
             frame=params["initial_frame"],
+            force_step=params["force_step"],
+            max_force=params["max_force"],
         )
+        self.ee_frame = params["ee_frame"]
         self.period = 1.0 / params["rate"]
         self.frame_ids = {
             TwistFrame.WORLD: params["world_frame"],
@@ -176,39 +218,91 @@ class TeleopKeyboardNode(Node):
         # Commands: best effort, depth 1 - a late twist is worth nothing (as rns_operator).
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._publisher = self.create_publisher(TwistStamped, "cmd_twist", qos)
+        self._force_publisher = self.create_publisher(WrenchStamped, "force_setpoint", qos)
         # Best effort also matches the controller's reliable status publisher; only the newest
         # entry is shown.
         self.status_topic = self.resolve_topic_name(params["controller_status_topic"])
         self.create_subscription(DiagnosticArray, self.status_topic, self._on_status, qos)
         self.status: ControllerStatus | None = None
+        self.force_status_topic = self.resolve_topic_name(params["force_status_topic"])
+        self.create_subscription(
+            DiagnosticArray, self.force_status_topic, self._on_force_status, qos
+        )
+        self.force_status: ControllerStatus | None = None
 
     def _on_status(self, msg: DiagnosticArray) -> None:
-        for entry in msg.status:
-            values = {kv.key: kv.value for kv in entry.values}
-            if "state" in values:  # the controller's entry (as rns_rerun_logger reads it)
-                level = entry.level[0] if isinstance(entry.level, bytes) else int(entry.level)
-                # one assignment: the panel thread reads it without a lock
-                self.status = ControllerStatus(
-                    values["state"], level, entry.message, time.monotonic()
-                )
-                return
+        status = _controller_status(msg)
+        if status is not None:
+            self.status = status  # one assignment: the panel thread reads it without a lock
+
+    def _on_force_status(self, msg: DiagnosticArray) -> None:
+        status = _controller_status(msg, detail_key="force_error")
+        if status is not None:
+            self.force_status = status
+
+    def frame_id(self, command: TeleopCommand) -> str:
+        """header.frame_id of ``command``: the EE frame in force mode."""
+        return self.ee_frame if command.force_mode else self.frame_ids[command.frame]
 
     def publish(self, command: TeleopCommand) -> None:
         """Publish one command as TwistStamped stamped with the node clock."""
         msg = TwistStamped()
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id = self.frame_ids[command.frame]
+        msg.header.frame_id = self.frame_id(command)
         msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z = command.angular
         msg.twist.linear.x, msg.twist.linear.y, msg.twist.linear.z = command.linear
         self._publisher.publish(msg)
 
+    def publish_force(self, force: float) -> None:
+        """One force setpoint: WrenchStamped, EE frame, force (0, 0, ``force``) [N], torque 0."""
+        msg = WrenchStamped()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = self.ee_frame
+        msg.wrench.force.z = float(force)
+        self._force_publisher.publish(msg)
+
+    def publish_tick(self, now: float) -> None:
+        """What :class:`KeyboardTeleop` has to send at monotonic ``now`` [s]: the twist (or
+        nothing) and, in force mode, the force setpoint."""
+        command = self.teleop.tick(now)
+        if command is not None:
+            self.publish(command)
+        force = self.teleop.force_setpoint()
+        if force is not None:
+            self.publish_force(force)
+
     def publish_exit_zeros(self) -> None:
-        """A few zero twists, :data:`EXIT_ZERO_GAP` apart, before the node goes away."""
-        zero = TeleopCommand((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), self.teleop.frame)
+        """A few zero twists, :data:`EXIT_ZERO_GAP` apart, before the node goes away (in the EE
+        frame in force mode; the force setpoint is left as it is)."""
+        zero = TeleopCommand(
+            (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), self.teleop.frame, self.teleop.force_mode
+        )
         for i in range(EXIT_ZEROS):
             if i:
                 time.sleep(EXIT_ZERO_GAP)
             self.publish(zero)
+
+
+def _controller_status(
+    msg: DiagnosticArray, detail_key: str | None = None
+) -> ControllerStatus | None:
+    """The entry of ``msg`` with a ``state`` value (as rns_rerun_logger reads it), or None; a
+    ``detail_key`` value [N] (the force error) leads its message."""
+    for entry in msg.status:
+        values = {kv.key: kv.value for kv in entry.values}
+        if "state" not in values:
+            continue
+        level = entry.level[0] if isinstance(entry.level, bytes) else int(entry.level)
+        message = entry.message
+        if detail_key is not None and detail_key in values:
+            rest = message.removeprefix(f"{values['state']}:").strip()
+            try:
+                detail = f"{detail_key.replace('_', ' ')} {float(values[detail_key]):+.3f} N"
+            except ValueError:
+                detail = f"{detail_key.replace('_', ' ')} {values[detail_key]}"
+            message = f"{values['state']}: {detail}" + (f"  {rest}" if rest else "")
+        return ControllerStatus(values["state"], level, message, time.monotonic())
+    return None
 
 
 class RawTerminal:
@@ -308,26 +402,32 @@ def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal, signals: Sequence
             if teleop.quit_requested:
                 break  # keys typed after a quit key must not move anything
             if last_key.urgent:
-                # a start, change or stop goes out now, not up to one period later
-                command = teleop.tick(now)
-                if command is not None:
-                    node.publish(command)
+                # a start, change, stop or push goes out now, not up to one period later
+                node.publish_tick(now)
                 next_tick = now + node.period
         now = time.monotonic()
         if now >= next_tick:
-            command = teleop.tick(now)
-            if command is not None:
-                node.publish(command)
+            node.publish_tick(now)
             # late (a slow redraw): restart the grid instead of publishing a burst
             next_tick = max(next_tick + node.period, now)
+        command = teleop.command(now)
+        show_force = teleop.force_mode or teleop.force > 0.0
         terminal.draw(
             render_panel(
-                teleop.command(now),
+                command,
                 teleop.speeds,
                 status_line(node.status, now, node.status_topic),
-                frame_id=node.frame_ids[teleop.frame],
+                frame_id=node.frame_id(command),
                 sending=teleop.sending,
                 last_key=last_key,
+                force=teleop.force if show_force else None,
+                force_step=teleop.force_step,
+                max_force=teleop.max_force,
+                force_status=(
+                    status_line(node.force_status, now, node.force_status_topic, "force ctrl")
+                    if teleop.force_mode or node.force_status is not None
+                    else None
+                ),
             )
         )
 

@@ -1,6 +1,7 @@
 """rns_teleop_keyboard driven as a person would: the real executable in a tmux pane, keys typed
 with ``tmux send-keys`` (repeated sends stand in for auto-repeat), the panel read back with
-``tmux capture-pane``, and cmd_twist recorded over DDS (loopback only) by the harness probe."""
+``tmux capture-pane``, and cmd_twist (and, in force mode, force_setpoint) recorded over DDS
+(loopback only) by the harness probe."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from pathlib import Path
 import pytest
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.qos import QoSProfile
 
 from rns_ros.harness import ros_environment
@@ -272,6 +273,118 @@ def test_lost_terminal_publishes_zero_and_exits(ros, terminal_env, panes):
     assert zeros, "no zero twist after the terminal went away"
     assert zeros[0][0] - lost < 1.5 < key_hold
     assert _is_zero(twists.latest())
+
+
+FORCE_STATUS_TOPIC = "/rns_force_controller/status"  # the node's default
+
+
+@pytest.fixture
+def fake_force_controller(ros):
+    """Publishes a force controller status (OK, CONTACT, force_error) at 10 Hz."""
+    probe = ros.probe()
+    publisher = probe.create_publisher(DiagnosticArray, FORCE_STATUS_TOPIC, QoSProfile(depth=10))
+
+    def publish() -> None:
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.OK,
+            name="rns_force_controller: motion/force control",
+            message="CONTACT: pushing",
+            values=[
+                KeyValue(key="state", value="CONTACT"),
+                KeyValue(key="force_error", value="0.0123"),
+            ],
+        )
+        publisher.publish(DiagnosticArray(status=[status]))
+
+    probe.create_timer(0.1, publish)
+
+
+def _force(msg: WrenchStamped) -> tuple[float, float, float]:
+    return _vector(msg.wrench.force)
+
+
+@needs_tmux
+def test_force_mode_drives_the_ee_and_steps_the_force_setpoint(
+    ros, terminal_env, fake_force_controller, panes
+):
+    key_hold, zero_duration, force_step, pushes = 1.0, 0.3, 2.5, 3
+    twists = ros.record(TwistStamped, "cmd_twist")
+    setpoints = ros.record(WrenchStamped, "force_setpoint")
+    command = [*COMMAND, "-p", f"key_hold:={key_hold}", "-p", f"zero_duration:={zero_duration}",
+               "-p", f"force_step:={force_step}"]  # fmt: skip
+    pane = panes(terminal_env, command)
+    wait(ros, lambda: "mode      camera (m: force mode)" in pane.text(), START_TIMEOUT,
+         "the panel", pane)  # fmt: skip
+    wait(ros, matched(ros, "cmd_twist"), START_TIMEOUT, "cmd_twist to match", pane)
+    wait(ros, matched(ros, "force_setpoint"), START_TIMEOUT, "force_setpoint to match", pane)
+    ros.spin_for(0.3)
+    assert not setpoints.messages  # camera mode: no force setpoint
+
+    # --- into force mode: the setpoint (0 N) flows at rate in the EE frame ---------------------
+    entered = pane.keys("m")
+    wait(ros, lambda: len(setpoints) >= 5, 5.0, "force setpoints", pane)
+    screen = pane.text()
+    assert "mode      force (m: back to camera mode)" in screen
+    assert "frame     EE (frame_id 'ee')" in screen
+    assert "force ctrl  CONTACT [OK]  force error +0.012 N  pushing" in screen
+    assert {m.header.frame_id for m in setpoints.messages} == {"ee"}
+    assert all(_force(m) == (0.0, 0.0, 0.0) for m in setpoints.messages)
+    assert all(_vector(m.wrench.torque) == (0.0, 0.0, 0.0) for m in setpoints.messages)
+    # entering stops the camera: zeros in the camera frame (what was being commanded)
+    assert all(_is_zero(m) for _, m in received_after(twists, entered))
+    assert {m.header.frame_id for _, m in received_after(twists, entered)} <= {"camera"}
+
+    # --- N pushes raise the published setpoint by N * force_step -------------------------------
+    before = setpoints.latest().wrench.force.z
+    for _ in range(pushes):
+        pane.keys("+")
+        ros.spin_for(0.1)
+    target = before + pushes * force_step
+    wait(ros, lambda: setpoints.latest().wrench.force.z == target, 3.0, "the pushed setpoint", pane)
+    assert f"force     setpoint {target:.3f} N along EE z" in pane.text()
+    values = {m.wrench.force.z for m in setpoints.messages}
+    assert values <= {before + k * force_step for k in range(pushes + 1)}
+    receipts = setpoints.received[-10:]
+    assert max(b - a for a, b in itertools.pairwise(receipts)) < 0.3  # at rate (20 Hz)
+
+    # --- EE x held: linear x at linear_speed in the EE frame; released after key_hold ---------
+    mark = time.monotonic()
+    _, last = hold(ros, pane, "i", duration=0.4, first_gap=0.2)
+    assert "linear    x +0.050  y +0.000  z +0.000" in pane.text()
+    wait(ros, lambda: any(_is_zero(m) for _, m in received_after(twists, mark)), 3.0,
+         "the release zero", pane)  # fmt: skip
+    during = received_after(twists, mark)
+    first_zero = next(i for i, (_, m) in enumerate(during) if _is_zero(m))
+    moving, release = during[:first_zero], during[first_zero][0]
+    assert moving, "no twist while i was held"
+    for _, msg in moving:
+        assert _vector(msg.twist.linear) == (0.05, 0.0, 0.0)
+        assert _vector(msg.twist.angular) == (0.0, 0.0, 0.0)
+    assert key_hold - 0.15 < release - last < key_hold + 0.5
+    ros.spin_for(zero_duration + 0.4)
+    assert {m.header.frame_id for _, m in received_after(twists, mark)} == {"ee"}
+    after = received_after(twists, release - 1e-6)
+    assert all(_is_zero(m) for _, m in after)
+    assert after[-1][0] - release < zero_duration + 0.3  # then silence on cmd_twist ...
+    assert setpoints.received[-1] > after[-1][0] + 0.2  # ... while the setpoint keeps flowing
+
+    # --- softer once, then leave force mode: an EE-frame zero, the setpoint stays as it is ----
+    pane.keys("-")
+    wait(ros, lambda: setpoints.latest().wrench.force.z == target - force_step, 3.0, "softer")
+    hold(ros, pane, "j", duration=0.2, first_gap=0.1)
+    left = pane.keys("m")
+    wait(ros, lambda: "mode      camera (m: force mode)" in pane.text(), 3.0, "camera mode", pane)
+    wait(ros, lambda: any(_is_zero(m) for _, m in received_after(twists, left)), 3.0, "exit zero")
+    zero_at, zero = next((r, m) for r, m in received_after(twists, left) if _is_zero(m))
+    assert zero_at - left < 0.5  # at once, not after key_hold
+    assert zero.header.frame_id == "ee"
+    ros.spin_for(0.3)
+    count = len(setpoints)
+    ros.spin_for(0.4)
+    assert len(setpoints) == count  # no longer sent ...
+    assert setpoints.latest().wrench.force.z == target - force_step  # ... the last one stays
+    screen = pane.text()
+    assert f"force     setpoint {target - force_step:.3f} N, not sent" in screen
 
 
 def _process_gone(pid: int) -> bool:

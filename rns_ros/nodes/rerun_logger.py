@@ -28,6 +28,23 @@ of 100 Hz state while a busy logger catches up instead of dropping samples):
                               does not name at their newest measured angle): a translucent ghost
                               arm at the goal; the ``["deploy"]`` goal clears it
 
+Part II contact mode (docs/part2_ros.md): when ``model_config`` is a fixed-base arm (its YAML has
+``ee_frame``, e.g. config/lwr_7dof.yaml), the arm is drawn from ``joint_states`` with its base link
+at the world origin, and the free-floating topics above are replaced by (drawing and entity paths:
+:mod:`rns_ros.viz.contact`):
+    joint_states              sensor_msgs/JointState: joint transforms, joint velocities, the EE
+                              pose the force arrows are drawn at
+    environment               std_msgs/String JSON (transient local, depth 1): wall / arc as
+                              static translucent geometry under world/environment
+    contact                   std_msgs/Float64MultiArray (labels from its layout, else the
+                              contract's CONTACT_LABELS): contact point coloured by contact_state,
+                              normal force and gap series
+    wrist_wrench              geometry_msgs/WrenchStamped (EE axes): the measured force arrow
+    <force_errors_topic>      std_msgs/Float64MultiArray of rns_force_controller (ERROR_LABELS):
+                              commanded force arrow, force and position-error series
+contact and the errors carry no header: they are placed at the newest joint_states stamp (skipped
+before the first). The three 1 kHz streams are logged at most at ``contact_log_rate``.
+
 Sinks (``sink``): ``spawn`` a native viewer, ``connect`` to one, ``serve`` a local web viewer,
 ``save`` an .rrd, or ``auto`` (spawn with a display, else save). Everything binds 127.0.0.1.
 ``destroy_node()`` sends what is buffered and closes the recording: a saved file is complete.
@@ -42,15 +59,15 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
+from std_msgs.msg import Float64MultiArray, String
 
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import twist_frame_ids
-from rns_ros.core import FreeFloatingModel, load_model_config
 from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError
+from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.nodes.parameters import (
     MODEL_CONFIG,
     WORLD_FRAME,
@@ -61,6 +78,15 @@ from rns_ros.nodes.parameters import (
 from rns_ros.nodes.ptp import DEPLOY_GOAL
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
+from rns_ros.viz.contact import (
+    CONTACT_LABELS,
+    ERROR_LABELS,
+    ContactRecorder,
+    ContactSettings,
+    labelled_values,
+    load_arm_model,
+    parse_environment,
+)
 from rns_ros.viz.recorder import RecorderSettings, TelemetryRecorder
 from rns_ros.viz.sinks import SinkKind, SinkSettings
 
@@ -137,6 +163,28 @@ PARAMETERS = (
         0.0,
         10000.0,
     ),
+    ParameterSpec(
+        "force_errors_topic",
+        "/rns_force_controller/errors",
+        "Float64MultiArray task errors of the force controller (fixed-base arms only)",
+    ),
+    ParameterSpec(
+        "contact_log_rate",
+        50.0,
+        "Highest recorded rate of contact, wrist_wrench and the force errors, by their own clock "
+        "(fixed-base arms only); 0: every message",
+        "[Hz]",
+        0.0,
+        10000.0,
+    ),
+    ParameterSpec(
+        "force_arrow_scale",
+        0.01,
+        "Length of the measured and commanded force arrows per newton (fixed-base arms only)",
+        "[m/N]",
+        1e-6,
+        10.0,
+    ),
 )
 SPECS = specs_by_name(PARAMETERS)
 
@@ -147,13 +195,16 @@ class RerunLoggerNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         params = declare_parameters(self, PARAMETERS)
-        urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
-        self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
-        self._limits = (self.robot.lower_limits, self.robot.upper_limits)
+        self.robot, urdf_path = load_arm_model(params["model_config"] or default_model_config())
+        #: A Part II fixed-base arm (contact topics) instead of the free-floating robot.
+        self.fixed_base = isinstance(self.robot, FixedBaseModel)
+        self._world_frame = params["world_frame"]
         self._last_state_stamp: int | None = None  # [ns], of the newest joint_states
-        self._frames = twist_frame_ids(
-            self.robot, params["world_frame"], params["default_twist_frame"]
-        )
+        if not self.fixed_base:
+            self._limits = (self.robot.lower_limits, self.robot.upper_limits)
+            self._frames = twist_frame_ids(
+                self.robot, params["world_frame"], params["default_twist_frame"]
+            )
         sink = SinkSettings(
             kind=params["sink"],
             rrd_path=params["rrd_path"],
@@ -171,25 +222,23 @@ class RerunLoggerNode(Node):
         )
         # From here on the recording is open: close it if the rest of the set-up is interrupted
         # (Ctrl-C during start-up), or the file would lack its footer.
-        self.recorder = TelemetryRecorder(self.robot, urdf_path, sink, settings)
+        if self.fixed_base:
+            contact = ContactSettings(
+                contact_log_rate=params["contact_log_rate"],
+                force_arrow_scale=params["force_arrow_scale"],
+            )
+            self.recorder = ContactRecorder(self.robot, urdf_path, sink, settings, contact=contact)
+        else:
+            self.recorder = TelemetryRecorder(self.robot, urdf_path, sink, settings)
         try:
             # deep queue: a recorder should not drop samples while rerun work or a busy CPU
             # holds it up (depth 10 lost ~12 % of a 100 Hz stream on a loaded CI machine)
             qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
             self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
-            self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
-            self.create_subscription(WrenchStamped, "momentum", self._on_momentum, qos)
-            self.create_subscription(
-                DiagnosticArray, params["controller_status_topic"], self._on_status, qos
-            )
-            self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, qos)
-            self.create_subscription(
-                DiagnosticArray, params["ptp_status_topic"], self._on_ptp_status, qos
-            )
-            self.create_subscription(Float64MultiArray, "energy", self._on_energy, qos)
-            self.create_subscription(JointState, "wheel_states", self._on_wheel_states, qos)
-            # goals are rare and must not be missed by a late logger: reliable, like rns_ptp's
-            self.create_subscription(JointState, "ptp_goal", self._on_ptp_goal, 10)
+            if self.fixed_base:
+                self._subscribe_contact(qos, params["force_errors_topic"])
+            else:
+                self._subscribe_free_floating(qos, params)
             # A quiet system still shows its newest samples: send the buffer periodically, by
             # wall time (a sim-time timer would fire 100x as often at real_time_factor 100).
             self._timer = self.create_timer(
@@ -199,6 +248,30 @@ class RerunLoggerNode(Node):
         except BaseException:
             self.recorder.close()
             raise
+
+    def _subscribe_free_floating(self, qos: QoSProfile, params) -> None:
+        self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
+        self.create_subscription(WrenchStamped, "momentum", self._on_momentum, qos)
+        self.create_subscription(
+            DiagnosticArray, params["controller_status_topic"], self._on_status, qos
+        )
+        self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, qos)
+        self.create_subscription(
+            DiagnosticArray, params["ptp_status_topic"], self._on_ptp_status, qos
+        )
+        self.create_subscription(Float64MultiArray, "energy", self._on_energy, qos)
+        self.create_subscription(JointState, "wheel_states", self._on_wheel_states, qos)
+        # goals are rare and must not be missed by a late logger: reliable, like rns_ptp's
+        self.create_subscription(JointState, "ptp_goal", self._on_ptp_goal, 10)
+
+    def _subscribe_contact(self, qos: QoSProfile, errors_topic: str) -> None:
+        self._ee_frame = self.robot.model.frames[self.robot.ee_frame_id].name
+        # latched by the simulator: a late logger still gets the newest environment
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.create_subscription(String, "environment", self._on_environment, latched)
+        self.create_subscription(Float64MultiArray, "contact", self._on_contact, qos)
+        self.create_subscription(WrenchStamped, "wrist_wrench", self._on_wrist_wrench, qos)
+        self.create_subscription(Float64MultiArray, errors_topic, self._on_force_errors, qos)
 
     # --- inputs ---------------------------------------------------------------------------------
     def _stamp_ns(self, header) -> int:
@@ -301,6 +374,46 @@ class RerunLoggerNode(Node):
             self.recorder.commanded_twist(self._stamp_ns(msg.header), [a.x, a.y, a.z], frame)
         except InputError as exc:
             self._ignored("cmd_twist", exc)
+
+    # --- Part II contact inputs -------------------------------------------------------------------
+    def _on_environment(self, msg: String) -> None:
+        try:
+            environment = parse_environment(msg.data)
+            if environment.frame != self._world_frame:
+                raise InputError(
+                    f"frame {environment.frame!r} is not the world_frame {self._world_frame!r}"
+                )
+            self.recorder.environment(msg.data)
+            self.get_logger().info(f"environment: {environment.kind} {environment.constraint}")
+        except InputError as exc:
+            self._ignored("environment", exc)
+
+    def _on_contact(self, msg: Float64MultiArray) -> None:
+        self._labelled("contact", msg, CONTACT_LABELS, self.recorder.contact)
+
+    def _on_force_errors(self, msg: Float64MultiArray) -> None:
+        self._labelled("force errors", msg, ERROR_LABELS, self.recorder.force_errors)
+
+    def _labelled(self, topic: str, msg: Float64MultiArray, labels, record) -> None:
+        """Values by the labels of the message's own layout (else the contract's), placed at the
+        newest joint_states stamp; skipped before the first joint_states."""
+        try:
+            label = msg.layout.dim[0].label if msg.layout.dim else ""
+            values = labelled_values(label, msg.data, labels, topic)
+            if self._last_state_stamp is not None:
+                record(self._last_state_stamp, values)
+        except InputError as exc:
+            self._ignored(topic, exc)
+
+    def _on_wrist_wrench(self, msg: WrenchStamped) -> None:
+        frame = msg.header.frame_id
+        f, t = msg.wrench.force, msg.wrench.torque
+        try:
+            if frame not in ("", self._ee_frame):
+                raise InputError(f"frame_id {frame!r} is not the EE frame {self._ee_frame!r}")
+            self.recorder.wrist_wrench(self._stamp_ns(msg.header), [f.x, f.y, f.z], [t.x, t.y, t.z])
+        except InputError as exc:
+            self._ignored("wrist_wrench", exc)
 
     def _ignored(self, topic: str, reason) -> None:
         self.get_logger().warn(f"ignored {topic}: {reason}", throttle_duration_sec=2.0)

@@ -1,4 +1,7 @@
-"""The viewer layout: the 3D scene large on the left, the time series grouped on the right."""
+"""The viewer layouts: the 3D scene large on the left, the time series grouped on the right.
+
+:func:`default_blueprint` for the free-floating robot, :func:`contact_blueprint` for a Part II
+fixed-base arm in contact."""
 
 from __future__ import annotations
 
@@ -47,6 +50,46 @@ def default_blueprint() -> rrb.Blueprint:
             rrb.TextLogView(name="rns_ptp log", origin=paths.PTP_LOG),
             rrb.TimeSeriesView(name="System momentum", origin=paths.MOMENTUM),
             rrb.TimeSeriesView(name="det(M~ M~ᵀ) [(kg m²)⁶]", origin=paths.DET_COUPLING),
+        ),
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(scene, plots, column_shares=[3, 2]),
+        rrb.TimePanel(timeline=paths.TIMELINE),
+        collapse_panels=False,
+    )
+
+
+def contact_blueprint() -> rrb.Blueprint:
+    """Part II layout (fixed-base arm in contact, docs/part2_ros.md): 3D view of the arm, the
+    environment and the force arrows | force, position error and contact plots stacked, joint
+    velocities and the orientation error in tabs."""
+    scene = rrb.Spatial3DView(
+        name="Arm and environment",
+        origin="/",
+        contents=["+ /**", f"- /{paths.PLOTS}/**", f"- /{paths.CONTROLLER_LOG}"],
+    )
+    plots = rrb.Vertical(
+        rrb.TimeSeriesView(name="Normal force: desired, measured, error [N]", origin=paths.FORCE),
+        rrb.TimeSeriesView(
+            name="Position error p_des - p, world axes [m]",
+            origin=paths.POSITION_ERROR,
+            contents=["+ $origin/**", f"- /{paths.POSITION_ERROR_ORIENTATION}"],
+        ),
+        rrb.TimeSeriesView(
+            name="Contact: normal force λ [N]",
+            origin=paths.CONTACT_PLOTS,
+            contents=[f"+ /{paths.CONTACT_NORMAL_FORCE}"],
+        ),
+        rrb.Tabs(
+            rrb.TimeSeriesView(name="Joint velocities [rad/s]", origin=paths.JOINT_VELOCITY),
+            rrb.TimeSeriesView(
+                name="Gap φ [m] (> 0 penetration)",
+                origin=paths.CONTACT_PLOTS,
+                contents=[f"+ /{paths.CONTACT_GAP}"],
+            ),
+            rrb.TimeSeriesView(
+                name="Orientation error [rad]", origin=paths.POSITION_ERROR_ORIENTATION
+            ),
         ),
     )
     return rrb.Blueprint(

@@ -57,6 +57,37 @@ Time series (``Scalars``, one entity per series, one row per logged message):
 * ``plots/wheels/speed/{x,y,z}`` [rad/s] and ``plots/wheels/torque/{x,y,z}`` [N m]: reaction
   wheel rates relative to the base and applied motor torques (``wheel_states``).
 
+Part II contact tasks (fixed-base arms, :mod:`rns_ros.viz.contact`; docs/part2_ros.md):
+
+=====================================  ================  =====================================
+path                                   archetype         content (source topic)
+=====================================  ================  =====================================
+``world/robot/base_pose``              Transform3D       static identity: the arm's base link
+                                                         at the world origin
+``world/environment/wall``             Boxes3D           static: translucent 0.6 m x 0.6 m x
+                                                         2 mm plate centred at the wall point,
+                                                         its thin axis along the normal
+                                                         (``environment``)
+``world/environment/arc``              Cylinders3D       static: translucent cylinder of the
+                                                         arc radius, 0.4 m long along the axis,
+                                                         centred at the arc centre
+``world/environment/normal``           Arrows3D          static: the wall normal (into the
+                                                         wall), 0.1 m, at the wall point
+``world/contact/point``                Points3D          contact point [m] (``contact``),
+                                                         green pushing, grey no load, red
+                                                         pulling
+``world/contact/force_measured``       Arrows3D          R_ee f_wrist * force_arrow_scale at
+                                                         the EE point (``wrist_wrench``)
+``world/contact/force_desired``        Arrows3D          f_des n * force_arrow_scale at the EE
+                                                         point (force controller ``errors``)
+=====================================  ================  =====================================
+
+* ``plots/contact/{normal_force,gap}``: lambda [N] and phi [m] (> 0 penetration) (``contact``).
+* ``plots/force/{desired,measured,error,reference}`` [N]: f_des, f, f_des - f, f_ref of (6.34)
+  (force controller ``errors``).
+* ``plots/position_error/{x,y,z}`` [m]: p_des - p in world axes; ``plots/position_error/
+  orientation`` [rad]: |log(R_des R^T)| (force controller ``errors``).
+
 Text: ``log/controller`` (TextLog): one line whenever the controller state changes;
 ``log/ptp``: one line whenever the rns_ptp state or phase changes.
 """
@@ -131,6 +162,27 @@ PTP_PROGRESS = "plots/ptp/progress"
 PTP_GOAL = "world/ptp/goal"
 PTP_GOAL_JOINTS = "world/ptp/goal/joints"
 
+# --- Part II: contact tasks ----------------------------------------------------------------------
+ENVIRONMENT = "world/environment"
+ENVIRONMENT_WALL = "world/environment/wall"
+ENVIRONMENT_ARC = "world/environment/arc"
+ENVIRONMENT_NORMAL = "world/environment/normal"
+CONTACT = "world/contact"
+CONTACT_POINT = "world/contact/point"
+FORCE_MEASURED_ARROW = "world/contact/force_measured"
+FORCE_DESIRED_ARROW = "world/contact/force_desired"
+
+CONTACT_PLOTS = "plots/contact"
+CONTACT_NORMAL_FORCE = "plots/contact/normal_force"
+CONTACT_GAP = "plots/contact/gap"
+FORCE = "plots/force"
+FORCE_DESIRED = "plots/force/desired"
+FORCE_MEASURED = "plots/force/measured"
+FORCE_ERROR = "plots/force/error"
+FORCE_REFERENCE = "plots/force/reference"
+POSITION_ERROR = "plots/position_error"
+POSITION_ERROR_ORIENTATION = "plots/position_error/orientation"
+
 CONTROLLER_LOG = "log/controller"
 PTP_LOG = "log/ptp"
 
@@ -156,6 +208,7 @@ def energy_cost(name: str) -> str:
 
 
 COUPLING_MOMENTUM_AXES = axis_paths(COUPLING_MOMENTUM)
+POSITION_ERROR_AXES = axis_paths(POSITION_ERROR)
 WHEEL_SPEED_AXES = axis_paths(WHEEL_SPEED)
 WHEEL_TORQUE_AXES = axis_paths(WHEEL_TORQUE)
 COMMANDED_ANGULAR_VELOCITY_AXES = axis_paths(COMMANDED_ANGULAR_VELOCITY)
@@ -269,6 +322,27 @@ def series_table(joint_names: tuple[str, ...] | list[str]) -> dict[str, Series]:
         table[ACHIEVED_ANGULAR_VELOCITY_AXES[index]] = Series(
             f"achieved {axis} [rad/s]", _RGB[index]
         )
+    for index, joint in enumerate(joint_names):
+        table[joint_velocity(joint)] = Series(
+            f"{joint} [rad/s]", _JOINT_RGB[index % len(_JOINT_RGB)]
+        )
+    return table
+
+
+def contact_series_table(joint_names: tuple[str, ...] | list[str]) -> dict[str, Series]:
+    """Legend label and colour of every time series of a fixed-base arm in contact (Part II):
+    joint velocities, contact, force and position-error series."""
+    table = {
+        CONTACT_NORMAL_FORCE: Series("normal force λ [N]", _RGB[2]),
+        CONTACT_GAP: Series("gap φ [m] (> 0 penetration)", _RGB[0]),
+        FORCE_DESIRED: Series("desired f_des [N]", _PALE_RGB[2]),
+        FORCE_MEASURED: Series("measured f [N]", _RGB[2]),
+        FORCE_ERROR: Series("error f_des - f [N]", _RGB[0]),
+        FORCE_REFERENCE: Series("reference f_ref (6.34) [N]", _GREY),
+        POSITION_ERROR_ORIENTATION: Series("orientation |log(R_des Rᵀ)| [rad]", _GREY),
+    }
+    for index, axis in enumerate(AXES):
+        table[POSITION_ERROR_AXES[index]] = Series(f"{axis} [m]", _RGB[index])
     for index, joint in enumerate(joint_names):
         table[joint_velocity(joint)] = Series(
             f"{joint} [rad/s]", _JOINT_RGB[index % len(_JOINT_RGB)]

@@ -19,6 +19,7 @@ from rns_ros.core.errors import InputError
 from rns_ros.viz import paths
 
 _SCALARS = "Scalars:scalars"
+_ROW_ID = "rerun.controls.RowId"
 
 
 def _entity(path: str) -> str:
@@ -98,3 +99,22 @@ def read_components(path: str | Path, entity: str) -> list[dict[str, list]]:
             for i in range(batch.num_rows)
         )
     return rows
+
+
+def read_static(path: str | Path, entity: str) -> dict[str, list]:
+    """The static data of ``entity`` the viewer shows: {component: value} of the newest static
+    row (by rerun's row id: a file holds chunks in flush order, not log order, and a later
+    static write replaces an earlier one). Empty when the entity has no static row."""
+    newest, row = b"", {}
+    for chunk in _reader(path).stream():
+        if _entity(chunk.entity_path) != _entity(entity) or not chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        columns = [name for name in batch.schema.names if ":" in name]
+        ids = batch.column(_ROW_ID).to_pylist()
+        for i, row_id in enumerate(ids):
+            if row_id >= newest:
+                newest = row_id
+                row = {n: batch.column(n)[i].as_py() for n in columns}
+                row = {n: v for n, v in row.items() if v is not None}
+    return row

@@ -150,17 +150,17 @@ class TelemetryRecorder:
         self._closed = False
         # A private stream with a fresh id: several recorders can live in one process.
         self.rec = rr.RecordingStream(self.settings.application_id, recording_id=uuid.uuid4())
-        self.sink: OpenSink = open_sink(self.rec, sink, default_blueprint(), env)
+        self.sink: OpenSink = open_sink(self.rec, sink, self._blueprint(), env)
         if self.settings.recording_name:
             self.rec.send_recording_name(self.settings.recording_name)
         self.view.log_static(self.rec)
-        for path, series in paths.series_table(robot.joint_names).items():
+        for path, series in self._series_table().items():
             self.rec.log(
                 path, rr.SeriesLines(names=series.label, colors=[series.color]), static=True
             )
 
         self._time_kind: str | None = None
-        self._limiters = {name: RateLimiter(self.settings.max_rate) for name in _STREAMS}
+        self._limiters = {name: RateLimiter(self.settings.max_rate) for name in self.STREAMS}
         self._scalars: defaultdict[str, _Rows] = defaultdict(_Rows)
         self._joints = _Rows()  # (theta, camera origin, camera +z axis)
         self._base = _Rows()  # (position, quaternion xyzw)
@@ -175,7 +175,18 @@ class TelemetryRecorder:
         self._controller_state: str | None = None
         self._ptp_step: tuple[str | None, str | None] = (None, None)  # (state, phase)
         #: Messages recorded per input stream (the others were above ``max_rate``).
-        self.counts = dict.fromkeys(_STREAMS, 0)
+        self.counts = dict.fromkeys(self.STREAMS, 0)
+
+    #: Input streams, each with its rate limiter and message count.
+    STREAMS: tuple[str, ...] = _STREAMS
+
+    def _blueprint(self):
+        """The default viewer layout sent with the recording (subclasses: their own)."""
+        return default_blueprint()
+
+    def _series_table(self) -> dict[str, paths.Series]:
+        """Legend label and colour of every time series (logged as static styles)."""
+        return paths.series_table(self.robot.joint_names)
 
     @property
     def closed(self) -> bool:

@@ -29,6 +29,7 @@ import rerun as rr
 import rerun.urdf as rru
 
 from rns_ros.core.errors import ModelError
+from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.viz import paths
 
@@ -41,7 +42,10 @@ _MOVING_JOINTS = ("revolute", "continuous", "prismatic")
 
 
 class RobotView:
-    """Logs one free-floating robot: static URDF model, then base pose and joint transforms.
+    """Logs one robot: static URDF model, then base pose and joint transforms.
+
+    A free-floating robot also gets its camera frame axes, pointing arrow and trail; a fixed-base
+    arm (Part II, no camera frame: :attr:`camera_link` is None) only the URDF model.
 
     Args:
         robot: the Pinocchio model (joint order = theta order).
@@ -52,7 +56,7 @@ class RobotView:
             joints.
     """
 
-    def __init__(self, robot: FreeFloatingModel, urdf_path: str | Path) -> None:
+    def __init__(self, robot: FreeFloatingModel | FixedBaseModel, urdf_path: str | Path) -> None:
         self.robot = robot
         self.urdf_path = Path(urdf_path)
         try:
@@ -69,7 +73,9 @@ class RobotView:
         #: (URDF joint, entity path) in theta order.
         self.joints = [(moving[name], paths.joint_transform(name)) for name in robot.joint_names]
         self.base_link = self.tree.root_link().name
-        self.camera_link = robot.model.frames[robot.camera_frame_id].name
+        camera = getattr(robot, "camera_frame_id", None)
+        #: Link of the camera frame; None for a fixed-base arm.
+        self.camera_link = None if camera is None else robot.model.frames[camera].name
 
     @property
     def model_path(self) -> str:
@@ -89,9 +95,12 @@ class RobotView:
         return result
 
     def log_static(self, rec: rr.RecordingStream) -> None:
-        """World axes, the URDF model (geometry + fixed joint origins) and the camera frame axes."""
+        """World axes, the URDF model (geometry + fixed joint origins) and the camera frame axes
+        (free-floating robots only)."""
         rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         rec.log_file_from_path(self.urdf_path, entity_path_prefix=paths.ROBOT, static=True)
+        if self.camera_link is None:
+            return
         rec.log(
             paths.CAMERA_FRAME,
             rr.CoordinateFrame(self.camera_link),
@@ -107,6 +116,19 @@ class RobotView:
         rec.log(
             paths.CAMERA_TRAIL,
             rr.LineStrips3D.from_fields(colors=[CAMERA_COLOR], radii=[0.004]),
+            static=True,
+        )
+
+    def log_fixed_base(self, rec: rr.RecordingStream) -> None:
+        """A fixed-base arm: its base link at the world origin, static (world -> base link)."""
+        rec.log(
+            paths.BASE_POSE,
+            rr.Transform3D(
+                translation=[0.0, 0.0, 0.0],
+                quaternion=rr.Quaternion(xyzw=[0.0, 0.0, 0.0, 1.0]),
+                parent_frame=paths.WORLD_FRAME_ID,
+                child_frame=self.base_link,
+            ),
             static=True,
         )
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import signal
 import subprocess
@@ -11,21 +13,25 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 import yaml
-from geometry_msgs.msg import Twist, TwistStamped
+from geometry_msgs.msg import Twist, TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rerun.chunk import RrdReader
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
 
 from rns_ros.core import ConfigError
+from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.rerun_logger import PARAMETERS, RerunLoggerNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.viz import paths
-from rns_ros.viz.readback import read_components, read_scalars, recording_summary
+from rns_ros.viz.contact import CONTACT_LABELS, ERROR_LABELS, ContactRecorder
+from rns_ros.viz.readback import read_components, read_scalars, read_static, recording_summary
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -47,7 +53,8 @@ def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
     measured angles), and the recording holds the JS-C phase and the progress up to 1."""
     rrd = tmp_path / "ptp.rrd"
     _node(ros, SimulatorNode)
-    ptp = _node(ros, PtpNode, method="joint_space", duration=1.0)
+    # a generous state watchdog: this test is not about it (one process, one GIL, 2 cores)
+    ptp = _node(ros, PtpNode, method="joint_space", duration=1.0, state_timeout=0.5)
     logger = _node(ros, RerunLoggerNode, sink="save", rrd_path=str(rrd))
     goals = ros.probe().create_publisher(JointState, "ptp_goal", 10)
     assert ros.spin_until(lambda: logger.recorder.state is not None, timeout=10.0)
@@ -228,3 +235,151 @@ def test_ctrl_c_leaves_a_complete_file(ros, tmp_path):
     times, _ = read_scalars(rrd, paths.ACHIEVED_ANGULAR_VELOCITY_AXES[0])
     assert times[0] > 1.6e9  # wall-clock stamps: an absolute timestamp timeline
     assert time.time() - times[-1] < 60.0
+
+
+# --- Part II: a fixed-base arm in contact ---------------------------------------------------------
+LWR = REPO / "config" / "lwr_7dof.yaml"
+
+
+def _labelled(labels, values) -> Float64MultiArray:
+    """A Float64MultiArray laid out like the contact simulator's / force controller's."""
+    msg = Float64MultiArray(data=[float(v) for v in values])
+    msg.layout.dim = [MultiArrayDimension(label=" ".join(labels), size=len(values), stride=1)]
+    return msg
+
+
+def _stamp(msg, seconds: float):
+    msg.header.stamp.sec = int(seconds)
+    msg.header.stamp.nanosec = round((seconds - int(seconds)) * 1e9)
+    return msg
+
+
+def _contact_row(k: int, start: float) -> list[float]:
+    """contact sample k of a 1 kHz stream: pushing 10 + k N at a point moving along y."""
+    point = [0.5, 0.2 + 1e-3 * k, 0.4]
+    return [start + 1e-3 * k, 1.0, 10.0 + k, 1e-7 * k, 0.0, *point, 0.0, 0.0, -1.0, 0.0]
+
+
+def test_fixed_base_arm_wall_contact_and_forces(ros, tmp_path):
+    """rns_rerun_logger with the LWR model: a latched wall, joint states, contact, the wrist
+    wrench and the force controller's errors, as the contract lays them out; read back."""
+    rrd = tmp_path / "contact.rrd"
+    scale = 0.02
+    logger = _node(
+        ros,
+        RerunLoggerNode,
+        model_config=str(LWR),
+        sink="save",
+        rrd_path=str(rrd),
+        contact_log_rate=50.0,
+        force_arrow_scale=scale,
+    )
+    assert logger.fixed_base
+    assert isinstance(logger.recorder, ContactRecorder)
+    probe = ros.probe()
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    environment = probe.create_publisher(String, "environment", latched)
+    states = probe.create_publisher(JointState, "joint_states", 10)
+    contact = probe.create_publisher(Float64MultiArray, "contact", 100)
+    wrench = probe.create_publisher(WrenchStamped, "wrist_wrench", 10)
+    errors = probe.create_publisher(Float64MultiArray, "/rns_force_controller/errors", 10)
+    recorder = logger.recorder
+
+    wall = {"type": "wall", "frame": "world", "point": [0.5, 0.2, 0.4], "normal": [0, 0, -2]}
+    environment.publish(String(data=json.dumps(wall)))
+    assert ros.spin_until(lambda: recorder.counts["environment"] == 1, timeout=10.0)
+
+    theta = np.radians([20.0, -20.0, 0.0, 100.0, 0.0, 10.0, 0.0])
+    start = 2.0  # [s], a sim-time stamp
+    names = [f"joint_{i}" for i in range(1, 8)]
+    states.publish(_stamp(JointState(name=names, position=theta.tolist()), start))
+    assert ros.spin_until(lambda: recorder.counts["joints"] == 1, timeout=10.0)
+
+    force_ee = np.array([0.5, -1.0, 12.0])
+    msg = WrenchStamped()
+    msg.header.frame_id = "ee"
+    msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = force_ee.tolist()
+    wrench.publish(_stamp(msg, start))
+    error = dict.fromkeys(ERROR_LABELS, 0.0)
+    error |= {"time": start, "position_error_x": 1e-4, "position_error_y": -2e-4}
+    error |= {"position_error_z": 3e-5, "orientation_error": 1e-3, "force_desired": 12.0}
+    error |= {"force_measured": 11.5, "force_error": 0.5, "force_reference": 12.2}
+    error |= {"normal_z": -1.0, "force_active": 1.0}
+    errors.publish(_labelled(ERROR_LABELS, error.values()))
+    assert ros.spin_until(
+        lambda: recorder.counts["wrench"] == 1 and recorder.counts["errors"] == 1, timeout=10.0
+    )
+
+    # malformed contact samples first (skipped, no traceback), then 41 at 1 kHz: at 50 Hz the
+    # logger keeps the ones 20 ms apart
+    contact.publish(_labelled(CONTACT_LABELS, _contact_row(0, start)[:-1]))  # 11 values
+    contact.publish(_labelled(CONTACT_LABELS, [math.nan, *_contact_row(0, start)[1:]]))
+    for k in range(41):
+        contact.publish(_labelled(CONTACT_LABELS, _contact_row(k, start)))
+    assert ros.spin_until(lambda: recorder.counts["contact"] == 3, timeout=10.0)
+    ros.spin_for(0.5)
+    counts = dict(recorder.counts)
+    _close(ros, logger)
+    assert counts == {"joints": 1, "environment": 1, "contact": 3, "wrench": 1, "errors": 1}
+
+    # the wall: a plate centred at its point, its thin axis along the (normalized) normal
+    box = read_static(rrd, paths.ENVIRONMENT_WALL)
+    np.testing.assert_allclose(box["Boxes3D:centers"][0], wall["point"], atol=1e-6)
+    x, y, z, w = box["Boxes3D:quaternions"][0]
+    np.testing.assert_allclose(
+        pin.Quaternion(w, x, y, z).toRotationMatrix()[:, 2], [0, 0, -1], atol=1e-6
+    )
+    # the measured force: R_ee f_wrist * scale at the EE point of the core forward kinematics
+    core = FixedBaseState.compute(load_fixed_base_model(LWR), theta, np.zeros(7))
+    (measured,) = [
+        row
+        for row in read_components(rrd, paths.FORCE_MEASURED_ARROW)
+        if row.get("Arrows3D:vectors")
+    ]
+    np.testing.assert_allclose(measured["Arrows3D:origins"][0], core.ee_position, atol=1e-6)
+    np.testing.assert_allclose(
+        measured["Arrows3D:vectors"][0], core.ee_rotation @ force_ee * scale, atol=1e-6
+    )
+    (desired,) = [
+        row
+        for row in read_components(rrd, paths.FORCE_DESIRED_ARROW)
+        if row.get("Arrows3D:vectors")
+    ]
+    np.testing.assert_allclose(desired["Arrows3D:origins"][0], core.ee_position, atol=1e-6)
+    np.testing.assert_allclose(desired["Arrows3D:vectors"][0], [0, 0, -12.0 * scale], atol=1e-6)
+    # contact: the samples 0, 20 and 40 ms, at the joint state's stamp
+    times, force = read_scalars(rrd, paths.CONTACT_NORMAL_FORCE)
+    np.testing.assert_allclose(times, [start] * 3)
+    np.testing.assert_allclose(force, [10.0, 30.0, 50.0])
+    np.testing.assert_allclose(read_scalars(rrd, paths.CONTACT_GAP)[1], [0.0, 2e-6, 4e-6])
+    points = [
+        row["Points3D:positions"][0]
+        for row in read_components(rrd, paths.CONTACT_POINT)
+        if row.get("Points3D:positions")
+    ]
+    np.testing.assert_allclose(points, [_contact_row(k, start)[5:8] for k in (0, 20, 40)], 1e-6)
+    # the errors' series are the sample's values
+    for label, path in (
+        ("force_desired", paths.FORCE_DESIRED),
+        ("force_measured", paths.FORCE_MEASURED),
+        ("force_error", paths.FORCE_ERROR),
+        ("force_reference", paths.FORCE_REFERENCE),
+        ("position_error_x", paths.POSITION_ERROR_AXES[0]),
+        ("position_error_y", paths.POSITION_ERROR_AXES[1]),
+        ("position_error_z", paths.POSITION_ERROR_AXES[2]),
+        ("orientation_error", paths.POSITION_ERROR_ORIENTATION),
+    ):
+        np.testing.assert_allclose(read_scalars(rrd, path)[1], [error[label]], err_msg=label)
+    # the arm: one pose per joint state, the base static at the origin
+    summary = recording_summary(rrd)
+    assert summary[paths.joint_transform("joint_7")] == 1
+    assert summary[paths.BASE_POSE] == 0
+    assert paths.BASE_ATTITUDE_TOTAL not in summary  # no free-floating series
+
+
+def test_config_yaml_fixed_base_parameters_have_their_documented_defaults():
+    values = yaml.safe_load((REPO / "config" / "rerun_logger.yaml").read_text())
+    values = values["/**"]["ros__parameters"]
+    assert values["force_errors_topic"] == "/rns_force_controller/errors"
+    assert values["contact_log_rate"] == 50.0
+    assert values["force_arrow_scale"] == 0.01

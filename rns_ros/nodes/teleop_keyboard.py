@@ -22,7 +22,7 @@ Subscribes:
     <controller_status_topic>  diagnostic_msgs/DiagnosticArray of rns_controller; the entry with
                 a ``state`` value is shown in the panel.
     <force_status_topic>  diagnostic_msgs/DiagnosticArray of rns_force_controller; the entry with
-                a ``state`` value (and its ``force_error`` [N], when given) is shown in the panel
+                a ``state`` value (and its ``force_error_N`` [N], when given) is shown in the panel
                 while in force mode or once one arrived.
 
 Why ``key_hold`` (0.7 s) may exceed the controller's ``command_timeout`` (0.5 s): the timeout is
@@ -236,7 +236,7 @@ class TeleopKeyboardNode(Node):
             self.status = status  # one assignment: the panel thread reads it without a lock
 
     def _on_force_status(self, msg: DiagnosticArray) -> None:
-        status = _controller_status(msg, detail_key="force_error")
+        status = _controller_status(msg, FORCE_ERROR_KEYS)
         if status is not None:
             self.force_status = status
 
@@ -283,23 +283,28 @@ class TeleopKeyboardNode(Node):
             self.publish(zero)
 
 
+#: Status keys holding the force error [N] (rns_force_controller's first), shown in the panel.
+FORCE_ERROR_KEYS = ("force_error_N", "force_error")
+
+
 def _controller_status(
-    msg: DiagnosticArray, detail_key: str | None = None
+    msg: DiagnosticArray, detail_keys: Sequence[str] = ()
 ) -> ControllerStatus | None:
-    """The entry of ``msg`` with a ``state`` value (as rns_rerun_logger reads it), or None; a
-    ``detail_key`` value [N] (the force error) leads its message."""
+    """The entry of ``msg`` with a ``state`` value (as rns_rerun_logger reads it), or None; the
+    first of ``detail_keys`` present (a force error [N]) leads its message."""
     for entry in msg.status:
         values = {kv.key: kv.value for kv in entry.values}
         if "state" not in values:
             continue
         level = entry.level[0] if isinstance(entry.level, bytes) else int(entry.level)
         message = entry.message
-        if detail_key is not None and detail_key in values:
+        key = next((key for key in detail_keys if key in values), None)
+        if key is not None:
             rest = message.removeprefix(f"{values['state']}:").strip()
             try:
-                detail = f"{detail_key.replace('_', ' ')} {float(values[detail_key]):+.3f} N"
+                detail = f"force error {float(values[key]):+.3f} N"
             except ValueError:
-                detail = f"{detail_key.replace('_', ' ')} {values[detail_key]}"
+                detail = f"force error {values[key]}"
             message = f"{values['state']}: {detail}" + (f"  {rest}" if rest else "")
         return ControllerStatus(values["state"], level, message, time.monotonic())
     return None

@@ -280,7 +280,8 @@ FORCE_STATUS_TOPIC = "/rns_force_controller/status"  # the node's default
 
 @pytest.fixture
 def fake_force_controller(ros):
-    """Publishes a force controller status (OK, CONTACT, force_error) at 10 Hz."""
+    """Publishes a force controller status (OK, CONTACT, force_error_N) at 10 Hz, keys as
+    rns_force_controller's."""
     probe = ros.probe()
     publisher = probe.create_publisher(DiagnosticArray, FORCE_STATUS_TOPIC, QoSProfile(depth=10))
 
@@ -291,7 +292,7 @@ def fake_force_controller(ros):
             message="CONTACT: pushing",
             values=[
                 KeyValue(key="state", value="CONTACT"),
-                KeyValue(key="force_error", value="0.0123"),
+                KeyValue(key="force_error_N", value="0.0123"),
             ],
         )
         publisher.publish(DiagnosticArray(status=[status]))

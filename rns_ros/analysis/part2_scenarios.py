@@ -198,6 +198,16 @@ def load_motion_force_scenario(path: str | Path) -> MotionForceScenario:
     )
 
 
+def load_contact_scenario(path: str | Path) -> ArcScenario | WallScenario:
+    """The task of a ``kind: motion_force`` file as its analysis dataclass (``.setup()``,
+    ``.duration``, :func:`~rns_ros.analysis.part2_runs.run_closed_loop` take it as it is).
+
+    Raises:
+        ConfigError: as :func:`load_motion_force_scenario`.
+    """
+    return load_motion_force_scenario(path).spec
+
+
 def load_operator_scenario(path: str | Path) -> Scenario | MotionForceScenario:
     """A scenario file of either kind: Part I :class:`~rns_ros.control.scenario.Scenario`
     (no ``kind`` key) or :class:`MotionForceScenario` (``kind: motion_force``).
@@ -245,6 +255,7 @@ __all__ = [
     "OperatorSample",
     "ScenarioKind",
     "Task",
+    "load_contact_scenario",
     "load_motion_force_scenario",
     "load_operator_scenario",
     "operator_sample",

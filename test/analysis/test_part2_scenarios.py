@@ -12,6 +12,7 @@ from rns_ros.analysis.part2_scenarios import (
     MotionForceScenario,
     ScenarioKind,
     Task,
+    load_contact_scenario,
     load_motion_force_scenario,
     load_operator_scenario,
     operator_sample,
@@ -51,6 +52,11 @@ def test_shipped_arc_is_the_fig6_3_task():
     assert scenario.duration == pytest.approx(3.2)
     assert scenario.setup.description == ArcScenario().setup().description
     np.testing.assert_array_equal(scenario.setup.initial_q, ArcScenario().setup().initial_q)
+
+
+def test_contact_scenario_is_the_dataclass():
+    assert load_contact_scenario(SCENARIOS / "wall_contact.yaml") == WallScenario()
+    assert load_contact_scenario(SCENARIOS / "planar_arc.yaml") == ArcScenario()
 
 
 def test_kind_dispatch_keeps_part1_files_part1():

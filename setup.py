@@ -12,6 +12,7 @@ CONSOLE_SCRIPTS = [
     "rns_demo = rns_ros.demo:main",
     "rns_simulator = rns_ros.nodes.simulator:main",
     "rns_controller = rns_ros.nodes.controller:main",
+    "rns_force_controller = rns_ros.nodes.force_controller:main",
     "rns_ptp = rns_ros.nodes.ptp:main",
     "rns_attitude_control = rns_ros.nodes.attitude_control:main",
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",

@@ -28,6 +28,7 @@ EXECUTABLES = frozenset(
         "rns_demo",
         "rns_simulator",
         "rns_controller",
+        "rns_force_controller",
         "rns_ptp",
         "rns_attitude_control",
         "rns_rerun_logger",

@@ -1,0 +1,579 @@
+"""rns_force_controller: operator twist + force setpoint in, joint torques out (thesis chapter 6).
+
+RNS-C or OS-C on a fixed-base arm whose end effector (EE) touches a rigid surface: motion along
+the surface from the operator twist, force along its normal from the force setpoint. The law is
+:class:`rns_ros.control.force_teleop.ForceTeleopController`; this node converts messages and
+runs one step per received ``joint_states`` (event-driven). Contract: docs/part2_ros.md.
+
+Subscribes:
+    joint_states    sensor_msgs/JointState (by name; position, velocity, effort = the torque held
+                    over the step that ended there); reliable, depth 10; triggers the step
+    wrist_wrench    geometry_msgs/WrenchStamped, EE axes (frame_id the EE frame, "" or "ee";
+                    world_frame also accepted), the wrench the EE exerts on the environment;
+                    reliable, depth 10; matched to the state of the same stamp
+    cmd_twist       geometry_msgs/TwistStamped (world or EE axes); best effort, depth 1
+    force_setpoint  geometry_msgs/WrenchStamped (world or EE axes, "" = EE); best effort, depth 1
+Publishes:
+    joint_efforts   std_msgs/Float64MultiArray, torques [N m] in the ``joints`` order, one per
+                    state; one zero torque when the state goes stale and at shutdown
+    ~/errors        std_msgs/Float64MultiArray, layout label " ".join(ERROR_LABELS), one per step
+    ~/status        diagnostic_msgs/DiagnosticArray at ``status_rate``
+    /diagnostics    the newest status at 1 Hz
+Service:
+    ~/reset         std_srvs/Trigger: clears a latched safety stop, re-latches the reference at
+                    the current pose (the force task waits for a new force setpoint)
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+from std_srvs.srv import Trigger
+
+from rns_ros.control.force_teleop import (
+    ERROR_LABELS,
+    CommandFrame,
+    ForceControlSettings,
+    ForceControlState,
+    ForceStep,
+    ForceTeleopController,
+    JointMeasurement,
+    WrenchSample,
+    command_frames,
+    validate_force_setpoint,
+    validate_twist,
+)
+from rns_ros.core.commands import joint_order
+from rns_ros.core.errors import InputError, RnsError
+from rns_ros.core.fixed_base import load_fixed_base_model
+from rns_ros.nodes.parameters import (
+    WORLD_FRAME,
+    ParameterSpec,
+    declare_parameters,
+    velocity_joint_order,
+)
+from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.status import status_text
+from rns_ros.resources import config_dir
+
+NODE_NAME = "rns_force_controller"
+SUMMARY = (
+    "Motion/force control of a fixed-base arm in contact (thesis ch. 6, RNS-C or OS-C): "
+    "twist + force setpoint in, joint torques out, one step per joint state."
+)
+#: Default model file (config/): the 7-DoF LWR4-class arm of section 6.2.2.
+DEFAULT_MODEL = "lwr_7dof.yaml"
+#: Period of the stale-state check (wall clock) [s] and of /diagnostics [s].
+WATCHDOG_PERIOD, DIAGNOSTICS_PERIOD = 0.05, 1.0
+#: Window of the step-time statistics [s].
+STEP_TIME_WINDOW = 1.0
+_ERROR = {
+    ForceControlState.INVALID_COMMAND,
+    ForceControlState.WRENCH_LIMIT,
+    ForceControlState.CONTACT_LOST,
+    ForceControlState.NO_CONTACT,
+    ForceControlState.STALE_STATE,
+    ForceControlState.NON_FINITE,
+    ForceControlState.CONTROL_ERROR,
+}
+_OK = {ForceControlState.OK, ForceControlState.HOLDING}
+
+
+def state_level(state: ForceControlState) -> bytes:
+    """DiagnosticStatus level of a :class:`ForceControlState`."""
+    if state in _ERROR:
+        return DiagnosticStatus.ERROR
+    return DiagnosticStatus.OK if state in _OK else DiagnosticStatus.WARN
+
+
+def _timeout(name: str, default: float, what: str) -> ParameterSpec:
+    return ParameterSpec(name, default, what, "[s]", 1e-3, 60.0)
+
+
+PARAMETERS = (
+    ParameterSpec(
+        "model_config",
+        "",
+        "Fixed-base model YAML: a path, or a file name in config/; empty: lwr_7dof.yaml",
+    ),
+    ParameterSpec(
+        "method", "rns", "rns: RNS-C closed form (6.17); os: OS-C (6.13)", choices=("rns", "os")
+    ),
+    ParameterSpec(
+        "os_variant",
+        "literal",
+        "OS-C variant [A-4.2]: literal (6.13) with tau_a = 0, or kinematic",
+        choices=("literal", "kinematic"),
+    ),
+    ParameterSpec("k_p", 100.0, "Motion-loop position gain of (6.33)", "[1/s^2]", 0.0, 1e5),
+    ParameterSpec("k_d", 10.0, "Motion-loop velocity gain of (6.33)", "[1/s]", 0.0, 1e4),
+    ParameterSpec(
+        "k_f",
+        5.0,
+        "Force-loop gain of (6.34) (thesis 5; sampled force measurement needs < 1)",
+        "[-]",
+        0.0,
+        100.0,
+    ),
+    ParameterSpec(
+        "virtual_mass", 1.0e5, "RNS-C virtual link mass m_hat [A-4.9]", "[kg]", 1e-3, 1e12
+    ),
+    ParameterSpec(
+        "virtual_inertia",
+        0.0,
+        "RNS-C virtual link inertia I_hat (times E); 0: m_hat/12 [A-4.9]",
+        "[kg m^2]",
+        0.0,
+        1e12,
+    ),
+    ParameterSpec(
+        "task_axes",
+        ["x", "y", "z", "wx", "wy", "wz"],
+        "Task rows of J_e by world axis (x y z wx wy wz); the planar arc: x, y",
+    ),
+    ParameterSpec(
+        "constrained_frame",
+        "ee",
+        "Axes of constrained_axis: ee (taken at activation, then fixed in world) or world",
+        choices=("ee", "world"),
+    ),
+    ParameterSpec(
+        "constrained_axis",
+        [0.0, 0.0, 1.0],
+        "Contact normal into the environment (normal_mode fixed; the start normal for wrench)",
+        "[-]",
+        -1.0e3,
+        1.0e3,
+        length=(3,),
+    ),
+    ParameterSpec(
+        "normal_mode",
+        "fixed",
+        "fixed: n = constrained_axis (a plane); wrench: the measured force direction while "
+        "|f| >= contact_threshold (curved surfaces)",
+        choices=("fixed", "wrench"),
+    ),
+    ParameterSpec(
+        "surface_curvature",
+        0.0,
+        "Normal feed-forward a_n = curvature |v_t|^2 [A-4.8]; > 0 when the surface bends toward "
+        "the environment (1/R for a cylinder), 0 for a plane",
+        "[1/m]",
+        -1e3,
+        1e3,
+    ),
+    ParameterSpec(
+        "force_measurement",
+        "predicted",
+        "f in (6.34): predicted (rigid-contact model at the same instant, sensor-corrected) or "
+        "sampled (the one-step-late wrench; k_f < 1 only)",
+        choices=("predicted", "sampled"),
+    ),
+    ParameterSpec(
+        "joints",
+        [f"joint_{i}" for i in range(1, 8)],
+        "Joint order of joint_efforts (a permutation of the model's joints), like the 'joints' "
+        "parameter of a ros2_control forward_command_controller",
+    ),
+    WORLD_FRAME,
+    ParameterSpec(
+        "default_twist_frame",
+        "ee",
+        "Axes of a cmd_twist with an empty frame_id: ee or world",
+        choices=("ee", "world"),
+    ),
+    _timeout("command_timeout", 0.5, "A cmd_twist older than this (receipt) decelerates to rest"),
+    _timeout("force_timeout", 0.5, "A force_setpoint older than this: f_des held, status WARN"),
+    ParameterSpec(
+        "state_timeout",
+        0.1,
+        "No joint_states for this long (wall clock, receipt): one zero torque, STALE_STATE",
+        "[s]",
+        0.005,
+        10.0,
+    ),
+    ParameterSpec(
+        "max_linear_speed", 0.5, "Twists faster than this are scaled down", "[m/s]", 1e-6, 10.0
+    ),
+    ParameterSpec(
+        "max_angular_speed", 1.0, "Twists faster than this are scaled down", "[rad/s]", 1e-6, 20.0
+    ),
+    ParameterSpec(
+        "max_linear_acceleration",
+        5.0,
+        "Clip of the twist feed-forward and rate limit of the reference (angular: same ramp time)",
+        "[m/s^2]",
+        1e-6,
+        1e3,
+    ),
+    ParameterSpec("max_force_setpoint", 30.0, "f_des is clipped to [0, this]", "[N]", 0.0, 1e4),
+    ParameterSpec(
+        "max_contact_force",
+        40.0,
+        "Measured |force| over this: WRENCH_LIMIT stop (latched)",
+        "[N]",
+        1e-6,
+        1e5,
+    ),
+    ParameterSpec(
+        "max_contact_torque",
+        10.0,
+        "Measured |torque| over this: WRENCH_LIMIT stop (latched)",
+        "[N m]",
+        1e-6,
+        1e5,
+    ),
+    ParameterSpec(
+        "contact_threshold",
+        1.0,
+        "In contact when the measured normal force is at least this",
+        "[N]",
+        1e-6,
+        1e4,
+    ),
+    ParameterSpec(
+        "contact_loss_time",
+        0.02,
+        "Force below contact_threshold this long while f_des >= 2 thresholds: CONTACT_LOST / "
+        "NO_CONTACT stop (latched)",
+        "[s]",
+        0.0,
+        10.0,
+    ),
+    ParameterSpec("status_rate", 50.0, "Rate of ~/status", "[Hz]", 0.1, 1000.0),
+)
+
+
+def _model_path(name: str) -> Path:
+    if not name:
+        return config_dir() / DEFAULT_MODEL
+    path = Path(name)
+    if path.is_file() or path.is_absolute():
+        return path
+    return config_dir() / name
+
+
+def _stamp_ns(stamp) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+class ForceControllerNode(Node):
+    """ROS 2 wrapper of :class:`ForceTeleopController` (see the module docstring)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, PARAMETERS)
+        self._params = params
+        self.robot = load_fixed_base_model(_model_path(params["model_config"]))
+        self.settings = ForceControlSettings(
+            method=params["method"],
+            os_variant=params["os_variant"],
+            k_p=params["k_p"],
+            k_d=params["k_d"],
+            k_f=params["k_f"],
+            virtual_mass=params["virtual_mass"],
+            virtual_inertia=params["virtual_inertia"],
+            task_axes=tuple(params["task_axes"]),
+            constrained_frame=params["constrained_frame"],
+            constrained_axis=tuple(params["constrained_axis"]),
+            normal_mode=params["normal_mode"],
+            surface_curvature=params["surface_curvature"],
+            force_measurement=params["force_measurement"],
+            default_twist_frame=params["default_twist_frame"],
+            command_timeout=params["command_timeout"],
+            force_timeout=params["force_timeout"],
+            max_linear_speed=params["max_linear_speed"],
+            max_angular_speed=params["max_angular_speed"],
+            max_linear_acceleration=params["max_linear_acceleration"],
+            max_force_setpoint=params["max_force_setpoint"],
+            max_contact_force=params["max_contact_force"],
+            max_contact_torque=params["max_contact_torque"],
+            contact_threshold=params["contact_threshold"],
+            contact_loss_time=params["contact_loss_time"],
+        )
+        self.controller = ForceTeleopController(self.robot, self.settings)
+        # ros2_control convention: data[p[i]] is model joint i
+        self._order = velocity_joint_order(params["joints"], self.robot.joint_names)
+        self._ee_frame = self.robot.model.frames[self.robot.ee_frame_id].name
+        self._frames = command_frames(params["world_frame"], self._ee_frame)
+        self._state_timeout = params["state_timeout"]
+        self._state_received: float | None = None  # monotonic [s]
+        self._stale = False  # the zero torque of a stale state was published
+        self._published = False  # any torque published (then shutdown publishes zero)
+        self._step: ForceStep | None = None
+        self._step_times: deque[tuple[float, float]] = deque()  # (monotonic, duration [s])
+        self._status_override: tuple[ForceControlState, str] | None = None
+        self._last_status: DiagnosticStatus | None = None
+        self._last_state: ForceControlState | None = None
+
+        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self.create_subscription(JointState, "joint_states", self._on_joint_state, reliable)
+        self.create_subscription(WrenchStamped, "wrist_wrench", self._on_wrench, reliable)
+        self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, command_qos)
+        self.create_subscription(WrenchStamped, "force_setpoint", self._on_setpoint, command_qos)
+        self._torque_pub = self.create_publisher(Float64MultiArray, "joint_efforts", command_qos)
+        self._errors_pub = self.create_publisher(Float64MultiArray, "~/errors", reliable)
+        self._status_pub = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
+        )
+        self.create_service(Trigger, "~/reset", self._on_reset)
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(WATCHDOG_PERIOD, self._on_watchdog, clock=steady)
+        self.create_timer(1.0 / params["status_rate"], self._publish_status, clock=steady)
+        self.create_timer(DIAGNOSTICS_PERIOD, self._on_diagnostics, clock=steady)
+        self._state_topic = self.resolve_topic_name("joint_states")
+        self.get_logger().info(
+            f"{self.settings.method.value} motion/force control of {self.robot.name} "
+            f"(task {list(self.settings.task_axes)}, normal {self.settings.normal_mode.value}, "
+            f"force {self.settings.force_measurement.value}, k_f {self.settings.k_f:g}); "
+            f"waiting for {self._state_topic}"
+        )
+
+    # --- inputs ---------------------------------------------------------------------------------
+    def _on_twist(self, msg: TwistStamped) -> None:
+        lin, ang = msg.twist.linear, msg.twist.angular
+        try:
+            command = validate_twist(
+                [lin.x, lin.y, lin.z],
+                [ang.x, ang.y, ang.z],
+                msg.header.frame_id,
+                self._frames,
+                self.settings.default_twist_frame,
+                _stamp_ns(msg.header.stamp),
+                time.monotonic(),
+            )
+        except InputError as exc:
+            self.controller.reject_twist(str(exc))
+            self.get_logger().error(f"rejected cmd_twist: {exc}", throttle_duration_sec=1.0)
+            return
+        self.controller.set_twist(command)
+
+    def _on_setpoint(self, msg: WrenchStamped) -> None:
+        f, m = msg.wrench.force, msg.wrench.torque
+        try:
+            setpoint = validate_force_setpoint(
+                [f.x, f.y, f.z],
+                [m.x, m.y, m.z],
+                msg.header.frame_id,
+                self._frames,
+                time.monotonic(),
+            )
+        except InputError as exc:
+            self.controller.reject_force(str(exc))
+            self.get_logger().error(f"rejected force_setpoint: {exc}", throttle_duration_sec=1.0)
+            return
+        self.controller.set_force(setpoint)
+
+    def _on_wrench(self, msg: WrenchStamped) -> None:
+        f, m = msg.wrench.force, msg.wrench.torque
+        force, torque = np.array([f.x, f.y, f.z]), np.array([m.x, m.y, m.z])
+        frame = msg.header.frame_id
+        if not (np.isfinite(force).all() and np.isfinite(torque).all()):
+            self.get_logger().error("ignored wrist_wrench: not finite", throttle_duration_sec=1.0)
+            return
+        if frame in ("", self._ee_frame) or self._frames.get(frame) is CommandFrame.EE:
+            pass
+        elif self._frames.get(frame) is CommandFrame.WORLD:
+            if self.controller.ee_rotation is None:
+                return
+            rotation = self.controller.ee_rotation  # the newest state's EE rotation
+            force, torque = rotation.T @ force, rotation.T @ torque
+        else:
+            self.get_logger().error(
+                f"ignored wrist_wrench in frame {frame!r}: expected the EE frame "
+                f"{self._ee_frame!r}",
+                throttle_duration_sec=1.0,
+            )
+            return
+        self.controller.add_wrench(WrenchSample(_stamp_ns(msg.header.stamp), force, torque))
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            order = joint_order(msg.name, self.robot.joint_names)
+            q = np.asarray(msg.position, dtype=float)
+            v = np.asarray(msg.velocity, dtype=float)
+            if q.size != order.size or v.size != order.size:
+                raise InputError(
+                    f"joint_states needs {order.size} positions and velocities, got "
+                    f"{q.size} and {v.size}"
+                )
+            if not (np.isfinite(q).all() and np.isfinite(v).all()):
+                raise InputError("joint_states positions/velocities are not finite")
+            effort = np.asarray(msg.effort, dtype=float)
+            effort = effort[order] if effort.size == order.size else None
+        except InputError as exc:
+            self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
+            return
+        now = time.monotonic()
+        if self._stale:
+            self.get_logger().info("joint_states resumed: reference re-latched at the pose")
+            self.controller.resync()
+        self._stale = False
+        self._state_received = now
+        started = time.perf_counter()
+        try:
+            step = self.controller.step(
+                JointMeasurement(_stamp_ns(msg.header.stamp), q[order], v[order], effort), now
+            )
+        except RnsError as exc:
+            self._status_override = (ForceControlState.CONTROL_ERROR, str(exc))
+            self.get_logger().error(f"control step failed: {exc}", throttle_duration_sec=1.0)
+            return
+        if step.torque is not None:
+            self._publish_torque(step.torque)
+        self._step_times.append((now, time.perf_counter() - started))
+        while self._step_times and self._step_times[0][0] < now - STEP_TIME_WINDOW:
+            self._step_times.popleft()
+        self._step, self._status_override = step, None
+        self._publish_errors(step)
+        if step.state is not self._last_state:
+            self._log_transition(step)
+        self._last_state = step.state
+
+    def _log_transition(self, step: ForceStep) -> None:
+        text = f"{step.state.value}: {step.detail}" if step.detail else step.state.value
+        level = state_level(step.state)
+        if level == DiagnosticStatus.ERROR:
+            self.get_logger().error(text)
+        elif level == DiagnosticStatus.WARN:
+            self.get_logger().warn(text)
+        elif step.detail:
+            self.get_logger().info(text)
+
+    # --- outputs --------------------------------------------------------------------------------
+    def _publish_torque(self, torque: np.ndarray) -> None:
+        data = np.empty(torque.size)
+        data[self._order] = torque
+        if not np.isfinite(data).all():  # never publish a non-finite value
+            return
+        self._torque_pub.publish(Float64MultiArray(data=data.tolist()))
+        self._published = True
+
+    def _publish_errors(self, step: ForceStep) -> None:
+        values = step.error_sample()
+        if not np.isfinite(values).all():
+            return
+        msg = Float64MultiArray(data=values.tolist())
+        msg.layout.dim = [
+            MultiArrayDimension(label=" ".join(ERROR_LABELS), size=len(values), stride=len(values))
+        ]
+        self._errors_pub.publish(msg)
+
+    def _on_watchdog(self) -> None:
+        if self._state_received is None or self._stale:
+            return
+        age = time.monotonic() - self._state_received
+        if age <= self._state_timeout:
+            return
+        self._stale = True
+        detail = (
+            f"{self._state_topic} {age:.3f} s old (state_timeout {self._state_timeout} s): one "
+            "zero torque published (motors off)"
+        )
+        self._status_override = (ForceControlState.STALE_STATE, detail)
+        self.get_logger().error(f"STALE_STATE: {detail}")
+        self._publish_torque(np.zeros(self.robot.n))
+        self._publish_status()
+
+    def _step_time_stats(self) -> tuple[float, float]:
+        if not self._step_times:
+            return 0.0, 0.0
+        durations = np.array([d for _, d in self._step_times]) * 1e6
+        return float(np.median(durations)), float(np.percentile(durations, 99))
+
+    def _publish_status(self) -> None:
+        step = self._step
+        values: dict = {"method": self.settings.method.value}
+        if self._status_override is not None:
+            state, detail = self._status_override
+        elif step is None:
+            state, detail = ForceControlState.WAITING_FOR_STATE, f"waiting for {self._state_topic}"
+        else:
+            state, detail = step.state, step.detail
+        if step is not None:
+            median, p99 = self._step_time_stats()
+            values.update(
+                position_error_m=float(np.linalg.norm(step.position_error)),
+                orientation_error_rad=step.orientation_error,
+                force_error_N=step.force_error,
+                force_desired_N=step.force_desired,
+                force_measured_N=step.force_measured,
+                force_reference_N=step.force_reference,
+                force_active=step.force_active,
+                contact=step.contact,
+                normal=step.normal,
+                peak_joint_speed_rad_s=self.controller.peak_joint_speed,
+                step_time_us=median,
+                step_time_p99_us=p99,
+            )
+        level = state_level(state)
+        status = DiagnosticStatus(
+            level=level,
+            name=f"{self.get_name()}: motion/force control",
+            message=f"{state.value}: {detail}" if detail else state.value,
+            hardware_id=self.robot.name,
+            values=[
+                KeyValue(key=key, value=status_text(value))
+                for key, value in {"state": state.value, "detail": detail, **values}.items()
+            ],
+        )
+        self._last_status = status
+        msg = DiagnosticArray(status=[status])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._status_pub.publish(msg)
+
+    def _on_diagnostics(self) -> None:
+        if self._last_status is None:
+            return
+        msg = DiagnosticArray(status=[self._last_status])
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics.publish(msg)
+
+    def _on_reset(self, _request, response):
+        fault = self.controller.fault
+        self.controller.reset()
+        response.success = True
+        response.message = (
+            f"cleared {fault[0].value}; reference re-latched at the next state, the force task "
+            "waits for a new force_setpoint"
+            if fault
+            else "no safety stop latched; reference re-latched at the next state"
+        )
+        self.get_logger().info(f"~/reset: {response.message}")
+        return response
+
+    def destroy_node(self) -> None:
+        """Motors off: one zero torque (when torques were published), then tear down."""
+        if self._published:
+            try:
+                self._torque_pub.publish(Float64MultiArray(data=[0.0] * self.robot.n))
+                self._torque_pub.wait_for_all_acked(Duration(seconds=0.2))
+            except Exception as exc:  # the context may already be shut down
+                self.get_logger().warn(f"could not publish the final zero torque: {exc}")
+        super().destroy_node()
+
+
+def main(args=None) -> int:
+    return run_node(
+        ForceControllerNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
+    )
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
+
+
+__all__ = ["ERROR_LABELS", "PARAMETERS", "ForceControllerNode", "main"]

@@ -1,0 +1,191 @@
+"""rns_force_controller over DDS without a simulator: a probe publishes joint_states and
+wrist_wrench itself and checks the node's torques, errors and status (docs/part2_ros.md)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import WrenchStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from rns_ros.control.force_teleop import (
+    ForceControlSettings,
+    ForceTeleopController,
+    JointMeasurement,
+    WrenchSample,
+)
+from rns_ros.core.fixed_base import load_fixed_base_model
+from rns_ros.nodes.force_controller import ERROR_LABELS, PARAMETERS, ForceControllerNode
+from rns_ros.resources import config_dir
+
+REPO = Path(__file__).resolve().parents[2]
+BIN = Path(sys.executable).parent
+JOINTS = [f"joint_{i}" for i in range(1, 8)]
+START = np.radians([20.0, -20.0, 0.0, 100.0, 0.0, 10.0, 0.0])
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+ZERO7 = np.zeros(7)
+PUSH = np.array([0.0, 0.0, 3.0])  # the wrench the EE exerts, EE axes [N]
+
+
+def _values(msg: DiagnosticArray) -> dict[str, str]:
+    return {kv.key: kv.value for kv in msg.status[0].values}
+
+
+class _Arm:
+    """Publishes joint_states (names shuffled) and the wrist wrench of the same stamp."""
+
+    def __init__(self, ros):
+        self.ros = ros
+        self.probe = ros.probe()
+        self.states = self.probe.create_publisher(JointState, "joint_states", RELIABLE)
+        self.wrench = self.probe.create_publisher(WrenchStamped, "wrist_wrench", RELIABLE)
+        self.sent = 0
+
+    def publish(self, q=START, v=ZERO7, effort=ZERO7):
+        stamp = self.probe.get_clock().now().to_msg()
+        wrench = WrenchStamped()
+        wrench.header.stamp, wrench.header.frame_id = stamp, "ee"
+        wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z = PUSH
+        self.wrench.publish(wrench)
+        self.ros.spin_for(0.02)  # the wrench first (two topics: no order guaranteed)
+        order = [6, 0, 5, 1, 4, 2, 3]
+        state = JointState(
+            name=[JOINTS[i] for i in order],
+            position=[float(q[i]) for i in order],
+            velocity=[float(v[i]) for i in order],
+            effort=[float(effort[i]) for i in order],
+        )
+        state.header.stamp = stamp
+        self.states.publish(state)
+        self.sent += 1
+        return stamp
+
+
+def _start(ros, **overrides):
+    overrides.setdefault("state_timeout", 0.5)  # not about the watchdog: generous
+    node = ros.add(ForceControllerNode, overrides)
+    torques = ros.record(Float64MultiArray, "joint_efforts")
+    errors = ros.record(Float64MultiArray, "rns_force_controller/errors")
+    status = ros.record(DiagnosticArray, "rns_force_controller/status")
+    arm = _Arm(ros)
+    assert ros.spin_until(
+        lambda: arm.states.get_subscription_count() and arm.wrench.get_subscription_count(), 10.0
+    )
+    return node, arm, torques, errors, status
+
+
+def test_one_finite_torque_per_state_in_joints_order(ros):
+    reversed_joints = list(reversed(JOINTS))
+    node, arm, torques, errors, status = _start(ros, joints=reversed_joints)
+    for _ in range(20):
+        arm.publish()
+        ros.spin_for(0.01)
+    assert ros.spin_until(lambda: len(errors) >= 20, 5.0)
+    assert len(torques) == 20
+    data = torques.array(lambda m: m.data)
+    assert data.shape == (20, 7)
+    assert np.isfinite(data).all()
+    # the first torque equals the pure step at the same inputs, reordered to `joints`
+    robot = load_fixed_base_model(config_dir() / "lwr_7dof.yaml")
+    controller = ForceTeleopController(robot, ForceControlSettings())
+    controller.add_wrench(WrenchSample(5, PUSH, np.zeros(3)))
+    expected = controller.step(JointMeasurement(5, START, np.zeros(7), np.zeros(7)), 0.0).torque
+    np.testing.assert_allclose(data[0], expected[::-1], rtol=1e-9, atol=1e-9)
+    # ~/errors layout; force measured = the pushed 3 N along the EE z axis (the default normal)
+    sample = errors.latest()
+    assert sample.layout.dim[0].label == " ".join(ERROR_LABELS)
+    row = dict(zip(ERROR_LABELS, sample.data, strict=True))
+    assert row["force_measured"] == pytest.approx(3.0)
+    assert row["force_active"] == 0.0  # no force setpoint yet
+    assert ros.spin_until(lambda: len(status) > 0, 2.0)
+    values = _values(status.latest())
+    assert values["state"] == "HOLDING"
+    assert values["contact"] == "in_contact"
+    assert float(values["step_time_us"]) > 0.0
+    assert node.controller.normal is not None
+
+
+def test_stale_state_publishes_one_zero_torque(ros):
+    _, arm, torques, _, status = _start(ros, state_timeout=0.1)
+    for _ in range(5):
+        arm.publish()
+        ros.spin_for(0.01)
+    assert ros.spin_until(lambda: len(torques) >= 5, 5.0)
+    assert ros.spin_until(
+        lambda: status.latest() is not None and _values(status.latest())["state"] == "STALE_STATE",
+        5.0,
+    )
+    ros.spin_for(0.3)
+    assert len(torques) == 6  # five torques, then exactly one zero
+    assert torques.latest().data.tolist() == [0.0] * 7
+    assert "state_timeout 0.1 s" in status.latest().status[0].message
+
+
+def test_shutdown_publishes_zero_torque(ros):
+    node, arm, torques, _, _ = _start(ros)
+    arm.publish(effort=np.ones(7))
+    assert ros.spin_until(lambda: len(torques) >= 1, 5.0)
+    ros.detach(node)
+    node.destroy_node()
+    assert ros.spin_until(lambda: len(torques) >= 2, 5.0)
+    assert torques.latest().data.tolist() == [0.0] * 7
+
+
+def test_config_yaml_mirrors_the_declared_defaults():
+    content = yaml.safe_load((REPO / "config" / "force_controller.yaml").read_text())
+    assert content["/**"]["ros__parameters"] == {spec.name: spec.default for spec in PARAMETERS}
+    arc = yaml.safe_load((REPO / "config" / "force_controller_arc.yaml").read_text())
+    names = {spec.name for spec in PARAMETERS}
+    assert set(arc["/**"]["ros__parameters"]) <= names
+
+
+def test_config_files_load_through_rcl(ros):
+    default = ros.add(ForceControllerNode, params_file=REPO / "config" / "force_controller.yaml")
+    assert default.settings.rows == (0, 1, 2, 3, 4, 5)
+    node = ros.add(
+        ForceControllerNode,
+        params_file=REPO / "config" / "force_controller_arc.yaml",
+        name="arc_controller",
+    )
+    assert node.robot.n == 3
+    assert node.settings.rows == (0, 1)
+    assert node.settings.surface_curvature == pytest.approx(1 / 0.707)
+
+
+@pytest.mark.parametrize(
+    ("args", "pattern"),
+    [
+        (["-p", "method:=pid"], r"'method' must be one of \['rns', 'os'\]"),
+        (
+            ["-p", "force_measurement:=sampled"],
+            r"needs k_f < 1, got k_f = 5: .*diverges",
+        ),
+        (["-p", "task_axes:=[x, q]"], r"task_axes must be distinct names"),
+    ],
+)
+def test_startup_errors_are_one_line_and_exit_2(args, pattern, tmp_path):
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    result = subprocess.run(
+        [str(BIN / "rns_force_controller"), "--ros-args", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=30,
+        check=False,
+    )
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert len(lines) == 1, result.stderr[-2000:]
+    assert lines[0].startswith("rns_force_controller: ")
+    assert re.search(pattern, lines[0]), lines[0]

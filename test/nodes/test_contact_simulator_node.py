@@ -317,3 +317,45 @@ def test_an_unknown_environment_is_one_line_and_exit_2(tmp_path):
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith("rns_simulator: parameter 'environment' must be one of")
     assert "cube" in lines[0]
+
+
+def _sim_seconds(msg) -> float:
+    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+
+
+def test_a_diverged_step_holds_the_last_state_until_reset(ros):
+    """A step that diverges (forced here once) is logged once; the node then publishes the last
+    finite state at rest, never a NaN, and ~/reset starts it again from the start state."""
+    from std_srvs.srv import Trigger
+
+    from rns_ros.core.errors import SimulationDivergedError
+
+    node = _node(ros, publish_clock=True, publish_rate=100.0)
+    probe = ros.probe()
+    errors = _errors(probe)
+    joints, wrenches, contacts = _recorders(probe)
+    client = probe.create_client(Trigger, "/rns_simulator/reset")
+    assert ros.spin_until(lambda: len(joints.messages) > 5)
+    healthy = node.simulator.step
+
+    def diverge():
+        node.simulator.step = healthy
+        raise SimulationDivergedError("contact simulation diverged (forced): non-finite v")
+
+    node.simulator.step = diverge
+    assert ros.spin_until(lambda: node._fault, timeout=5.0)
+    count = len(joints.messages)
+    assert ros.spin_until(lambda: len(joints.messages) > count + 10, timeout=5.0)
+    held = joints.messages[-5:]
+    assert len({_sim_seconds(m) for m in held}) == 1  # simulated time stopped
+    assert not np.any([m.velocity for m in held])
+    assert not np.any([m.effort for m in held])
+    assert sum("diverged" in e for e in errors) == 1, errors
+    assert _all_finite(joints, wrenches, contacts)
+
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(Trigger.Request())
+    assert ros.spin_until(future.done, timeout=5.0)
+    assert future.result().success
+    assert ros.spin_until(lambda: not node._fault and node.simulator.time > 0.1, timeout=5.0)
+    assert np.allclose(joints.messages[-1].position, WALL_TASK_RAD, atol=1e-12)

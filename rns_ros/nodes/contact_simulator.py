@@ -304,6 +304,15 @@ class ContactSimulatorNode(Node):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
+        try:
+            self._start()
+        except BaseException:
+            # a failed start-up leaves nothing registered: rcl keeps one /rosout publisher per
+            # node name, and a leaked node would swallow the logs of the next rns_simulator
+            Node.destroy_node(self)
+            raise
+
+    def _start(self) -> None:
         params = declare_parameters(self, PARAMETERS)
         model_path = _model_path(params["model_config"])
         self.robot = load_fixed_base_model(model_path, gravity=params["gravity"])

@@ -61,9 +61,12 @@ def _recorders(probe):
 
 
 def _errors(probe, level=Log.ERROR):
+    """Log lines of at least ``level`` on /rosout (transient local, as rcl publishes it: lines
+    logged before the subscription matched arrive too)."""
     errors = []
+    qos = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
     probe.create_subscription(
-        Log, "/rosout", lambda m: errors.append(m.msg) if m.level >= level else None, 100
+        Log, "/rosout", lambda m: errors.append(m.msg) if m.level >= level else None, qos
     )
     return errors
 
@@ -350,6 +353,7 @@ def test_a_diverged_step_holds_the_last_state_until_reset(ros):
     assert len({_sim_seconds(m) for m in held}) == 1  # simulated time stopped
     assert not np.any([m.velocity for m in held])
     assert not np.any([m.effort for m in held])
+    assert ros.spin_until(lambda: any("diverged" in e for e in errors), timeout=5.0), errors
     assert sum("diverged" in e for e in errors) == 1, errors
     assert _all_finite(joints, wrenches, contacts)
 

@@ -76,6 +76,11 @@ ERROR_LABELS = (
     "force_active",
 )
 #: Longest step used to integrate the reference [s] (a gap in the states is not integrated over).
+#: The first-order hold of a twist extrapolates it with its acceleration feed-forward for up
+#: to this many of its message periods past its stamp: a twist usually reaches the controller a
+#: control step after its stamp, so one period would drop the feed-forward every other step
+#: (1.3 mm instead of 0.02 mm on the wall stroke); a stream that stops is held, not extrapolated.
+EXTRAPOLATION_PERIODS = 2.0
 MAX_STEP = 0.1
 #: Wrench samples kept for matching by stamp.
 WRENCH_HISTORY = 32
@@ -835,16 +840,16 @@ class ForceTeleopController:
             notes.append(f"{age}: holding the pose")
             return np.zeros(6), np.zeros(6), 0.0
         command, rotation = track.command, state.ee_rotation
-        hold = 0.0
+        hold, horizon = 0.0, EXTRAPOLATION_PERIODS * track.period
         if track.period > 0.0:
-            hold = min(max((stamp - command.stamp) * 1e-9, 0.0), track.period)
+            hold = min(max((stamp - command.stamp) * 1e-9, 0.0), horizon)
         lin_acc = self._in_world(track.linear_acceleration, command.frame, rotation)
         ang_acc = self._in_world(track.angular_acceleration, command.frame, rotation)
         lin_acc = _limit(lin_acc, settings.max_linear_acceleration)[0]
         ang_acc = _limit(ang_acc, settings.max_angular_acceleration)[0]
         linear = self._in_world(command.linear, command.frame, rotation) + lin_acc * hold
         angular = self._in_world(command.angular, command.frame, rotation) + ang_acc * hold
-        if track.period == 0.0 or hold >= track.period:
+        if track.period == 0.0 or hold >= horizon:
             lin_acc, ang_acc = np.zeros(3), np.zeros(3)
         v, a = np.concatenate([linear, angular]), np.concatenate([lin_acc, ang_acc])
         removed = np.zeros(6)

@@ -48,22 +48,34 @@ def _ns(t: float) -> int:
     return round(t * 1e9)
 
 
-def _dds_loop(scenario, settings, dt, *, drop_wrench_every=0):
+def _dds_loop(scenario, settings, dt, *, drop_wrench_every=0, twist_every=1, late=0):
     """The controller against a ContactSimulator, fed like DDS: each state comes with the wrench
     and effort of the torque held over the step that ended there; twist and force setpoint are
-    the scenario's reference velocity and force, one message per state."""
+    the scenario's reference velocity and force, one message every ``twist_every`` states,
+    arriving ``late`` states after their stamp.
+
+    Returns:
+        (force error (k,) [N], joint speed (k,) [rad/s], the states seen, the simulator,
+        |p_des - p| (k,) [m]).
+    """
     setup = scenario.setup()
     controller = ForceTeleopController(setup.robot, settings)
     sim = ContactSimulator(setup.robot, setup.constraint, initial_q=setup.initial_q, dt=dt)
     steps = round(setup.duration / dt)
-    force_error, joint_speed, states = [], [], set()
+    force_error, joint_speed, position_error, states = [], [], [], set()
     for i in range(steps + 1):
         t = i * dt
-        controller.set_twist(
-            TwistCommand(setup.reference(t).velocity, ZERO, CommandFrame.WORLD, _ns(t), t)
-        )
-        normal = sim.contact_normal()
-        controller.set_force(ForceSetpoint(setup.force(t) * normal, ZERO, CommandFrame.WORLD, t))
+        if i % twist_every == 0 and i >= late:
+            sampled = t - late * dt  # the instant the operator sampled (the message's stamp)
+            controller.set_twist(
+                TwistCommand(
+                    setup.reference(sampled).velocity, ZERO, CommandFrame.WORLD, _ns(sampled), t
+                )
+            )
+            normal = sim.contact_normal()
+            controller.set_force(
+                ForceSetpoint(setup.force(sampled) * normal, ZERO, CommandFrame.WORLD, t)
+            )
         wrench = sim.wrist_wrench()  # under the torque held over the previous step
         if not drop_wrench_every or i % drop_wrench_every:
             controller.add_wrench(WrenchSample(_ns(t), wrench[:3], wrench[3:]))
@@ -74,9 +86,26 @@ def _dds_loop(scenario, settings, dt, *, drop_wrench_every=0):
         sim.set_torque(out.torque)
         force_error.append(out.force_desired - sim.contact_force)  # as run_closed_loop logs it
         joint_speed.append(np.abs(sim.v).max())
+        position_error.append(np.linalg.norm(out.position_error))
         if i < steps:
             sim.step()
-    return np.array(force_error), np.array(joint_speed), states, sim
+    return (
+        np.array(force_error),
+        np.array(joint_speed),
+        states,
+        sim,
+        np.array(position_error),
+    )
+
+
+def test_late_twists_keep_their_acceleration_feed_forward():
+    """Twists every 2 ms reaching the controller one 1 ms step after their stamp (what the
+    operator's sim-time timer and DDS give): the first-order hold extrapolates each over up to
+    two of its periods, so the feed-forward never drops out. Measured 0.028 mm on one stroke
+    (0.020 mm with on-time twists); holding for one period only gave 1.3 mm."""
+    settings = ForceControlSettings(nominal_period=1e-3)
+    *_, position_error = _dds_loop(WallScenario(strokes=1), settings, 1e-3, twist_every=2, late=1)
+    assert position_error.max() < 1e-4
 
 
 @pytest.mark.parametrize(("method", "label"), [("rns", "RNS-C"), ("os", "OS-C")])
@@ -86,7 +115,7 @@ def test_dds_fed_loop_reproduces_the_in_process_loop(method, label):
     (RNS-C), 1.5420 vs 1.5419 (OS-C); max force error 1.24e-6 / 4.3e-7 N in both loops."""
     reference = run_closed_loop(WallScenario(strokes=1), label, dt=QUICK_PERIOD)
     settings = ForceControlSettings(method=method, nominal_period=QUICK_PERIOD)
-    force_error, joint_speed, states, sim = _dds_loop(
+    force_error, joint_speed, states, sim, _ = _dds_loop(
         WallScenario(strokes=1), settings, QUICK_PERIOD
     )
     print(label, joint_speed.max(), reference.peak_joint_speed, np.abs(force_error).max())
@@ -120,7 +149,7 @@ def test_sampled_force_with_a_small_gain_is_stable():
         force_measurement="sampled", k_f=0.5, nominal_period=QUICK_PERIOD
     )
     scenario = WallScenario(strokes=1, stroke=1.5)
-    force_error, joint_speed, _, _sim = _dds_loop(scenario, settings, QUICK_PERIOD)
+    force_error, joint_speed, *_ = _dds_loop(scenario, settings, QUICK_PERIOD)
     settled = force_error[round(1.0 / QUICK_PERIOD) :]
     print("sampled k_f 0.5: max |e| after the ramp", np.abs(settled).max())
     assert np.abs(settled).max() < 0.05

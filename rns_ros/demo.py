@@ -34,6 +34,15 @@ from rns_ros.analysis.recorded_run import RunFigures, run_figures
 from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
 from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import RnsError, load_model
+from rns_ros.demo_contact import (
+    CONTACT_METHODS,
+    CONTACT_SCENARIOS,
+    DEFAULT_CONTACT_METHODS,
+    format_contact_table,
+    is_contact_scenario,
+    non_finite_contact_figures,
+    run_contact_method,
+)
 from rns_ros.demo_ptp import (
     PTP_METHODS,
     PTP_SCENARIOS,
@@ -310,14 +319,17 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument(
         "--scenario",
         default="satellite_observation",
-        help="inspection scenario name or YAML file, or a point-to-point scenario "
-        f"({', '.join(PTP_SCENARIOS)}: rns_ptp instead of rns_controller)",
+        help="inspection scenario name or YAML file, a point-to-point scenario "
+        f"({', '.join(PTP_SCENARIOS)}: rns_ptp instead of rns_controller), or a motion/force "
+        f"scenario ({', '.join(CONTACT_SCENARIOS)}: contact simulator + rns_force_controller)",
     )
     parser.add_argument(
         "--methods",
         default=None,
         help=f"comma-separated; inspection: from {list(METHODS)} (default "
-        f"{','.join(DEFAULT_METHODS)}); point-to-point: from {list(PTP_METHODS)} (default all)",
+        f"{','.join(DEFAULT_METHODS)}); point-to-point: from {list(PTP_METHODS)} (default all); "
+        f"motion/force: from {list(CONTACT_METHODS)} (default "
+        f"{','.join(DEFAULT_CONTACT_METHODS)})",
     )
     parser.add_argument("--mode", choices=("kinematic", "dynamic"), default="kinematic")
     parser.add_argument("--rate", type=float, default=100.0, help="controller rate [Hz]")
@@ -337,8 +349,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     add_domain_id_argument(parser, 42, "of the runs")
     args = parser.parse_args(argv)
     args.ros_args = ros_args
-    ptp = args.scenario in PTP_SCENARIOS
-    allowed, default = (list(PTP_METHODS), list(PTP_METHODS)) if ptp else (METHODS, DEFAULT_METHODS)
+    if args.scenario in PTP_SCENARIOS:
+        allowed, default = list(PTP_METHODS), list(PTP_METHODS)
+    elif is_contact_scenario(args.scenario):
+        allowed, default = list(CONTACT_METHODS), list(DEFAULT_CONTACT_METHODS)
+    else:
+        allowed, default = METHODS, DEFAULT_METHODS
     text = ",".join(default) if args.methods is None else args.methods
     args.methods = [m.strip() for m in text.split(",") if m.strip()]
     unknown = [m for m in args.methods if m not in allowed]
@@ -361,6 +377,8 @@ def _main(argv: list[str] | None) -> int:
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     if args.scenario in PTP_SCENARIOS:
         return _main_ptp(args, PTP_SCENARIOS[args.scenario])
+    if is_contact_scenario(args.scenario):
+        return _main_contact(args)
     try:
         scenario_file = scenario_path(args.scenario)
         (scenario,) = check_scenarios([scenario_file])
@@ -444,6 +462,48 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
         "ratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
         "not printed (ours is identified, docs/arm_identification.md): compare the ranking.",
         [asdict(row) for row in rows],
+    )
+
+
+def _main_contact(args: argparse.Namespace) -> int:
+    print(f"scenario: {scenario_path(args.scenario)} (thesis Part II, chapter 6)")
+    print(
+        "contact simulation at 1 kHz in lockstep with "
+        f"rns_force_controller, real-time factor {args.real_time_factor:g}, ROS domain "
+        f"{args.domain_id} (localhost only)\n",
+        flush=True,
+    )
+    rows = []
+    try:
+        for method in args.methods:
+            print(f"running {method} ...", flush=True)
+            rows.append(run_contact_method(method, args.scenario, args))
+    except RnsError as exc:
+        print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
+        return 2
+    return _report(
+        args,
+        rows,
+        format_contact_table(rows),
+        non_finite_contact_figures(rows),
+        "pos err: in-plane p_des - p; held: |f_des - f| once the 10 N are reached; in-process: "
+        "the same task in rns_reproduce's loop (docs/part2.md). The thesis prints no numbers for "
+        "this task; it claims RNS-C moves the joints more calmly than OS-C.",
+        [
+            {
+                "method": row.method,
+                "label": row.label,
+                **asdict(row.figures),
+                "core_peak_joint_speed": row.core_peak_joint_speed,
+                "loop_rate_hz": row.loop_rate_hz,
+                "step_time_median_us": row.step_time_median_us,
+                "step_time_p99_us": row.step_time_p99_us,
+                "final_state": row.final_state,
+                "wall_time_s": row.wall_time_s,
+                "recording": row.recording,
+            }
+            for row in rows
+        ],
     )
 
 

@@ -42,6 +42,7 @@ import numpy as np
 import rclpy
 import yaml
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -116,6 +117,9 @@ class Harness:
         ros_args: global ROS arguments for every node of the stack, as a command line gives them
             (``["--ros-args", "-p", "rate:=50.0", "-r", "joint_states:=arm/joint_states"]``).
             Parameters given to :meth:`add` take precedence over them.
+        events: spin on rclpy's EventsExecutor (what ``run_node`` uses) instead of the
+            SingleThreadedExecutor: about twice the message throughput, for 1 kHz loops such as
+            the contact simulator with rns_force_controller (205 -> 413 steps/s in lockstep).
 
     Raises:
         ConfigError: ``domain_id`` out of range, or ``ros_args`` that rcl cannot parse.
@@ -125,7 +129,9 @@ class Harness:
     other machines.
     """
 
-    def __init__(self, domain_id: int | None = None, ros_args: Iterable[str] = ()) -> None:
+    def __init__(
+        self, domain_id: int | None = None, ros_args: Iterable[str] = (), *, events: bool = False
+    ) -> None:
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
         os.environ.pop("ROS_STATIC_PEERS", None)
         self.domain_id = _domain(domain_id)
@@ -138,7 +144,8 @@ class Harness:
             rclpy.init(args=["harness", *ros_args], context=self.context, domain_id=self.domain_id)
         except RuntimeError as exc:  # rcl's parse errors (RCLError derives from RuntimeError)
             raise ConfigError(f"invalid ROS arguments {ros_args}: {exc}") from None
-        self.executor = SingleThreadedExecutor(context=self.context)
+        executor = EventsExecutor if events else SingleThreadedExecutor
+        self.executor = executor(context=self.context)
         self.nodes: list[Node] = []
         self._probe: Node | None = None
 
@@ -253,21 +260,24 @@ class ProcessStack:
         params_file: str | Path | None = None,
         remappings: Mapping[str, str] | None = None,
         extra: Iterable[str] = (),
+        ros_args: Iterable[str] = (),
     ) -> list[str]:
-        """The argument vector that starts ``executable`` with these ROS arguments."""
+        """The argument vector that starts ``executable`` with these ROS arguments
+        (``extra``: before ``--ros-args``; ``ros_args``: more ROS arguments, after the others,
+        e.g. ``["-p", "rate:=50.0"]``)."""
         path = self.bin_dir / executable
         program = str(path) if path.exists() else shutil.which(executable)
         if program is None:
             raise ConfigError(f"executable {executable!r} not found in {self.bin_dir} or on PATH")
-        ros_args = []
+        # the file first: rcl applies ROS arguments in order, so -p overrides what it sets
+        arguments = [] if params_file is None else ["--params-file", str(params_file)]
         for key, value in (parameters or {}).items():
             text = yaml.safe_dump(value, default_flow_style=True).strip().removesuffix("...")
-            ros_args += ["-p", f"{key}:={text.strip()}"]
-        if params_file is not None:
-            ros_args += ["--params-file", str(params_file)]
+            arguments += ["-p", f"{key}:={text.strip()}"]
         for source, target in (remappings or {}).items():
-            ros_args += ["-r", f"{source}:={target}"]
-        return [program, *extra, *(["--ros-args", *ros_args] if ros_args else [])]
+            arguments += ["-r", f"{source}:={target}"]
+        arguments += list(ros_args)
+        return [program, *extra, *(["--ros-args", *arguments] if arguments else [])]
 
     def start(self, executable: str, parameters=None, **options) -> subprocess.Popen:
         """Start one executable (arguments as :meth:`command`). Its output goes to a temporary

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """rns_ros benchmarks on this machine: numbers, not tests (nothing here asserts).
 
-Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller] [--samples N]
+Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller|force_controller]
+                                              [--samples N]
         .venv/bin/python scripts/benchmark.py --only latency [--commands N] [--rates HZ ...]
                                               [--domain-id ID]
         .venv/bin/python scripts/benchmark.py --only cratio [--workers N]
@@ -14,6 +15,11 @@ controller one evaluation of the law (4.5)/(4.15) per method, and one controller
            held over a 10 ms period) with the naive and the midpoint hold correction; "tick" adds
            the FreeFloatingState of the sampled robot, i.e. what rns_controller computes per period.
            Goal (controller issue): <= 100 us median step for dls and sc.
+force_controller  rns_force_controller's step (median, p99) for rns and os on the 7-DoF wall task
+           (one 2.5 s stroke closed around the contact simulator, 1 ms period) as a share of the
+           1 ms budget, and the contact simulator's RK4 step. Both must fit one period for the
+           1 kHz torque loop; over DDS the lockstep loop rate is in `rns_demo --scenario
+           wall_contact`'s table.
 latency    end to end, over DDS on localhost: an operator twist's publish() on cmd_twist to the
            reception of the first joint_references that reflects it, p50 / p99 / max / mean over
            --commands (default 1000) commands, per controller rate (default 100 and 500 Hz).
@@ -93,6 +99,8 @@ from rns_ros.harness import Harness, ProcessStack
 from rns_ros.resources import default_model_config
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
+#: Control period = contact simulator step of the force-controller benchmark [s].
+FORCE_STEP = 1e-3
 SATELLITE_OBSERVATION_RAD = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0])
 
 
@@ -508,6 +516,58 @@ def cratio(workers: int | None) -> None:
     print(f"full map mean C_ratio {values.mean():.6f} (goal: wall < 60 s; {cores} cores here)")
 
 
+def force_controller(samples: int) -> None:
+    """rns_force_controller's step (rns_ros.control.force_teleop) on the LWR wall task, one
+    stroke closed around the in-process ContactSimulator, and the simulator's contact step."""
+    from rns_ros.analysis.part2_runs import WallScenario
+    from rns_ros.control.force_teleop import (
+        CommandFrame,
+        ForceControlSettings,
+        ForceSetpoint,
+        ForceTeleopController,
+        JointMeasurement,
+        TwistCommand,
+        WrenchSample,
+    )
+    from rns_ros.sim.contact import ContactSimulator
+
+    setup = WallScenario(strokes=1).setup()
+    zero = np.zeros(3)
+    steps = min(samples, round(setup.duration / FORCE_STEP))
+    print(
+        f"\n{'force controller, LWR wall, 1 kHz':<34}{'median [us]':>12}{'p99 [us]':>12}"
+        f"{'budget':>10}"
+    )
+    for method in ("rns", "os"):
+        control = ForceTeleopController(
+            setup.robot, ForceControlSettings(method=method, nominal_period=FORCE_STEP)
+        )
+        sim = ContactSimulator(
+            setup.robot, setup.constraint, initial_q=setup.initial_q, dt=FORCE_STEP
+        )
+        control_times, sim_times = np.empty(steps), np.empty(steps)
+        for i in range(steps):
+            t, stamp = i * FORCE_STEP, round(i * FORCE_STEP * 1e9)
+            reference = setup.reference(t)
+            control.set_twist(TwistCommand(reference.velocity, zero, CommandFrame.WORLD, stamp, t))
+            force = setup.force(t) * sim.contact_normal()
+            control.set_force(ForceSetpoint(force, zero, CommandFrame.WORLD, t))
+            wrench = sim.wrist_wrench()
+            control.add_wrench(WrenchSample(stamp, wrench[:3], wrench[3:]))
+            measurement = JointMeasurement(stamp, sim.q, sim.v, sim.torque.copy())
+            start = time.perf_counter_ns()
+            out = control.step(measurement, t)
+            control_times[i] = (time.perf_counter_ns() - start) / 1e3
+            sim.set_torque(out.torque)
+            start = time.perf_counter_ns()
+            sim.step()
+            sim_times[i] = (time.perf_counter_ns() - start) / 1e3
+        share = np.median(control_times) / (FORCE_STEP * 1e6)
+        print(row(f"step ({method})", control_times, f"{share:>9.0%}"))
+    print(row("contact simulator step (RK4)", sim_times, f"{np.median(sim_times) / 1e3:>9.0%}"))
+    print("(budget: share of the 1 ms control period; the DDS loop rate is in rns_demo's table)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__.splitlines()[0],
@@ -517,7 +577,7 @@ def main() -> None:
     )
     parser.add_argument(
         "--only",
-        choices=("core", "simulator", "controller", "latency", "cratio"),
+        choices=("core", "simulator", "controller", "force_controller", "latency", "cratio"),
         help="run one section (latency only this way)",
     )
     parser.add_argument("--samples", type=int, default=5000, help="repetitions per operation")
@@ -548,6 +608,8 @@ def main() -> None:
         simulator(robot, args.samples)
     if args.only in (None, "controller"):
         controller(robot, args.samples)
+    if args.only in (None, "force_controller"):
+        force_controller(args.samples)
     if args.only == "latency":
         latency(robot, args.commands, args.rates, args.domain_id)
 

@@ -119,3 +119,18 @@ def test_a_bad_ros_domain_id_in_the_environment_is_a_config_error(monkeypatch):
     monkeypatch.setenv("ROS_DOMAIN_ID", "abc")
     with pytest.raises(ConfigError, match="got 'abc'"):
         Harness()
+
+
+def test_process_parameters_override_the_params_file(tmp_path):
+    """rcl applies ROS arguments in order: the params file must come before the -p overrides,
+    or the file silently wins (a demo run asked for method os and ran rns)."""
+    params = tmp_path / "params.yaml"
+    params.write_text("/**:\n  ros__parameters:\n    method: rns\n")
+    argv = ProcessStack(DOMAIN).command(
+        "rns_force_controller",
+        {"method": "os"},
+        params_file=params,
+        ros_args=["-r", "a:=b"],
+    )
+    ros = argv[argv.index("--ros-args") + 1 :]
+    assert ros.index("--params-file") < ros.index("method:=os") < ros.index("a:=b")

@@ -33,6 +33,7 @@ CHECKED = (
     "rns_attitude_control",
     "rns_controller",
     "rns_demo",
+    "rns_force_controller",
     "rns_observer",
     "rns_operator",
     "rns_rerun_logger",

@@ -153,14 +153,21 @@ PARAMETERS = (
         1000.0,
         read_only=False,
     ),
-    ParameterSpec("publish_clock", False, "Publish /clock (sim time) and stamp messages with it"),
+    ParameterSpec(
+        "publish_clock",
+        True,
+        "Publish /clock (sim time) and stamp messages with it (on by default: in lockstep the "
+        "simulation runs slower than the wall clock, so the other nodes use sim time)",
+    ),
     ParameterSpec(
         "lockstep_period",
-        0.0,
+        0.001,
         "Lockstep with a controller: never run more than this much simulated time past the "
-        "newest torque command (the step, 0.001, for an event-driven controller: it samples as "
-        "in-process at any real_time_factor; real time before the first command, paused when "
-        "they stop); command_timeout then counts simulated time; 0: off",
+        "newest torque command (default the step: every torque acts on the state it was "
+        "computed from, as in-process, at any real_time_factor; a Python torque loop over DDS "
+        "does not keep 1 kHz in real time on a small machine, see docs/part2_ros.md; real time "
+        "before the first command, paused when they stop); command_timeout then counts "
+        "simulated time; 0: off (free-running at real_time_factor)",
         "[s]",
         0.0,
         10.0,
@@ -615,8 +622,10 @@ class ContactSimulatorNode(Node):
 
     def _await_command(self) -> bool:
         """Lockstep: True (after a short wait) while the next step would run more than
-        ``lockstep_period`` past the newest command; after ``LOCKSTEP_PATIENCE`` of wall time
-        one step is taken (logged), as in the free-floating node."""
+        ``lockstep_period`` past the newest command. After ``LOCKSTEP_PATIENCE`` of wall time
+        without a command the controller counts as gone: joint brakes on (the push ends) and
+        the simulation runs on in real time, as before the first command, until a torque
+        command comes back (logged)."""
         if self._lockstep <= 0.0:
             return False
         with self._lock:
@@ -627,12 +636,18 @@ class ContactSimulatorNode(Node):
             if self._paused_since is None:
                 self._paused_since = now
             elif now - self._paused_since > LOCKSTEP_PATIENCE:
+                # the controller is gone (killed, hung): a torque loop must not leave the arm
+                # pushing, so brake and run on in real time until torques come back
                 self.get_logger().warn(
-                    f"lockstep: no joint_efforts for {LOCKSTEP_PATIENCE} s at "
-                    f"t = {self.simulator.time:.3f} s; one step on",
+                    f"lockstep: no joint_efforts for {LOCKSTEP_PATIENCE} s (wall clock) at "
+                    f"t = {self.simulator.time:.3f} s: joint brakes on, running in real time "
+                    "until torque commands come back",
                     throttle_duration_sec=5.0,
                 )
-                self._paused_since = now
+                self._paused_since = None
+                self._last_command = None
+                self.braking = self._braking_logged = True
+                self._reanchor = True
                 return False
             self._command_arrived.clear()
         self._command_arrived.wait(0.005)

@@ -41,6 +41,10 @@ PUSH = 10.0  # N
 
 def _node(ros, **overrides) -> ContactSimulatorNode:
     overrides.setdefault("command_timeout", 0.3)  # generous: 2 shared cores
+    # free-running on the wall clock unless a test is about lockstep or sim time (the contact
+    # mode's defaults are lockstep at the step and /clock)
+    overrides.setdefault("lockstep_period", 0.0)
+    overrides.setdefault("publish_clock", False)
     parameters = [Parameter(name, value=value) for name, value in overrides.items()]
     return ros.add(ContactSimulatorNode(context=ros.context, parameter_overrides=parameters))
 
@@ -187,7 +191,11 @@ def test_killed_controller_mid_push_releases_within_the_timeout(ros):
 
     def sliding():
         command.publish(Float64MultiArray(data=tau.tolist()))
-        return joints.messages and np.abs(joints.messages[-1].velocity).max() > 0.05
+        return (
+            contacts.messages  # (its subscription may match later than the joints')
+            and joints.messages
+            and np.abs(joints.messages[-1].velocity).max() > 0.05
+        )
 
     assert ros.spin_until(sliding, timeout=10.0)
     assert contacts.messages[-1].data[LABEL["normal_force"]] > 5.0

@@ -1,0 +1,341 @@
+"""rns_demo --scenario wall_contact: the thesis' 7-DoF wall task over DDS, RNS-C against OS-C.
+
+Section 6.2.2 (Figs. 6.7-6.8; docs/part2.md, "Chapter 6 runs"): the LWR4-class arm pushes 10 N
+into a wall through its start flange point and strokes back and forth along it. For each
+controller a fresh in-process stack (:class:`rns_ros.harness.Harness`, its own domain, localhost
+only) runs ``rns_simulator`` in contact mode (wall through the start flange, normal along the
+flange z axis), ``rns_force_controller`` with that method, ``rns_operator`` playing
+``config/scenarios/wall_contact.yaml`` (twist and force setpoint) and ``rns_rerun_logger`` (one
+``.rrd`` per run). The simulator runs in lockstep with the controller (``lockstep_period`` = the
+1 ms step): every torque is computed from the state it acts on, as in the in-process loop of
+``rns_reproduce``, at whatever speed the machine allows.
+
+The table gives, from the recorded topics (:mod:`rns_ros.analysis.recorded_contact`), the largest
+in-plane position error, the largest force error (whole run, and once the 10 N are reached), the
+peak joint speed next to the in-process run of the same task (``run_closed_loop``), the residual
+joint speed at the end, the torque-loop rate reached (control steps per wall second) and the
+controller's step time (median / p99).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from rns_ros.analysis.part2_runs import run_closed_loop
+from rns_ros.analysis.part2_scenarios import (
+    ScenarioKind,
+    Task,
+    load_motion_force_scenario,
+    scenario_kind,
+)
+from rns_ros.analysis.recorded_contact import ContactRunFigures, contact_run_figures
+from rns_ros.cli import one_line
+from rns_ros.core import ConfigError, RnsError
+from rns_ros.harness import Harness, ProcessStack, TopicLog
+from rns_ros.resources import config_dir, scenario_path
+from rns_ros.sim.contact import ArcConstraint
+
+#: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
+CONTACT_METHODS = {
+    "rns": ("rns", "literal", "RNS-C"),
+    "os": ("os", "literal", "OS-C"),
+    "os_kinematic": ("os", "kinematic", "OS-C-kinematic"),
+}
+DEFAULT_CONTACT_METHODS = ("rns", "os")
+#: Shipped motion/force scenarios (any ``kind: motion_force`` file works too).
+CONTACT_SCENARIOS = ("wall_contact", "planar_arc")
+#: Per task: the params files of rns_simulator (contact mode) and rns_force_controller.
+TASK_PARAMS = {
+    Task.WALL: ("contact_simulator.yaml", "force_controller.yaml"),
+    Task.ARC: ("contact_arc.yaml", "force_controller_arc.yaml"),
+}
+#: Simulator step = control period [s], operator rate [Hz].
+CONTACT_STEP = 1e-3
+OPERATOR_RATE = 500.0
+#: Simulated time after the operator finished, before the run ends [s].
+SETTLE = 0.3
+ERRORS_TOPIC = "rns_force_controller/errors"
+#: rns_force_controller states that end a demo run as failed (safety stops, lost state, ...).
+FAILED_STATES = (
+    "unknown",
+    "WAITING_FOR_STATE",
+    "INVALID_COMMAND",
+    "WRENCH_LIMIT",
+    "CONTACT_LOST",
+    "NO_CONTACT",
+    "STALE_STATE",
+    "NON_FINITE",
+    "CONTROL_ERROR",
+)
+STATUS_TOPIC = "rns_force_controller/status"
+
+
+@dataclass(frozen=True)
+class ContactDemoRow:
+    """One DDS run of a motion/force controller.
+
+    Attributes:
+        method: rns_demo method (``rns``, ``os``, ``os_kinematic``); label: RNS-C, OS-C, ...
+        figures: what the recorded topics show (:class:`ContactRunFigures`).
+        core_peak_joint_speed: peak |theta_dot| of the in-process run of the same task and
+            controller (``run_closed_loop``) [rad/s].
+        loop_rate_hz: control steps per wall-clock second over the run [Hz].
+        step_time_median_us, step_time_p99_us: the controller's own step time [us], from its
+            newest status.
+        final_state: the controller's state at the end (OK unless a safety stop happened).
+        wall_time_s: wall time of the run [s]; recording: the .rrd written, or None.
+    """
+
+    method: str
+    label: str
+    figures: ContactRunFigures
+    core_peak_joint_speed: float
+    loop_rate_hz: float
+    step_time_median_us: float
+    step_time_p99_us: float
+    final_state: str
+    wall_time_s: float
+    recording: str | None
+
+
+def _status_values(log: TopicLog) -> dict[str, str]:
+    latest = log.latest()
+    if latest is None or not latest.status:
+        return {}
+    return {kv.key: kv.value for kv in latest.status[0].values}
+
+
+def _error_columns(log: TopicLog) -> dict[str, np.ndarray]:
+    if len(log) < 2:
+        raise RnsError("fewer than two force-controller samples were recorded; is DDS working?")
+    labels = log.latest().layout.dim[0].label.split()
+    data = np.array([msg.data for msg in log.messages if len(msg.data) == len(labels)])
+    return {label: data[:, i] for i, label in enumerate(labels)}
+
+
+def is_contact_scenario(name_or_path: str) -> bool:
+    """True when ``name_or_path`` names a ``kind: motion_force`` scenario file."""
+    try:
+        return scenario_kind(scenario_path(name_or_path)) is ScenarioKind.MOTION_FORCE
+    except ConfigError:
+        return False
+
+
+def _environment(constraint) -> dict:
+    """rns_simulator environment parameters of the scenario's surface (world axes)."""
+    if isinstance(constraint, ArcConstraint):
+        return {
+            "environment": "arc",
+            "arc_center": constraint.center.tolist(),
+            "arc_radius": float(constraint.radius),
+            "arc_axis": constraint.axis.tolist(),
+        }
+    return {
+        "environment": "wall",
+        "wall_point": constraint.point.tolist(),
+        "wall_normal": constraint.normal.tolist(),
+    }
+
+
+def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace):
+    """One DDS run of the motion/force scenario ``scenario_name`` with ``method``.
+
+    The nodes run as their own processes (:class:`~rns_ros.harness.ProcessStack`: the installed
+    ``rns_simulator``, ``rns_force_controller``, ``rns_operator`` and ``rns_rerun_logger``, each
+    on its own executor, as ``ros2 run`` starts them); this process only records the topics.
+    Sharing one process (one GIL) halves the 1 kHz torque loop's rate.
+
+    Raises:
+        RnsError: bad scenario, the controller stopped the task, or the run did not finish.
+    """
+    controller, variant, label = CONTACT_METHODS[method]
+    path = scenario_path(scenario_name)
+    scenario = load_motion_force_scenario(path)
+    setup = scenario.setup
+    core = run_closed_loop(setup, label, dt=CONTACT_STEP)
+    simulator_file, controller_file = (config_dir() / name for name in TASK_PARAMS[scenario.task])
+    model_config = str(config_dir() / scenario.spec.model)
+    timing = {"use_sim_time": True}
+    ros_args = list(args.ros_args[1:]) if args.ros_args else []
+    start = time.perf_counter()
+    with (
+        ProcessStack(args.domain_id) as processes,
+        Harness(args.domain_id, args.ros_args) as stack,
+    ):
+        joints = stack.record(JointState, "joint_states")
+        errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
+        status = stack.record(DiagnosticArray, STATUS_TOPIC)
+        twists = stack.record(TwistStamped, "cmd_twist")
+        recording = _start_logger(processes, f"{scenario.name}_{method}", args, model_config)
+        # the controller first: it is listening when the first state comes
+        processes.start(
+            "rns_force_controller",
+            {
+                "model_config": model_config,
+                "method": controller,
+                "os_variant": variant,
+                # lockstep: the simulator waits for each torque, so a state can come late when
+                # the 2 cores are busy; the 0.1 s default is for a free-running plant
+                "state_timeout": 1.0,
+                **timing,
+            },
+            params_file=controller_file,
+            ros_args=ros_args,
+        )
+        processes.start(
+            "rns_simulator",
+            {
+                "model_config": model_config,
+                **_environment(setup.constraint),
+                "initial_joint_positions": setup.initial_q.tolist(),
+                "step_size": CONTACT_STEP,
+                "publish_rate": 1.0 / CONTACT_STEP,
+                "real_time_factor": args.real_time_factor,
+                "publish_clock": True,
+                "lockstep_period": CONTACT_STEP,
+            },
+            params_file=simulator_file,
+            ros_args=ros_args,
+        )
+        processes.start(
+            "rns_operator",
+            {"scenario": str(path), "rate": OPERATOR_RATE, "zero_duration": SETTLE, **timing},
+            ros_args=ros_args,
+        )
+        budget = 60.0 + 20.0 * scenario.duration
+
+        def finished() -> bool:
+            if not len(twists) or not len(errors):
+                return False
+            # the operator's first twist is stamped when its profile starts (sim time)
+            end = _seconds(twists.messages[0].header.stamp) + scenario.duration + 2 * SETTLE
+            return _latest_time(errors) >= end
+
+        done = stack.spin_until(finished, timeout=budget)
+        wall = time.perf_counter() - start
+        values = _status_values(status)
+        states = {_state(msg) for msg in status.messages}
+        if not done:
+            outputs = "; ".join(
+                one_line(processes.output(p)[-300:]) for p in processes.processes if p.poll()
+            )
+            raise RnsError(
+                f"{label}: the scenario did not finish within {budget:.0f} s (controller state "
+                f"{values.get('state')}){': ' + outputs if outputs else ''}"
+            )
+    failed = sorted(states & set(FAILED_STATES) - {"WAITING_FOR_STATE"})
+    if failed:
+        raise RnsError(
+            f"{label}: rns_force_controller reported {failed} during the run "
+            f"(last: {values.get('state')}, {values.get('detail')})"
+        )
+    columns = _error_columns(errors)
+    figures = contact_run_figures(
+        columns, joints.stamps(), joints.array(lambda m: m.velocity), tail=SETTLE
+    )
+    return ContactDemoRow(
+        method=method,
+        label=label,
+        figures=figures,
+        core_peak_joint_speed=core.peak_joint_speed,
+        loop_rate_hz=figures.samples / wall,
+        step_time_median_us=float(values.get("step_time_us", "nan")),
+        step_time_p99_us=float(values.get("step_time_p99_us", "nan")),
+        final_state=values.get("state", "unknown"),
+        wall_time_s=wall,
+        recording=recording,
+    )
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
+def _state(msg: DiagnosticArray) -> str:
+    if not msg.status:
+        return "unknown"
+    return next((kv.value for kv in msg.status[0].values if kv.key == "state"), "unknown")
+
+
+def _start_logger(
+    processes: ProcessStack, name: str, args: argparse.Namespace, model_config: str
+) -> str | None:
+    """``rns_rerun_logger`` as a process: ``<output>/<name>.rrd``, or a live viewer."""
+    if args.no_record:
+        return None
+    args.output.mkdir(parents=True, exist_ok=True)
+    path = (args.output / f"{name}.rrd").resolve()
+    sink = "spawn" if args.viewer else "save"
+    processes.start(
+        "rns_rerun_logger",
+        {
+            "sink": sink,
+            "rrd_path": str(path),
+            "recording_name": name,
+            "model_config": model_config,
+            "use_sim_time": True,
+        },
+    )
+    return str(path) if sink == "save" else None
+
+
+def _latest_time(errors: TopicLog) -> float:
+    latest = errors.latest()
+    return latest.data[0] if latest is not None and latest.data else -math.inf
+
+
+def format_contact_table(rows: list[ContactDemoRow]) -> str:
+    """One line per controller: errors, joint speeds (DDS and in-process), loop timing."""
+    header = (
+        f"{'controller':<16}{'max pos err [mm]':>18}{'max |f err| [N]':>17}{'held [N]':>10}"
+        f"{'peak |θ̇| [rad/s]':>18}{'in-process':>12}{'final |θ̇|':>11}{'loop [Hz]':>11}"
+        f"{'step med/p99 [µs]':>19}{'wall [s]':>10}"
+    )
+    lines = [header, "-" * len(header)]
+    for row in rows:
+        f = row.figures
+        lines.append(
+            f"{row.label:<16}{1e3 * f.max_position_error_m:>18.4f}{f.max_force_error_n:>17.3g}"
+            f"{f.held_force_error_n:>10.3g}{f.peak_joint_speed:>18.3f}"
+            f"{row.core_peak_joint_speed:>12.3f}{f.final_joint_speed:>11.2g}"
+            f"{row.loop_rate_hz:>11.0f}"
+            f"{f'{row.step_time_median_us:.0f}/{row.step_time_p99_us:.0f}':>19}"
+            f"{row.wall_time_s:>10.1f}"
+        )
+    return "\n".join(lines)
+
+
+def non_finite_contact_figures(rows: list[ContactDemoRow]) -> list[str]:
+    """One text per run with a NaN or infinite figure; empty when all are finite."""
+    problems = []
+    for row in rows:
+        values = {
+            **{name: getattr(row.figures, name) for name in row.figures.__dataclass_fields__},
+            "core_peak_joint_speed": row.core_peak_joint_speed,
+            "loop_rate_hz": row.loop_rate_hz,
+        }
+        bad = [f"{name} = {value}" for name, value in values.items() if not math.isfinite(value)]
+        if bad:
+            problems.append(f"{row.label}: " + ", ".join(bad))
+    return problems
+
+
+__all__ = [
+    "CONTACT_METHODS",
+    "CONTACT_SCENARIOS",
+    "DEFAULT_CONTACT_METHODS",
+    "ContactDemoRow",
+    "format_contact_table",
+    "is_contact_scenario",
+    "non_finite_contact_figures",
+    "run_contact_method",
+]

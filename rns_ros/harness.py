@@ -42,7 +42,6 @@ import numpy as np
 import rclpy
 import yaml
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -117,9 +116,6 @@ class Harness:
         ros_args: global ROS arguments for every node of the stack, as a command line gives them
             (``["--ros-args", "-p", "rate:=50.0", "-r", "joint_states:=arm/joint_states"]``).
             Parameters given to :meth:`add` take precedence over them.
-        events: spin on rclpy's EventsExecutor (what ``run_node`` uses) instead of the
-            SingleThreadedExecutor: about twice the message throughput, for 1 kHz loops such as
-            the contact simulator with rns_force_controller (205 -> 413 steps/s in lockstep).
 
     Raises:
         ConfigError: ``domain_id`` out of range, or ``ros_args`` that rcl cannot parse.
@@ -129,9 +125,7 @@ class Harness:
     other machines.
     """
 
-    def __init__(
-        self, domain_id: int | None = None, ros_args: Iterable[str] = (), *, events: bool = False
-    ) -> None:
+    def __init__(self, domain_id: int | None = None, ros_args: Iterable[str] = ()) -> None:
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
         os.environ.pop("ROS_STATIC_PEERS", None)
         self.domain_id = _domain(domain_id)
@@ -144,8 +138,7 @@ class Harness:
             rclpy.init(args=["harness", *ros_args], context=self.context, domain_id=self.domain_id)
         except RuntimeError as exc:  # rcl's parse errors (RCLError derives from RuntimeError)
             raise ConfigError(f"invalid ROS arguments {ros_args}: {exc}") from None
-        executor = EventsExecutor if events else SingleThreadedExecutor
-        self.executor = executor(context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
         self._probe: Node | None = None
 

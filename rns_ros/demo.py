@@ -38,6 +38,7 @@ from rns_ros.demo_contact import (
     CONTACT_METHODS,
     CONTACT_SCENARIOS,
     DEFAULT_CONTACT_METHODS,
+    contact_epilogue,
     format_contact_table,
     is_contact_scenario,
     non_finite_contact_figures,
@@ -486,9 +487,7 @@ def _main_contact(args: argparse.Namespace) -> int:
         rows,
         format_contact_table(rows),
         non_finite_contact_figures(rows),
-        "pos err: in-plane p_des - p; held: |f_des - f| once the 10 N are reached; in-process: "
-        "the same task in rns_reproduce's loop (docs/part2.md). The thesis prints no numbers for "
-        "this task; it claims RNS-C moves the joints more calmly than OS-C.",
+        contact_epilogue(args.scenario),
         [
             {
                 "method": row.method,

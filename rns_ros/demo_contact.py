@@ -260,6 +260,25 @@ def _seconds(stamp) -> float:
     return stamp.sec + 1e-9 * stamp.nanosec
 
 
+#: What the thesis reports for each task (compare with the peak |theta_dot| columns).
+THESIS_NOTES = {
+    Task.WALL: "The thesis prints no numbers for the wall task (Figs. 6.7-6.8); it shows RNS-C "
+    "moving the joints more calmly than OS-C.",
+    Task.ARC: "Thesis Fig. 6.4: peak |θ̇| 0.73 rad/s for RNS-C against 4.22 for OS-C (our "
+    "half-cycle time is tuned to the 0.73, docs/part2.md [A-4.7]).",
+}
+
+
+def contact_epilogue(scenario_name: str) -> str:
+    """The text under the table: what the columns are and what the thesis reports."""
+    task = load_motion_force_scenario(scenario_path(scenario_name)).task
+    return (
+        "pos err: in-plane p_des - p; held: |f_des - f| once the desired force is reached; "
+        "in-process: the same task in rns_reproduce's loop (docs/part2.md); final |θ̇|: over "
+        f"the last {SETTLE} s, after the task. " + THESIS_NOTES[task]
+    )
+
+
 def _state(msg: DiagnosticArray) -> str:
     if not msg.status:
         return "unknown"
@@ -334,6 +353,7 @@ __all__ = [
     "CONTACT_SCENARIOS",
     "DEFAULT_CONTACT_METHODS",
     "ContactDemoRow",
+    "contact_epilogue",
     "format_contact_table",
     "is_contact_scenario",
     "non_finite_contact_figures",

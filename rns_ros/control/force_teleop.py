@@ -108,8 +108,12 @@ class ConstrainedFrame(Choice):
 
 
 class NormalMode(Choice):
-    """``fixed``: n = constrained_axis (a plane); ``wrench``: the measured force direction while
-    |f| >= contact_threshold, else the last one (curved surfaces)."""
+    """``fixed``: the surface known at activation: n = constrained_axis there, a plane for
+    surface_curvature 0, else a sphere of radius 1/surface_curvature through that point (its
+    trace in the task plane: the cylinder of the planar arc), n(p) toward (kappa > 0) or away
+    from (kappa < 0) its centre; ``wrench``: the measured force direction while the EE pushes
+    with |f| >= contact_threshold, else the ``fixed`` surface model (or the last normal, for
+    a plane); for surfaces whose shape is only roughly known."""
 
     __label__ = "normal_mode"
     FIXED = "fixed"
@@ -704,6 +708,8 @@ class ForceTeleopController:
         self._wrenches: dict[int, WrenchSample] = {}
         self._latest_wrench: WrenchSample | None = None
         self._normal: np.ndarray | None = None
+        # fixed mode on a curved surface: the centre of curvature, latched at activation (3,)
+        self._center: np.ndarray | None = None
         self._tangent: np.ndarray | None = None
         self._beta = 0.0
         self._f_des = 0.0
@@ -814,6 +820,9 @@ class ForceTeleopController:
                     f"{list(self.settings.task_axes)}"
                 )
             self._normal = normal
+            curvature = self.settings.surface_curvature
+            if curvature != 0.0:
+                self._center = state.ee_position + normal / curvature
         self._p_des = state.ee_position.copy()
         self._r_des = state.ee_rotation.copy()
         self._v_des = np.zeros(6)
@@ -940,12 +949,18 @@ class ForceTeleopController:
         exact = self._wrenches.get(stamp)
         latest = exact or self._latest_wrench
         force_world = None if latest is None else rotation @ latest.force
+        normal = None
         if settings.normal_mode is NormalMode.WRENCH and force_world is not None:
             size = float(np.linalg.norm(force_world))
-            if size >= settings.contact_threshold:
+            # only a push gives the normal: a (bilateral) pull points the other way
+            if size >= settings.contact_threshold and float(self._normal @ force_world) > 0.0:
                 normal = self._project_normal(force_world / size)
-                if normal is not None:
-                    self._normal = normal
+        if normal is None and self._center is not None:
+            # the surface model: a sphere of radius 1/kappa through the activation point
+            toward = np.sign(settings.surface_curvature) * (self._center - state.ee_position)
+            normal = self._project_normal(toward / max(float(np.linalg.norm(toward)), 1e-12))
+        if normal is not None:
+            self._normal = normal
         n = self._normal
         f_meas = 0.0 if force_world is None else float(n @ force_world)
         f_des = self._force_desired(state, now, notes, flags)

@@ -206,12 +206,24 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
             params_file=simulator_file,
             ros_args=ros_args,
         )
+        budget = 60.0 + 20.0 * scenario.duration
+        # the operator only once this process records the running loop: a recorder matched
+        # seconds late (discovery on a busy machine) would miss the start of the task
+        if not stack.spin_until(lambda: len(errors) > 0 and len(joints) > 0, timeout=budget):
+            raise RnsError(
+                f"{label}: no joint_states and {ERRORS_TOPIC} within {budget:.0f} s; is DDS "
+                "working?"
+            )
         processes.start(
             "rns_operator",
-            {"scenario": str(path), "rate": OPERATOR_RATE, "zero_duration": SETTLE, **timing},
+            {
+                "scenario": str(path),
+                "rate": OPERATOR_RATE,
+                "zero_duration": SETTLE,
+                **timing,
+            },
             ros_args=ros_args,
         )
-        budget = 60.0 + 20.0 * scenario.duration
 
         def finished() -> bool:
             if not len(twists) or not len(errors):
@@ -239,6 +251,12 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
             f"(last: {values.get('state')}, {values.get('detail')})"
         )
     columns = _error_columns(errors)
+    task_start = _seconds(twists.messages[0].header.stamp)
+    if columns["time"][0] > task_start:
+        raise RnsError(
+            f"{label}: the recording starts {columns['time'][0] - task_start:.3f} s after the "
+            "task; its figures would miss the start"
+        )
     figures = contact_run_figures(
         columns, joints.stamps(), joints.array(lambda m: m.velocity), tail=SETTLE
     )

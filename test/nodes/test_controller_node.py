@@ -68,11 +68,15 @@ class Operator:
         self.publisher.publish(msg)
 
 
-@pytest.fixture
-def stack(ros):
-    """Simulator + controller + probe recorders on one executor."""
+#: state_timeout of the tests that are not about the state watchdog [s]: every node shares one
+#: process here, and one GIL on a busy 2-core machine delayed a joint state by 0.19 s in CI.
+TEST_STATE_TIMEOUT = 0.5
+
+
+def _stack(ros, state_timeout=TEST_STATE_TIMEOUT):
+    """Simulator + controller (``state_timeout`` [s]) + probe recorders on one executor."""
     simulator = _node(ros, SimulatorNode)
-    controller = _node(ros, ControllerNode)
+    controller = _node(ros, ControllerNode, state_timeout=state_timeout)
     probe = ros.probe()
     streams = {
         "references": Recorder(probe, JointTrajectory, "joint_references"),
@@ -80,6 +84,11 @@ def stack(ros):
         "odom": Recorder(probe, Odometry, "base_odom"),
     }
     return SimpleNamespace(simulator=simulator, controller=controller, probe=probe, streams=streams)
+
+
+@pytest.fixture
+def stack(ros):
+    return _stack(ros)
 
 
 def _latest_state(streams):
@@ -466,10 +475,11 @@ def _speeds(references) -> np.ndarray:
     return np.array([np.abs(m.points[0].velocities).max() for m in references])
 
 
-def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros, stack):
+def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
     """Issue 11, defect 2: the simulator dies while twists stream. Within state_timeout
     (+ one period) the controller publishes zero and reports STALE_STATE (ERROR); it resumes only
     with a fresh state, ramping up from rest."""
+    stack = _stack(ros, state_timeout=0.1)  # the shipped default (checked below)
     probe, streams = stack.probe, stack.streams
     received = []  # monotonic receipt times of joint_states at the probe [s]
     probe.create_subscription(
@@ -494,6 +504,7 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros, sta
     # one state may still have been in flight when the node went; the loss starts after it
     delay = zero_at - received[-1]
     print(f"last joint_states -> zero command: {delay:.3f} s (state_timeout 0.1 s)")
+    assert next(spec.default for spec in PARAMETERS if spec.name == "state_timeout") == 0.1
     assert 0.09 <= delay < 0.1 + 0.01 + 0.1  # timeout + one period + executor slack
     ros.spin_for(0.5)
     assert np.all(_speeds(streams["references"].messages[-40:]) == 0.0)

@@ -25,8 +25,10 @@ import numpy as np
 from rns_ros.control.inspection import (
     ControlGains,
     ControlOutput,
+    LawRates,
     Method,
-    reactionless_camera_control,
+    control_output,
+    law_rates,
     wrist_offset,
 )
 from rns_ros.core.errors import ConfigError
@@ -205,19 +207,19 @@ class ReactionlessController:
         omega_ref = as_vector(omega_ref, 3, "omega_ref")
         evaluated = state
         if settings.hold_correction is HoldCorrection.NAIVE:
-            output = self._evaluate(state, omega_ref, settings.period)
+            rates = self._rates(state, omega_ref, settings.period)
         else:
             # predictor of theta_dot over the coming period: the law at the sample; each
             # iteration re-predicts from its own output. (Warm-starting from the previous period's
             # output saves one evaluation but let SC oscillate: 1.4e-2 deg on own_device.)
-            predicted = self._evaluate(state, omega_ref, settings.period).joint_velocity
+            rates = self._rates(state, omega_ref, settings.period)
             for _ in range(settings.hold_iterations):
-                q_mid = state.q.copy()
-                q_mid[7:] = state.theta + 0.5 * settings.period * predicted
-                evaluated = FreeFloatingState.compute(self.robot, q_mid)
+                evaluated = state.with_joint_angles(
+                    state.theta + 0.5 * settings.period * rates.joint_velocity
+                )
                 # position limits: judged over the half period left after the midpoint
-                output = self._evaluate(evaluated, omega_ref, 0.5 * settings.period)
-                predicted = output.joint_velocity
+                rates = self._rates(evaluated, omega_ref, 0.5 * settings.period)
+        output = control_output(evaluated, omega_ref, rates)
         theta_dot = output.joint_velocity
         start = self._reference
         self._reference = start + settings.period * theta_dot
@@ -229,16 +231,14 @@ class ReactionlessController:
             evaluated_theta=evaluated.theta,
         )
 
-    def _evaluate(
-        self, state: FreeFloatingState, omega_ref: np.ndarray, horizon: float
-    ) -> ControlOutput:
+    def _rates(self, state: FreeFloatingState, omega_ref: np.ndarray, horizon: float) -> LawRates:
         settings = self.settings
-        return reactionless_camera_control(
+        return law_rates(
             self.robot,
             state,
             omega_ref,
-            method=settings.method,
-            gains=settings.gains,
-            wrist_reference=self._wrist_reference,
-            limit_horizon=horizon,
+            settings.method,
+            settings.gains,
+            self._wrist_reference,
+            horizon,
         )

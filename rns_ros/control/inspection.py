@@ -20,12 +20,19 @@ controller) needs the hold-interval correction of the controller issue.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from rns_ros.core.errors import ConfigError, ModelError
-from rns_ros.core.fastmath import gram_determinant, svd_small
+from rns_ros.core.fastmath import (
+    gram_determinant,
+    solve_small,
+    svd_small,
+    symmetric_eigenvalues,
+)
 from rns_ros.core.inverses import (
     THESIS_EPSILON,
     THESIS_LAMBDA2_MAX,
@@ -42,6 +49,9 @@ from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Singular values of J-bar below this fraction of sigma_max count as lost for P [-].
 _RANK_RCOND = 1e-12
+#: SC and pinv take the closed form of :func:`law_rates` while sigma_min(J-bar) exceeds this [-]
+#: (S = J-bar J-bar^T then has a condition number below ~1e7); closer, the SVD.
+_CLOSED_FORM_SIGMA = 1e-3
 
 #: Thesis wrist-stabilization gain k_g of eq. (4.5) [1/(m s)] (section 4.2.2 prints "kg/m s").
 THESIS_WRIST_GAIN = 100.0
@@ -154,6 +164,28 @@ def position_limit_scale(
     return float((room[binding] / moving[binding]).min())
 
 
+class LawRates(NamedTuple):
+    """The joint velocity of one evaluation of the law and what it was made with.
+
+    Attributes:
+        joint_velocity: theta_dot_ref after speed and position-limit scaling [rad/s], (n,).
+        sigma_min: smallest singular value of J-bar (of J_W_omega_e for the baseline) [-].
+        algorithmic: det(J-bar J-bar^T) [-].
+        damping: DLS lambda^2 applied [-] (0 for other methods).
+        sc_scale: SC's b prod(sigma) [-] (1 for other methods).
+        limit_scale: joint-limit scale in [0, 1] [-].
+        position_limited: True when a joint position limit reduced ``limit_scale``.
+    """
+
+    joint_velocity: np.ndarray
+    sigma_min: float
+    algorithmic: float
+    damping: float
+    sc_scale: float
+    limit_scale: float
+    position_limited: bool
+
+
 def reactionless_camera_control(
     robot: FreeFloatingModel,
     state: FreeFloatingState,
@@ -176,40 +208,100 @@ def reactionless_camera_control(
             ignores position limits. Velocity limits always apply.
     """
     omega_ref = as_vector(omega_ref, 3, "omega_ref")
-    method = Method.parse(method)
-    gains = gains or ControlGains()
+    if wrist_reference is not None:
+        wrist_reference = as_vector(wrist_reference, 3, "wrist_reference")
+    rates = law_rates(
+        robot,
+        state,
+        omega_ref,
+        Method.parse(method),
+        gains or ControlGains(),
+        wrist_reference,
+        limit_horizon,
+    )
+    return control_output(state, omega_ref, rates)
+
+
+def control_output(
+    state: FreeFloatingState, omega_ref: np.ndarray, rates: LawRates
+) -> ControlOutput:
+    """The :class:`ControlOutput` of ``rates`` (the law evaluated at ``state``)."""
+    theta_dot = rates.joint_velocity
     j_omega = state.camera.jacobian[3:]
-    restricted = state.restricted_jacobian
-    svd = WideSvd(*svd_small(restricted))  # the one SVD of J-bar: inverse, projector, det
+    sigma = state.coupling_singular_values.tolist()
+    return ControlOutput(
+        joint_velocity=theta_dot,
+        sigma_min=rates.sigma_min,
+        determinants=Determinants(
+            kinematic=gram_determinant(j_omega),
+            coupling=math.prod(value * value for value in sigma),
+            algorithmic=rates.algorithmic,
+        ),
+        damping=rates.damping,
+        speed_scale=rates.sc_scale * rates.limit_scale,
+        limit_scale=rates.limit_scale,
+        position_limited=rates.position_limited,
+        angular_residual=omega_ref - j_omega @ theta_dot,
+        coupling_momentum=state.coupling_angular_momentum_matrix @ theta_dot,
+    )
+
+
+def law_rates(
+    robot: FreeFloatingModel,
+    state: FreeFloatingState,
+    omega_ref: np.ndarray,
+    method: Method,
+    gains: ControlGains,
+    wrist_reference: np.ndarray | None,
+    limit_horizon: float | None,
+) -> LawRates:
+    """theta_dot of eq. (4.5)/(4.15) (or 4.7-4.8) at ``state``, without the diagnostics record.
+
+    Arguments as :func:`reactionless_camera_control`, already parsed: ``omega_ref`` (3,) and
+    ``wrist_reference`` (3,) or None as float arrays, ``method`` a :class:`Method`.
+
+    Where J-bar is well conditioned (DLS: sigma_min > epsilon, no damping; SC and pinv:
+    sigma_min > _CLOSED_FORM_SIGMA) the law needs no SVD: J-bar^+ = J-bar^T S^-1 with
+    S = J-bar J-bar^T (3 x 3), J-bar^SC = b sqrt(det S) J-bar^+ (4.13, mu_i = prod(sigma) /
+    sigma_i), and P g = P_RNS g - J-bar^+ J-bar g, so with k = k_g (times det S for SC, 4.15)
+
+        theta_dot = J-bar^T S^-1 (c omega_ref + k J-bar g) - k P_RNS g,  g = J_vw^T dp_w,
+
+    c = 1 (dls, pinv) or b sqrt(det S) (sc): one 3 x 3 solve. Elsewhere the SVD of J-bar.
+    """
+    j_omega = state.camera.jacobian[3:]
+    projector = state.reaction_null_space_projector
+    restricted = j_omega @ projector
+    gram = restricted @ restricted.T
+    eigenvalues = symmetric_eigenvalues(gram).tolist()  # sigma_i^2 of J-bar, ascending
+    sigma_min = math.sqrt(max(eigenvalues[0], 0.0))
+    algorithmic = math.prod(eigenvalues)
     damping, sc_scale = 0.0, 1.0
     if method is Method.CONVENTIONAL:
         theta_dot, sigma_min = _conventional(robot, j_omega, omega_ref)
     else:
-        if method is Method.DLS:
-            inverse = dls_from_svd(svd, gains.epsilon, gains.lambda2_max)
-            matrix, damping = inverse.matrix, inverse.damping
-        elif method is Method.SC:
-            inverse = sc_from_svd(svd, gains.sc_gain)
-            matrix, sc_scale = inverse.matrix, inverse.speed_scale
-        else:
-            matrix = pseudoinverse_from_svd(svd)
-        sigma_min = float(svd.sigma[-1])
-        theta_dot = matrix @ omega_ref
-        if wrist_reference is not None and gains.wrist_gain > 0.0:
-            drift = wrist_offset(state) - as_vector(wrist_reference, 3, "wrist_reference")
-            # P = P_RNS (E - J-bar^+ J-bar) = P_RNS - V_r V_r^T: the right singular vectors of
-            # J-bar with sigma > 0 already lie in range(P_RNS)
-            kept = svd.vt[svd.sigma > _RANK_RCOND * max(svd.sigma[0], TINY)]
-            gradient = state.wrist.jacobian[:3].T @ drift
-            null_gradient = state.reaction_null_space_projector @ gradient - kept.T @ (
-                kept @ gradient
-            )
-            term = -gains.wrist_gain * null_gradient
+        wrist = wrist_reference is not None and gains.wrist_gain > 0.0
+        regular = sigma_min > (gains.epsilon if method is Method.DLS else _CLOSED_FORM_SIGMA)
+        if regular:
+            scale = 1.0
             if method is Method.SC:
-                term *= float(np.prod(svd.sigma**2))  # det(J-bar J-bar^T), eq. (4.15)
-            theta_dot = theta_dot + term
+                sc_scale = gains.sc_gain * math.sqrt(algorithmic)
+                scale = sc_scale
+            rhs = scale * omega_ref
+            if wrist:
+                gain = gains.wrist_gain * (algorithmic if method is Method.SC else 1.0)
+                gradient = state.wrist.jacobian[:3].T @ (wrist_offset(state) - wrist_reference)
+                rhs = rhs + gain * (restricted @ gradient)
+                theta_dot = restricted.T @ solve_small(gram, rhs) - gain * (projector @ gradient)
+            else:
+                theta_dot = restricted.T @ solve_small(gram, rhs)
+        else:
+            theta_dot, damping, sc_scale, sigma_min, algorithmic = _svd_law(
+                state, restricted, omega_ref, method, gains, wrist_reference if wrist else None
+            )
     limit_scale = uniform_speed_scale(theta_dot, robot.velocity_limits)
-    theta_dot = limit_scale * theta_dot
+    if limit_scale < 1.0:
+        theta_dot = limit_scale * theta_dot
     position_limited = False
     if limit_horizon is not None:
         position_scale = position_limit_scale(
@@ -219,21 +311,38 @@ def reactionless_camera_control(
             position_limited = True
             limit_scale *= position_scale
             theta_dot = position_scale * theta_dot
-    return ControlOutput(
-        joint_velocity=theta_dot,
-        sigma_min=sigma_min,
-        determinants=Determinants(
-            kinematic=gram_determinant(j_omega),
-            coupling=float(np.prod(state.coupling_singular_values**2)),
-            algorithmic=float(np.prod(svd.sigma**2)),
-        ),
-        damping=damping,
-        speed_scale=sc_scale * limit_scale,
-        limit_scale=limit_scale,
-        position_limited=position_limited,
-        angular_residual=omega_ref - j_omega @ theta_dot,
-        coupling_momentum=state.coupling_angular_momentum_matrix @ theta_dot,
+    return LawRates(
+        theta_dot, sigma_min, algorithmic, damping, sc_scale, limit_scale, position_limited
     )
+
+
+def _svd_law(state, restricted, omega_ref, method, gains, wrist_reference):
+    """The law from the SVD of J-bar (inside the DLS region, near singular SC / pinv):
+    (theta_dot (n,), lambda^2, SC scale, sigma_min, det(J-bar J-bar^T))."""
+    svd = WideSvd(*svd_small(restricted))
+    damping, sc_scale = 0.0, 1.0
+    if method is Method.DLS:
+        inverse = dls_from_svd(svd, gains.epsilon, gains.lambda2_max)
+        matrix, damping = inverse.matrix, inverse.damping
+    elif method is Method.SC:
+        inverse = sc_from_svd(svd, gains.sc_gain)
+        matrix, sc_scale = inverse.matrix, inverse.speed_scale
+    else:
+        matrix = pseudoinverse_from_svd(svd)
+    determinant = float(np.prod(svd.sigma**2))
+    theta_dot = matrix @ omega_ref
+    if wrist_reference is not None:
+        drift = wrist_offset(state) - wrist_reference
+        # P = P_RNS (E - J-bar^+ J-bar) = P_RNS - V_r V_r^T: the right singular vectors of
+        # J-bar with sigma > 0 already lie in range(P_RNS)
+        kept = svd.vt[svd.sigma > _RANK_RCOND * max(svd.sigma[0], TINY)]
+        gradient = state.wrist.jacobian[:3].T @ drift
+        null_gradient = state.reaction_null_space_projector @ gradient - kept.T @ (kept @ gradient)
+        term = -gains.wrist_gain * null_gradient
+        if method is Method.SC:
+            term *= determinant  # det(J-bar J-bar^T), eq. (4.15)
+        theta_dot = theta_dot + term
+    return theta_dot, damping, sc_scale, float(svd.sigma[-1]), determinant
 
 
 def _conventional(robot: FreeFloatingModel, j_omega: np.ndarray, omega_ref: np.ndarray):

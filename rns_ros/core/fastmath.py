@@ -5,8 +5,9 @@ behind it, ``numpy.linalg._umath_linalg.solve1``, does the same LAPACK solve in 
 private numpy API (numpy is pinned exactly in requirements.txt), so it is looked up once with a
 fallback to the public function, and a test checks both agree. Use it only where the matrix is
 known to be well conditioned (it does not raise LinAlgError on a singular matrix). The SVD
-gufuncs (``svd_s``, ``svd_f``) are used the same way: same LAPACK routine as ``np.linalg.svd``,
-about half the call time on the 3 x 7 matrices of the controller.
+gufuncs (``svd_s``, ``svd_f``), the many-right-hand-side solve (``solve``) and the symmetric
+eigenvalues (``eigvalsh_lo``) are used the same way: same LAPACK routines as ``np.linalg``, about
+half the call time on the 3 x 3 and 3 x 7 matrices of the controller.
 """
 
 from __future__ import annotations
@@ -17,10 +18,12 @@ try:  # pragma: no branch - depends on the numpy build
     from numpy.linalg import _umath_linalg
 
     _SOLVE1 = getattr(_umath_linalg, "solve1", None)
+    _SOLVE = getattr(_umath_linalg, "solve", None)
     _SVD_THIN = getattr(_umath_linalg, "svd_s", None)
     _SVD_FULL = getattr(_umath_linalg, "svd_f", None)
+    _EIGVALSH = getattr(_umath_linalg, "eigvalsh_lo", None)
 except ImportError:  # pragma: no cover
-    _SOLVE1 = _SVD_THIN = _SVD_FULL = None
+    _SOLVE1 = _SOLVE = _SVD_THIN = _SVD_FULL = _EIGVALSH = None
 
 
 def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -28,6 +31,21 @@ def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     if _SOLVE1 is None:
         return np.linalg.solve(matrix, rhs)
     return _SOLVE1(matrix, rhs)
+
+
+def solve_small_many(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """X with matrix @ X = rhs for a square, well-conditioned ``matrix`` (k, k), rhs (k, m)."""
+    if _SOLVE is None:
+        return np.linalg.solve(matrix, rhs)
+    return _SOLVE(matrix, rhs)
+
+
+def symmetric_eigenvalues(matrix: np.ndarray) -> np.ndarray:
+    """Eigenvalues of a finite symmetric matrix (k, k), ascending, shape (k,) (LAPACK syevd on
+    the lower triangle, like ``np.linalg.eigvalsh``)."""
+    if _EIGVALSH is None:
+        return np.linalg.eigvalsh(matrix)
+    return _EIGVALSH(matrix)
 
 
 def svd_small(matrix: np.ndarray, full: bool = False):

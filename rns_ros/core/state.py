@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.conventions import thesis_inertia_blocks
+from rns_ros.core.fastmath import solve_small_many, symmetric_eigenvalues
 from rns_ros.core.inverses import kernel_basis
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import as_vector
@@ -23,6 +24,11 @@ from rns_ros.core.validation import as_vector
 #: Relative singular-value threshold below which a direction of the coupling angular momentum
 #: matrix counts as lost (rank decision for P_RNS), dimensionless.
 DEFAULT_RANK_TOLERANCE = 1e-9
+#: P_RNS comes from the 3 x 3 Gram matrix M~ M~^T (a solve) while sigma_min / sigma_max of
+#: M~_omega_m stays above this [-]; closer to a coupling singularity from the SVD, with the rank
+#: decision of ``rank_tolerance``. (The Gram matrix squares the condition number: at 1e-2 P_RNS
+#: is idempotent to ~1e-13, at 3e-3 only to 1e-12; our arm has sigma_min / sigma_max ~ 0.04.)
+GRAM_CONDITION_LIMIT = 1e-2
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -144,33 +150,53 @@ class FreeFloatingState:
             rank_tolerance: relative singular-value threshold for the rank of M~_omega_m [-].
         """
         model, data = robot.model, robot.data
-        q = as_vector(q, model.nq, "q")
-        centroidal = pin.computeCentroidalMap(model, data, q)  # also the CoM, data.com[0]
+        q = _frozen(as_vector(q, model.nq, "q"))
+        pin.computeCentroidalMap(model, data, q)  # also the CoM and the joint placements
+        rotation = _frozen(data.oMi[1].rotation)
+        base_position = _frozen(data.oMi[1].translation)
+        return cls._from_centroidal_map(robot, q, base_position, rotation, rank_tolerance)
+
+    def with_joint_angles(
+        self, theta, *, rank_tolerance: float = DEFAULT_RANK_TOLERANCE
+    ) -> FreeFloatingState:
+        """The state with the arm at ``theta`` [rad], shape (n,), and the base pose unchanged.
+
+        What a held joint velocity reaches within a control period while the base stands still
+        (reactionless motion): the hold correction evaluates the law there. Same quantities as
+        :meth:`compute` at the moved q, without re-checking q or recomputing the base pose (the
+        base arrays are shared with this state; all are read-only).
+        """
+        q = self.q.copy()
+        q[7:] = theta
+        q.setflags(write=False)
+        pin.computeCentroidalMap(self.robot.model, self.robot.data, q)
+        return type(self)._from_centroidal_map(
+            self.robot, q, self.base_position, self.base_rotation, rank_tolerance
+        )
+
+    @classmethod
+    def _from_centroidal_map(
+        cls, robot, q, base_position, rotation, rank_tolerance
+    ) -> FreeFloatingState:
+        """The rest of :meth:`compute` once ``pin.computeCentroidalMap`` ran at ``q``."""
+        model, data = robot.model, robot.data
+        centroidal = data.Ag
         com = data.com[0].copy()
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        rotation = data.oMi[1].rotation.copy()
-        base_position = data.oMi[1].translation.copy()
-        tilde_m_wm = centroidal[3:, 6:]
+        pin.computeJointJacobians(model, data)  # at the placements of the centroidal map
+        tilde_m_wm = centroidal[3:, 6:].copy()
         tilde_m_w = centroidal[3:, 3:6] @ rotation.T
-
-        # P_RNS from the SVD of M~_omega_m: projector onto its kernel (eq. 2.34, 3.3).
-        kernel, sigma, rank = kernel_basis(tilde_m_wm, rank_tolerance, checked=True)
-        projector = kernel @ kernel.T
-
-        base_position = _sealed(base_position)
+        projector, sigma, rank = reaction_null_space(tilde_m_wm, rank_tolerance)
         camera = _frame_kinematics(robot, robot.camera_frame_id, base_position)
         wrist = (
             None
             if robot.wrist_frame_id is None
             else _frame_kinematics(robot, robot.wrist_frame_id, base_position)
         )
-        q = _frozen(q)
         return cls(
             q=q,
             theta=q[7:],
             base_position=base_position,
-            base_rotation=_sealed(rotation),
+            base_rotation=rotation,
             coupling_angular_momentum_matrix=_sealed(tilde_m_wm),
             base_rotational_inertia=_sealed(tilde_m_w),
             center_of_mass=_sealed(com),
@@ -233,6 +259,27 @@ class FreeFloatingState:
         )
 
 
+def reaction_null_space(
+    coupling: np.ndarray, rank_tolerance: float = DEFAULT_RANK_TOLERANCE
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """P_RNS = E - M~^+ M~ of eq. (2.34) / (3.3) for M~_omega_m (3, n), n > 3 or not.
+
+    Returns (P_RNS (n, n), singular values of M~ descending (min(3, n),), rank of M~). Away from
+    a coupling singularity (sigma_min / sigma_max > GRAM_CONDITION_LIMIT) M~^+ M~ =
+    M~^T (M~ M~^T)^-1 M~ with one 3 x 3 solve and the singular values from the eigenvalues of
+    M~ M~^T; otherwise the kernel basis of the SVD (rank decision by ``rank_tolerance``).
+    """
+    rows, columns = coupling.shape
+    if rows < columns:
+        gram = coupling @ coupling.T
+        eigenvalues = symmetric_eigenvalues(gram)
+        if eigenvalues[0] > GRAM_CONDITION_LIMIT**2 * eigenvalues[-1]:
+            projector = np.eye(columns) - coupling.T @ solve_small_many(gram, coupling)
+            return projector, np.sqrt(eigenvalues[::-1]), rows
+    kernel, sigma, rank = kernel_basis(coupling, rank_tolerance, checked=True)
+    return kernel @ kernel.T, sigma, rank
+
+
 def _gram_determinant(matrix: np.ndarray) -> float:
     """det(A A^T) for a wide matrix A, via its singular values (accurate near zero)."""
     return float(np.prod(np.linalg.svd(matrix, compute_uv=False) ** 2))
@@ -240,6 +287,7 @@ def _gram_determinant(matrix: np.ndarray) -> float:
 
 def _frame_kinematics(robot: FreeFloatingModel, frame_id: int, base_position) -> FrameKinematics:
     model, data = robot.model, robot.data
+    pin.updateFramePlacement(model, data, frame_id)
     placement = data.oMf[frame_id]
     position = placement.translation.copy()
     jacobian = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)

@@ -12,6 +12,9 @@ from rns_testing import SATELLITE_OBSERVATION_DEG, configurations, vectors
 
 from rns_ros.control.inspection import (
     ControlGains,
+    Method,
+    _svd_law,
+    law_rates,
     reactionless_camera_control,
     uniform_speed_scale,
     wrist_offset,
@@ -192,3 +195,25 @@ def test_satellite_observation_continuous_time(robot):
     # geometry (sigma_min ~ 5e-4, speed scaled to 0.5 %): documented, not asserted.
     assert conventional_deviation > 0.05
     assert conventional_deviation > 1e3 * max(dls_deviation, 1e-9)
+
+
+@SETTINGS
+@given(configurations(), vectors(3, 0.2))
+def test_closed_form_law_is_the_svd_law(robot, config, omega):
+    """Away from the singular region (4.10-4.15) the one-solve closed form of law_rates gives the
+    joint velocity of the SVD form (4.9, 4.11, 4.13) to rounding, wrist term included."""
+    state = _regular_state(robot, config)
+    reference = wrist_offset(state) + np.array([0.01, -0.02, 0.005])
+    gains = ControlGains()
+    for method in (Method.DLS, Method.SC, Method.PINV):
+        rates = law_rates(robot, state, omega, method, gains, reference, None)
+        theta_dot, damping, sc_scale, sigma_min, det = _svd_law(
+            state, state.restricted_jacobian, omega, method, gains, reference
+        )
+        theta_dot = rates.limit_scale * theta_dot
+        scale = max(1.0, float(np.abs(theta_dot).max()))
+        np.testing.assert_allclose(rates.joint_velocity, theta_dot, atol=1e-10 * scale)
+        assert rates.damping == damping == 0.0
+        assert rates.sc_scale == pytest.approx(sc_scale, rel=1e-10)
+        assert rates.sigma_min == pytest.approx(sigma_min, rel=1e-10)
+        assert rates.algorithmic == pytest.approx(det, rel=1e-10)

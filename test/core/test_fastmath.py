@@ -7,7 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rns_ros.core.fastmath import gram_determinant, solve_small, svd_small
+from rns_ros.core.fastmath import (
+    gram_determinant,
+    solve_small,
+    solve_small_many,
+    svd_small,
+    symmetric_eigenvalues,
+)
 
 matrices = st.lists(st.floats(-3.0, 3.0), min_size=21, max_size=21).map(
     lambda values: np.array(values).reshape(3, 7)
@@ -39,3 +45,14 @@ def test_svd_reconstructs_and_matches_numpy(matrix):
 def test_gram_determinant_is_the_product_of_squared_singular_values(matrix):
     expected = np.prod(np.linalg.svd(matrix, compute_uv=False) ** 2)
     assert gram_determinant(matrix) == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+@settings(max_examples=50, deadline=None)
+@given(matrices)
+def test_many_rhs_solve_and_symmetric_eigenvalues_match_numpy(matrix):
+    gram = matrix @ matrix.T + 1e-3 * np.eye(3)  # the Gram matrices of the controller
+    solution = solve_small_many(gram, matrix)
+    assert np.allclose(gram @ solution, matrix, atol=1e-9 * max(1.0, np.abs(matrix).max()))
+    eigenvalues = symmetric_eigenvalues(gram)
+    expected = np.linalg.svd(matrix, compute_uv=False)[::-1] ** 2 + 1e-3
+    assert np.allclose(eigenvalues, expected, rtol=1e-10, atol=1e-12)

@@ -16,6 +16,7 @@ from rns_ros.core import FreeFloatingModel, FreeFloatingState, InputError, Model
 from rns_ros.core.config import load_model_config
 from rns_ros.core.conventions import base_rotation_blocks, base_twist_to_world
 from rns_ros.core.integration import free_floating_velocity
+from rns_ros.core.inverses import kernel_basis
 from rns_ros.core.momentum import (
     base_twist_from_momentum,
     coupling_angular_momentum,
@@ -24,6 +25,7 @@ from rns_ros.core.momentum import (
     shift_momentum,
     spatial_momentum,
 )
+from rns_ros.core.state import GRAM_CONDITION_LIMIT, reaction_null_space
 from rns_ros.resources import default_model_config
 
 SETTINGS = settings(max_examples=40, deadline=None)
@@ -268,3 +270,60 @@ def test_straight_arm_is_a_coupling_singularity_and_p_rns_grows(inferred_robot):
     assert state.reaction_null_space_rank == 5
     projector = state.reaction_null_space_projector
     assert np.allclose(state.coupling_angular_momentum_matrix @ projector, 0.0, atol=1e-9)
+
+
+@SETTINGS
+@given(configurations(), vectors(7, 0.05))
+def test_state_with_moved_joints_is_the_state_computed_there(robot, config, step):
+    """with_joint_angles (the hold midpoint) equals compute at the moved q, field by field."""
+    state = _state(robot, config)
+    theta = state.theta + step
+    moved = state.with_joint_angles(theta)
+    q = state.q.copy()
+    q[7:] = theta
+    direct = FreeFloatingState.compute(robot, q)
+    for name in (
+        "q",
+        "base_position",
+        "base_rotation",
+        "coupling_angular_momentum_matrix",
+        "base_rotational_inertia",
+        "center_of_mass",
+        "coupling_singular_values",
+        "reaction_null_space_projector",
+    ):
+        np.testing.assert_allclose(getattr(moved, name), getattr(direct, name), atol=1e-12)
+    for frame in ("camera", "wrist"):
+        for name in ("position", "rotation", "jacobian"):
+            np.testing.assert_allclose(
+                getattr(getattr(moved, frame), name),
+                getattr(getattr(direct, frame), name),
+                atol=1e-12,
+            )
+    assert moved.reaction_null_space_rank == direct.reaction_null_space_rank
+    assert not moved.q.flags.writeable
+    assert not moved.reaction_null_space_projector.flags.writeable
+
+
+@SETTINGS
+@given(configurations())
+def test_gram_projector_is_the_svd_kernel_projector(robot, config):
+    """P_RNS from the 3 x 3 solve (eq. 2.34) equals V_k V_k^T of the SVD kernel basis."""
+    coupling = _state(robot, config).coupling_angular_momentum_matrix
+    projector, sigma, rank = reaction_null_space(coupling)
+    kernel, sigma_svd, rank_svd = kernel_basis(coupling, 1e-9)
+    if sigma_svd[-1] > GRAM_CONDITION_LIMIT * sigma_svd[0]:
+        assert rank == rank_svd == 3
+    np.testing.assert_allclose(projector, kernel @ kernel.T, atol=1e-10)
+    np.testing.assert_allclose(sigma, sigma_svd, rtol=1e-9, atol=1e-9 * sigma_svd[0])
+
+
+def test_near_a_coupling_singularity_the_projector_comes_from_the_svd():
+    """Rank 2 up to 1e-12: the Gram matrix would lose all digits; the SVD decides rank 2."""
+    rng = np.random.default_rng(3)
+    coupling = rng.standard_normal((3, 2)) @ rng.standard_normal((2, 7))
+    coupling[2] += 1e-12 * rng.standard_normal(7)
+    projector, _, rank = reaction_null_space(coupling)
+    assert rank == 2
+    assert np.allclose(projector @ projector, projector, atol=1e-12)
+    assert np.allclose(coupling @ projector, 0.0, atol=1e-10)

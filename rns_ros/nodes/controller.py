@@ -30,6 +30,7 @@ Publishes (joint commands only once a joint state has arrived):
 from __future__ import annotations
 
 import time
+from collections import deque
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -53,6 +54,7 @@ from rns_ros.control.controller import (
     angular_velocity_in_world,
 )
 from rns_ros.control.inspection import ControlGains
+from rns_ros.control.prediction import OutputTiming, PublishedOutput, predict_joint_angles
 from rns_ros.control.teleop import (
     CommandGate,
     ControllerState,
@@ -85,6 +87,10 @@ SUMMARY = "Reactionless camera-pointing controller: twist in, joint references o
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
+#: Default publish-to-receipt time of an output [s]: loopback DDS (0.4-0.6 ms measured).
+DEFAULT_OUTPUT_LATENCY = 5e-4
+#: Default plant update period [s]: rns_simulator's step_size.
+DEFAULT_PLANT_PERIOD = 1e-3
 #: Shortest interval between two ticks when commands are served at once [s]: a command flood
 #: cannot make the controller compute faster than this; a change within it waits for the tick.
 MIN_TICK_INTERVAL = 1e-3
@@ -226,8 +232,31 @@ PARAMETERS = (
     ParameterSpec(
         "predict_state",
         True,
-        "Extrapolate the last joint_states by their age at their measured rates before "
-        "evaluating the law (the sample lags by up to one publish period)",
+        "Extrapolate the last joint_states to where the joints are when the new output takes "
+        "effect (its arrival, output_latency after the tick, rounded up to the plant's next "
+        "update): at their measured rates, then at this controller's own outputs from when "
+        "they act (the sample lags by up to one publish period)",
+    ),
+    ParameterSpec(
+        "output_latency",
+        DEFAULT_OUTPUT_LATENCY,
+        "Publish-to-receipt time of an output at the plant, for predict_state. Wall clock "
+        "only: under use_sim_time it counts as 0 (a lockstep simulator waits for each output)",
+        "[s]",
+        0.0,
+        0.05,
+        read_only=False,
+    ),
+    ParameterSpec(
+        "plant_period",
+        DEFAULT_PLANT_PERIOD,
+        "Update period of the plant (rns_simulator step_size, ros2_control update period), "
+        "on a grid through the joint_states stamps: an output acts at the first update after "
+        "it arrives; 0: at once",
+        "[s]",
+        0.0,
+        0.1,
+        read_only=False,
     ),
     ParameterSpec("twist_stamped", True, "cmd_twist is TwistStamped (false: plain Twist)"),
     ParameterSpec(
@@ -268,11 +297,12 @@ class ControllerNode(Node):
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
         self._stopped = True
         self._predict = params["predict_state"]
+        self._sim_time = bool(self.get_parameter("use_sim_time").value)
+        # what this node published recently (node clock), for the prediction
+        self._outputs: deque[PublishedOutput] = deque()
         # latency is a wall-clock matter; in simulated time, commands served between ticks
         # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
-        self._immediate = (
-            params["immediate_reaction"] and not self.get_parameter("use_sim_time").value
-        )
+        self._immediate = params["immediate_reaction"] and not self._sim_time
         self._last_tick = -np.inf  # monotonic time of the last tick [s]
         self._last_tick_clock: float | None = None  # node-clock time of the last tick [s]
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
@@ -498,14 +528,24 @@ class ControllerNode(Node):
         self._publish_status(state, detail, {"method": self.controller.settings.method.value})
 
     def _predicted_theta(self) -> np.ndarray:
-        """The measured angles moved on by their age at the measured rates: joint_states lag by
-        up to one publish period, and the held command is meant for where the joints are now."""
+        """The measured angles moved on to where the joints are when this tick's output takes
+        effect (:func:`predict_joint_angles`): joint_states lag by up to one publish period,
+        the output reaches the plant a moment later and acts at its next update, and the
+        midpoint hold is reactionless only for the configuration it starts from."""
         if not self._predict or self._theta_rate is None or self._stopped:
             return self._theta
-        age = (self.get_clock().now() - self._theta_stamp).nanoseconds * 1e-9
-        if not 0.0 < age < MAX_PREDICTION_AGE:
+        now = self.get_clock().now()
+        age = (now - self._theta_stamp).nanoseconds * 1e-9
+        if not 0.0 <= age < MAX_PREDICTION_AGE:
             return self._theta  # clocks disagree or the state is stale: do not extrapolate
-        return self._theta + age * self._theta_rate
+        timing = OutputTiming(
+            latency=0.0 if self._sim_time else self._params["output_latency"],
+            plant_period=self._params["plant_period"],
+        )
+        stamp = self._theta_stamp.nanoseconds * 1e-9
+        return predict_joint_angles(
+            self._theta, self._theta_rate, stamp, stamp + age, self._outputs, timing
+        ).theta
 
     def _state(
         self, step: ControllerStep, gate: GateOutput, state: FreeFloatingState
@@ -531,7 +571,12 @@ class ControllerNode(Node):
         )
 
     def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
-        stamp = self.get_clock().now().to_msg()
+        now = self.get_clock().now()
+        stamp = now.to_msg()
+        seconds = now.nanoseconds * 1e-9
+        self._outputs.append(PublishedOutput(seconds, velocities))
+        while self._outputs and self._outputs[0].time < seconds - 2 * MAX_PREDICTION_AGE:
+            self._outputs.popleft()
         self._output.publish(
             joint_command(
                 stamp, self.robot.joint_names, positions, velocities, self._velocity_order

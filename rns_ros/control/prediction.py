@@ -96,17 +96,20 @@ def predict_joint_angles(
         theta at the acting time a of eq. (module docstring), and a.
     """
     target = timing.acting_time(now, stamp)
+    # newest first, back to the last output already acting at the stamp (``rate`` shows it)
+    later = []
+    for output in reversed(outputs):
+        starts = timing.acting_time(output.time, stamp)
+        if starts <= stamp:
+            break
+        if starts < target:
+            later.append((starts, output.velocity))
     predicted = np.array(theta, dtype=float)
     velocity = np.asarray(rate, dtype=float)
     since = stamp
-    for output in outputs:
-        starts = timing.acting_time(output.time, stamp)
-        if starts <= stamp:
-            continue  # already acting when the state was sampled: ``rate`` shows it
-        if starts >= target:
-            break
+    for starts, output_velocity in reversed(later):
         predicted += (starts - since) * velocity
-        velocity, since = output.velocity, starts
+        velocity, since = output_velocity, starts
     predicted += (target - since) * velocity
     return Prediction(predicted, target)
 

@@ -2,7 +2,7 @@
 
 Physics is :class:`rns_ros.sim.free_floating.FreeFloatingSimulator`; this node only converts
 messages. It steps from its own monotonic-clock thread (absolute deadlines, so no drift), not from
-an executor timer.
+an executor timer (in lockstep at ``real_time_factor`` 0: from the command callback, below).
 
 Publishes (all remappable):
     joint_states  sensor_msgs/JointState      names, positions [rad], velocities [rad/s],
@@ -20,12 +20,22 @@ Publishes (all remappable):
     wheel_states  sensor_msgs/JointState      with ``reaction_wheels``: wheel_x/y/z spin angle
                                               [rad], rate relative to the base [rad/s], applied
                                               motor torque [N m] (after the limits)
-    /clock        rosgraph_msgs/Clock         every step, when ``publish_clock`` is true
+    /clock        rosgraph_msgs/Clock         when ``publish_clock`` is true: every step; in
+                                              lockstep only with each state publication (the
+                                              ``publish_rate`` grid and every pause), so other
+                                              nodes' sim-time timers fire at those instants
 With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simulated time) past
 the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
-before the first command it runs in real time, and a controller that stops answering pauses it.
-``command_timeout`` then counts simulated time, and the state is also published at each pause
-(off the ``publish_rate`` grid), so the controller's tick there samples that instant.
+before the first command it runs in real time, and a controller that stops answering pauses it
+(after ``LOCKSTEP_PATIENCE`` of wall time one step is taken, with its state and /clock).
+The period counts from the command's header stamp when /clock is published and the stamp lies
+within the last period (a controller ticking on this clock: the next pause is its next tick,
+whatever the command's latency), else from its receipt. ``command_timeout`` then counts
+simulated time, and the state is also published at each pause (off the ``publish_rate`` grid
+if the controller's ticks are), so the controller's tick there samples that instant. At
+``real_time_factor`` 0 the command callback itself steps to the next pause (up to
+``CALLBACK_STEPS`` steps, the simulation thread goes on beyond them): the executor thread runs
+the whole period, with no hand-off between threads.
 Subscribes:
     joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
                       first point: positions/velocities/accelerations matched by joint name
@@ -105,6 +115,10 @@ SUMMARY = (
 #: A lockstep pause longer than this [s] (wall time) is reported and ends with one step, so a
 #: controller whose sim-time timer waits for a later /clock is never deadlocked.
 LOCKSTEP_PATIENCE = 2.0
+#: Lockstep at real_time_factor 0: a command callback runs at most this many steps to the next
+#: pause itself (a long lockstep_period goes on in the simulation thread, so the executor is
+#: not blocked for long).
+CALLBACK_STEPS = 200
 #: After ~/reset, a JointTrajectory starting this close to the reset angles [rad] ends the
 #: reset hold (a resynchronized controller); the hold otherwise lasts ``reset_hold``.
 RESET_MATCH_TOLERANCE = 0.01
@@ -203,7 +217,12 @@ PARAMETERS = (
         60.0,
         read_only=False,
     ),
-    ParameterSpec("publish_clock", False, "Publish /clock (sim time) and stamp messages with it"),
+    ParameterSpec(
+        "publish_clock",
+        False,
+        "Publish /clock (sim time) and stamp messages with it: every step; in lockstep with each "
+        "state publication only",
+    ),
     ParameterSpec(
         "lockstep_period",
         0.0,
@@ -301,9 +320,10 @@ class WheelSnapshot(NamedTuple):
 
 
 def stamp_from_seconds(seconds: float) -> TimeMsg:
-    """builtin_interfaces/Time for a simulated time [s]."""
-    whole = math.floor(seconds)
-    return TimeMsg(sec=int(whole), nanosec=min(round((seconds - whole) * 1e9), 999_999_999))
+    """builtin_interfaces/Time for a simulated time [s], rounded to the nanosecond (so a time
+    summed from steps, 1.9999999999 s, is 2 s: the tick a sim-time timer waits for)."""
+    sec, nanosec = divmod(round(seconds * 1e9), 1_000_000_000)
+    return TimeMsg(sec=int(sec), nanosec=int(nanosec))
 
 
 class SimulatorNode(Node):
@@ -371,10 +391,15 @@ class SimulatorNode(Node):
         self._publish_period = 1.0 / params["publish_rate"]  # [s], wall time while faulted
 
         self._lock = threading.Lock()
+        # held by whoever steps (the simulation thread, or a command callback: _run_to_pause)
+        self._stepping = threading.Lock()
+        self._steps = 0  # since the start or the last reset
         self._stop = threading.Event()
         self._reset_requested = False
         self._last_command = None  # monotonic receipt time of the active command
-        self._command_sim_time = 0.0  # simulated time of its receipt [s]
+        # simulated time the lockstep period and the age of that command count from [s]: its
+        # stamp when that is a recent simulated time (see _command_anchor), else its receipt
+        self._command_sim_time = 0.0
         self._command_arrived = threading.Event()
         self._paused_since: float | None = None  # monotonic start of a lockstep pause [s]
         self._stale_logged = False
@@ -464,7 +489,8 @@ class SimulatorNode(Node):
             return
         if self._ignoring_commands(command.positions):
             return
-        self._accept(command.positions, command.velocities, command.accelerations)
+        stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+        self._accept(command.positions, command.velocities, command.accelerations, stamp)
 
     def _on_velocities(self, msg: Float64MultiArray) -> None:
         if self._ignoring_commands():
@@ -536,7 +562,7 @@ class SimulatorNode(Node):
                 return True
         return False
 
-    def _accept(self, positions, velocities, accelerations) -> None:
+    def _accept(self, positions, velocities, accelerations, stamp: float | None = None) -> None:
         with self._lock:
             if self._fault or self._reset_requested or self.simulator.time < self._hold_until:
                 return  # changed since the check: the command is stale now
@@ -544,9 +570,31 @@ class SimulatorNode(Node):
             if self._last_command is None and self._lockstep > 0.0:
                 self._reanchor = True  # lockstep starts: leave the real-time pace of the wait
             self._last_command = time.monotonic()
-            self._command_sim_time = self.simulator.time
+            self._command_sim_time = self._command_anchor(stamp)
             self._stale_logged = False
-            self._command_arrived.set()
+            self._paused_since = None
+            in_callback = self._steps_in_callback()
+            if not in_callback:
+                self._command_arrived.set()
+        if in_callback:
+            self._run_to_pause()
+
+    def _command_anchor(self, stamp: float | None) -> float:
+        """Simulated time [s] a command's lockstep period counts from: its header ``stamp``
+        [s] when /clock is published and the stamp lies within the period before now (a
+        controller ticking on this clock stamps the instant it sampled), so the next pause falls
+        on that controller's next tick whatever the latency of this command; else (no stamp, a
+        wall-clock stamp, a stamp that would put the pause behind the current step) the
+        simulated time of receipt. Caller holds the lock."""
+        now, dt = self.simulator.time, self.simulator.dt
+        if (
+            stamp is not None
+            and self._publish_clock
+            and self._lockstep > 0.0
+            and now - self._lockstep + 0.5 * dt < stamp <= now + 0.5 * dt
+        ):
+            return stamp
+        return now
 
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected joint command: {reason}", throttle_duration_sec=1.0)
@@ -554,6 +602,7 @@ class SimulatorNode(Node):
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         with self._lock:
             self._reset_requested, self._hold_logged = True, False
+        self._command_arrived.set()  # a paused simulation thread resets at once
         response.success = True
         response.message = "simulation reset to its initial state"
         return response
@@ -565,11 +614,11 @@ class SimulatorNode(Node):
                 self._reanchor = True
             elif parameter.name == "command_timeout":
                 self._command_timeout = float(parameter.value)
+        self._command_arrived.set()  # a paused simulation thread rechecks who steps
         return SetParametersResult(successful=True)
 
-    # --- simulation loop (own thread) ---------------------------------------------------------
+    # --- simulation loop (own thread; in lockstep at real_time_factor 0 the command callback) ---
     def _run(self) -> None:
-        steps = 0
         wall_anchor = sim_anchor = 0.0
         while not self._stop.is_set():
             if self._fault and not self._reset_requested:
@@ -577,7 +626,8 @@ class SimulatorNode(Node):
                 self._stop.wait(self._publish_period)
                 self._reanchor = True
                 continue
-            if self._await_command():
+            forced = self._await_command()
+            if forced is None:
                 self._reanchor = True  # paused for the controller: do not sprint afterwards
                 continue
             if self._reanchor:
@@ -586,38 +636,13 @@ class SimulatorNode(Node):
                     self.simulator.time,
                     False,
                 )
-            with self._lock:
-                if self._reset_requested:
-                    self.simulator.reset()
-                    self._last_command, self._reset_requested, self._reanchor = None, False, True
-                    self._command_sim_time = 0.0
-                    self._hold_until = self.simulator.time + self._reset_hold
-                    self._fault = False
-                    self._last_wheel_command = None
-                    self._energy_cost = EnergyCost()
-                    steps = 0
-                self._expire_stale_command()
-                try:
-                    self.simulator.step()
-                except SimulationDivergedError as exc:
-                    self._fault = True
-                    self.get_logger().error(
-                        f"{exc}. Stopped: publishing that state with zero velocities until ~/reset"
-                    )
+            with self._stepping:
+                # the command callback may have run to the pause since the check
+                if not forced and self._paused():
                     continue
-                steps += 1
-                # a lockstep pause also publishes the state there: the controller's tick at the
-                # pause samples this instant, not the last grid point (stale by up to a period)
-                publish = steps % self._publish_every == 0 or self._pauses_here()
-                snapshot = self.simulator.snapshot() if publish else None
-                momentum = self.simulator.centroidal_momentum() if publish else None
-                wheels = self._wheel_snapshot() if publish else None
-                sim_time = self.simulator.time
-            # the state first: a sim-time timer woken by this clock tick should find it there
-            if snapshot is not None:
-                self._publish_state(snapshot, momentum, wheels)
-            if self._clock_pub is not None:
-                self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
+                sim_time = self._advance()
+            if sim_time is None:
+                continue
             factor = self._real_time_factor
             if self._lockstep > 0.0 and self._last_command is None:
                 # no controller yet: real time, so it joins before much simulated time passes
@@ -629,6 +654,76 @@ class SimulatorNode(Node):
                 elif delay < -0.5:
                     self._reanchor = True  # far behind (overloaded machine): do not sprint
 
+    def _advance(self) -> float | None:
+        """One step (after a requested reset) and what it publishes; the simulated time after
+        it [s], None when it diverged. Caller holds ``_stepping``."""
+        with self._lock:
+            if self._reset_requested:
+                self.simulator.reset()
+                self._last_command, self._reset_requested, self._reanchor = None, False, True
+                self._command_sim_time = 0.0
+                self._hold_until = self.simulator.time + self._reset_hold
+                self._fault = False
+                self._last_wheel_command = None
+                self._energy_cost = EnergyCost()
+                self._steps = 0
+            self._expire_stale_command()
+            try:
+                self.simulator.step()
+            except SimulationDivergedError as exc:
+                self._fault = True
+                self.get_logger().error(
+                    f"{exc}. Stopped: publishing that state with zero velocities until ~/reset"
+                )
+                return None
+            self._steps += 1
+            # a lockstep pause also publishes the state there: the controller's tick at the
+            # pause samples this instant, not the last grid point (stale by up to a period)
+            pauses = self._pauses_here()
+            if pauses:
+                self._paused_since = time.monotonic()
+            publish = self._steps % self._publish_every == 0 or pauses
+            snapshot = self.simulator.snapshot() if publish else None
+            momentum = self.simulator.centroidal_momentum() if publish else None
+            wheels = self._wheel_snapshot() if publish else None
+            sim_time = self.simulator.time
+        # the state first: a sim-time timer woken by this clock tick should find it there
+        if snapshot is not None:
+            self._publish_state(snapshot, momentum, wheels)
+        # lockstep: /clock only with the states (so at every pause); without it, every step
+        if self._clock_pub is not None and (snapshot is not None or self._lockstep <= 0.0):
+            self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
+        return sim_time
+
+    def _steps_in_callback(self) -> bool:
+        """Lockstep as fast as possible once a controller answers: the command callback steps
+        to the next pause itself (no hand-off to the simulation thread)."""
+        return (
+            self._lockstep > 0.0
+            and self._real_time_factor == 0.0
+            and self._last_command is not None
+            and not self._fault
+            and not self._reset_requested
+        )
+
+    def _run_to_pause(self) -> None:
+        """Executor thread, after a command: step until the next lockstep pause (at most
+        ``CALLBACK_STEPS`` steps; the simulation thread takes over beyond them)."""
+        with self._stepping:
+            for _ in range(CALLBACK_STEPS):
+                with self._lock:
+                    if self._stop.is_set() or not self._steps_in_callback() or self._pauses_here():
+                        break
+                if self._advance() is None:
+                    break
+            paused = self._paused()
+        if not paused:  # beyond CALLBACK_STEPS, a reset, a fault: the simulation thread goes on
+            self._command_arrived.set()
+
+    def _paused(self) -> bool:
+        with self._lock:
+            return self._pauses_here()
+
     def _pauses_here(self) -> bool:
         """Lockstep: the simulation has reached ``lockstep_period`` past the newest command."""
         if self._lockstep <= 0.0 or self._last_command is None:
@@ -636,9 +731,10 @@ class SimulatorNode(Node):
         ahead = self.simulator.time + 0.5 * self.simulator.dt - self._command_sim_time
         return ahead >= self._lockstep
 
-    def _await_command(self) -> bool:
-        """Lockstep: True (after a short wait) while the next step would run more than
-        ``lockstep_period`` of simulated time past the newest command. Before the first command
+    def _await_command(self) -> bool | None:
+        """Lockstep: None (after a wait) while the next step would run more than
+        ``lockstep_period`` of simulated time past the newest command; else False, or True for
+        the one step of a pause that outlasted ``LOCKSTEP_PATIENCE``. Before the first command
         it runs in real time (a controller starts from the published states). A controller that
         stops answering pauses the simulation rather than letting the robot run on under an old
         command: after ``LOCKSTEP_PATIENCE`` it is logged and one step is taken."""
@@ -659,10 +755,13 @@ class SimulatorNode(Node):
                     throttle_duration_sec=5.0,
                 )
                 self._paused_since = now
-                return False
+                return True
             self._command_arrived.clear()
-        self._command_arrived.wait(0.005)
-        return True
+            # the callback steps at real_time_factor 0: wake for the patience only (and for a
+            # reset, a parameter change, the end of a callback's run: they set the event)
+            wait = 0.005 if self._real_time_factor > 0.0 else 0.1
+        self._command_arrived.wait(wait)
+        return None
 
     def _wheel_snapshot(self) -> WheelSnapshot | None:
         if not self._wheels:
@@ -808,6 +907,7 @@ class SimulatorNode(Node):
 
     def destroy_node(self) -> None:
         self._stop.set()
+        self._command_arrived.set()
         if self._thread.is_alive():
             self._thread.join(timeout=2.0)
         super().destroy_node()

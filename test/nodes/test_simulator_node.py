@@ -16,6 +16,7 @@ from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rns_testing import Recorder
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
@@ -25,7 +26,13 @@ from rns_ros.core import ConfigError, FreeFloatingModel, FreeFloatingState
 from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import base_twist_from_momentum
-from rns_ros.nodes.simulator import PARAMETERS, SATELLITE_OBSERVATION_RAD, SimulatorNode
+from rns_ros.nodes.simulator import (
+    LOCKSTEP_PATIENCE,
+    PARAMETERS,
+    SATELLITE_OBSERVATION_RAD,
+    SimulatorNode,
+    stamp_from_seconds,
+)
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -185,6 +192,93 @@ def test_lockstep_pauses_one_period_past_each_command(ros):
     ros.spin_for(0.3)
     assert node.simulator.time == pytest.approx(received_at + period)
     assert np.allclose(joints.messages[-1].velocity, 0.1)
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
+def test_lockstep_clock_comes_with_the_states_and_pauses_follow_the_command_stamps(ros):
+    """A controller ticking on /clock stamps each command with the state it sampled. In
+    lockstep the next pause is one period past that stamp, whatever the command's latency (the
+    first one arrives while the simulation still runs in real time), so from then on exactly
+    one state per period is published, at the controller's ticks. /clock comes with the
+    states only (not every 1 ms step): a sim-time timer elsewhere fires at those instants."""
+    period = 0.01
+    node = _simulator(ros, real_time_factor=0.0, publish_clock=True, lockstep_period=period)
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states", qos=1000)
+    clock = Recorder(probe, Clock, "/clock", qos=1000)
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+    assert ros.spin_until(lambda: len(joints.messages) >= 3)
+    answered = 0
+    first_command_at = None
+    while answered < 30:
+        count = len(joints.messages)
+        state = joints.messages[-1]
+        msg = _trajectory([0.05] * 7)
+        msg.header.stamp = state.header.stamp  # the instant this "controller" sampled
+        command.publish(msg)
+        first_command_at = first_command_at or _seconds(state.header.stamp)
+        answered += 1
+        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=2.0)
+    ros.spin_for(0.1)
+    stamps = [_seconds(m.header.stamp) for m in joints.messages]
+    locked = [t for t in stamps if t > first_command_at + 1.5 * period]
+    assert len(locked) >= 20
+    assert np.allclose(np.diff(locked), period, atol=1e-9)  # one state per period, no extra
+    # on the grid of the stamps the "controller" sent, not shifted by the first one's latency
+    periods = (np.array(locked) - first_command_at) / period
+    assert np.allclose(periods, np.round(periods), atol=1e-6)
+    assert node.simulator.time == pytest.approx(locked[-1])  # paused there
+    ticks = [_seconds(m.clock) for m in clock.messages]
+    assert ticks == sorted(ticks)
+    assert len(ticks) >= len(locked)
+    assert set(np.round(ticks, 9)) <= set(np.round(stamps, 9))  # /clock only with a state
+
+
+def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
+    """A controller that stops answering pauses the simulation; after LOCKSTEP_PATIENCE (wall
+    time) one step is taken and published with its /clock, so a controller whose sim-time
+    timer waits for a later time gets it."""
+    period = 0.01
+    node = _simulator(
+        ros,
+        real_time_factor=0.0,
+        publish_clock=True,
+        lockstep_period=period,
+        command_interface="velocity",
+        command_timeout=60.0,
+    )
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states", qos=1000)
+    clock = Recorder(probe, Clock, "/clock", qos=1000)
+    command = probe.create_publisher(Float64MultiArray, "joint_velocities", COMMAND_QOS)
+    assert ros.spin_until(lambda: len(joints.messages) >= 3)
+    before = node._command_sim_time
+    command.publish(Float64MultiArray(data=[0.1] * 7))
+    assert ros.spin_until(lambda: node._command_sim_time != before, timeout=2.0)
+    pause = node._command_sim_time + period
+    assert ros.spin_until(lambda: node.simulator.time == pytest.approx(pause), timeout=2.0)
+    ros.spin_for(LOCKSTEP_PATIENCE - 0.5)
+    assert node.simulator.time == pytest.approx(pause)  # still waiting
+    dt = node.simulator.dt
+    assert ros.spin_until(lambda: node.simulator.time > pause + 0.5 * dt, timeout=2.0)
+    ros.spin_for(0.1)
+    assert node.simulator.time == pytest.approx(pause + dt)  # one step, then paused again
+    assert _seconds(joints.messages[-1].header.stamp) == pytest.approx(pause + dt)
+    assert _seconds(clock.messages[-1].clock) == pytest.approx(pause + dt)
+
+
+def test_clock_stamps_round_to_the_nanosecond():
+    """Simulated time summed from 1 ms steps falls a hair short of whole seconds; the stamp is
+    the whole second a sim-time timer waits for (not 1.999999999 s)."""
+    t = 0.0
+    for _ in range(2000):
+        t += 0.001
+    assert t != 2.0
+    assert (stamp_from_seconds(t).sec, stamp_from_seconds(t).nanosec) == (2, 0)
+    assert (stamp_from_seconds(0.0305).sec, stamp_from_seconds(0.0305).nanosec) == (0, 30_500_000)
 
 
 def test_velocity_interface_takes_the_order_of_the_joints_parameter(ros):

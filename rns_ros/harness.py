@@ -6,7 +6,9 @@ a domain of your choosing:
 * :class:`Harness` - nodes in this process, on one executor with a private rclpy Context. Add node
   classes with parameter dicts, YAML parameter files and remappings, record topics as arrays, spin
   for a duration or until a condition, and tear everything down (also when a test fails: use it
-  as a context manager)::
+  as a context manager). ``executor="events"`` spins them on rclpy's (experimental, C++)
+  EventsExecutor instead of the SingleThreadedExecutor, which rebuilds its wait set in Python
+  for every callback (``rns_demo`` runs use it)::
 
       from rns_ros.harness import Harness
       from rns_ros.nodes.simulator import SimulatorNode
@@ -42,6 +44,7 @@ import numpy as np
 import rclpy
 import yaml
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -51,6 +54,8 @@ from rns_ros.core.errors import ConfigError
 
 #: DDS discovery never leaves the machine.
 DISCOVERY_RANGE = "LOCALHOST"
+#: Executors a :class:`Harness` can spin its nodes on.
+EXECUTORS = ("single_threaded", "events")
 #: Recording QoS: best effort matches reliable and best-effort publishers alike.
 RECORD_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
 
@@ -116,16 +121,28 @@ class Harness:
         ros_args: global ROS arguments for every node of the stack, as a command line gives them
             (``["--ros-args", "-p", "rate:=50.0", "-r", "joint_states:=arm/joint_states"]``).
             Parameters given to :meth:`add` take precedence over them.
+        executor: ``single_threaded`` (rclpy's SingleThreadedExecutor) or ``events`` (rclpy's
+            experimental EventsExecutor: the same callbacks in the same thread, sim-time timers
+            included, without the Python wait-set rebuild per callback; in a lockstep run that
+            overhead was most of the wall time).
 
     Raises:
-        ConfigError: ``domain_id`` out of range, or ``ros_args`` that rcl cannot parse.
+        ConfigError: ``domain_id`` out of range, an unknown ``executor``, or ``ros_args`` that
+            rcl cannot parse.
 
     Sets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and removes ``ROS_STATIC_PEERS`` in this
     process's environment before the Context starts, so nothing it creates is discoverable from
     other machines.
     """
 
-    def __init__(self, domain_id: int | None = None, ros_args: Iterable[str] = ()) -> None:
+    def __init__(
+        self,
+        domain_id: int | None = None,
+        ros_args: Iterable[str] = (),
+        executor: str = "single_threaded",
+    ) -> None:
+        if executor not in EXECUTORS:
+            raise ConfigError(f"executor must be one of {list(EXECUTORS)}, got {executor!r}")
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
         os.environ.pop("ROS_STATIC_PEERS", None)
         self.domain_id = _domain(domain_id)
@@ -138,7 +155,10 @@ class Harness:
             rclpy.init(args=["harness", *ros_args], context=self.context, domain_id=self.domain_id)
         except RuntimeError as exc:  # rcl's parse errors (RCLError derives from RuntimeError)
             raise ConfigError(f"invalid ROS arguments {ros_args}: {exc}") from None
-        self.executor = SingleThreadedExecutor(context=self.context)
+        if executor == "events":
+            self.executor = EventsExecutor(context=self.context)
+        else:
+            self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
         self._probe: Node | None = None
 

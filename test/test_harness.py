@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import threading
 
+import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistStamped
@@ -55,6 +56,28 @@ def test_teardown_happens_when_the_body_fails():
         failing_test()
     assert not started["stack"].context.ok()
     assert not started["simulator"]._thread.is_alive()
+
+
+def test_the_events_executor_runs_a_lockstep_stack_on_sim_time():
+    """executor="events": sim-time timers fire on /clock and lockstep runs on, one controller
+    tick (status, stamped on the period grid) per simulated period."""
+    with Harness(DOMAIN, executor="events") as stack:
+        simulator = stack.add(
+            SimulatorNode,
+            {"real_time_factor": 0.0, "publish_clock": True, "lockstep_period": 0.01},
+        )
+        stack.add(ControllerNode, {"use_sim_time": True, "state_timeout": 1.0})
+        status = stack.record(DiagnosticArray, "rns_controller/status")
+        assert stack.spin_until(lambda: simulator.simulator.time > 1.0, timeout=30.0)
+        stamps = status.stamps()
+    ticks = stamps[stamps > 0.2]  # lockstep from the first command on
+    assert len(ticks) > 50
+    assert np.allclose(np.diff(ticks), 0.01, atol=1e-9)
+
+
+def test_an_unknown_executor_is_a_config_error():
+    with pytest.raises(ConfigError, match="executor"):
+        Harness(DOMAIN, executor="multi")
 
 
 def test_params_file_remapping_and_name(tmp_path):

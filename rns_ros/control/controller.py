@@ -27,6 +27,8 @@ from rns_ros.control.inspection import (
     ControlOutput,
     LawRates,
     Method,
+    arm_control_output,
+    arm_law_rates,
     control_output,
     law_rates,
     wrist_offset,
@@ -40,6 +42,17 @@ from rns_ros.core.validation import Choice, as_vector, positive
 DEFAULT_RATE = 100.0
 #: Largest number of midpoint iterations accepted (one already meets 1e-5 deg at 100 Hz).
 MAX_HOLD_ITERATIONS = 5
+#: A midpoint evaluation is consistent when its output theta_dot and the prediction it was
+#: evaluated at differ by at most HOLD_CONSISTENCY * T * max(max|theta_dot|, HOLD_SPEED_FLOOR)
+#: (inf-norm) [1/s]: the evaluation point is then within 5e-3 T^2 max|theta_dot| [rad] of the held
+#: motion's midpoint, about a third of what the law at the sample as predictor leaves (typically
+#: 0.017 T^2 max|theta_dot| on satellite observation at 100 Hz). 3e-3 gave the same base figures
+#: for 1.3-1.5 evaluations per period instead of 1.0-1.3; without the check (extrapolation
+#: trusted) pinv turned the base 1.4e-5 deg in the algorithmic singularity scenario.
+HOLD_CONSISTENCY = 1e-2
+#: Speed below which HOLD_CONSISTENCY applies to this speed instead [rad/s] (slow motion turns
+#: the base by little: the error of an evaluation point scales with max|theta_dot|).
+HOLD_SPEED_FLOOR = 0.1
 
 
 class HoldCorrection(Choice):
@@ -147,6 +160,8 @@ class ReactionlessController:
         self._reference: np.ndarray | None = None
         # the hold in progress: theta_ref at its start and theta_dot held (for end_hold)
         self._hold: tuple[np.ndarray, np.ndarray] | None = None
+        # theta_dot held over the last (up to) two periods, oldest first: the midpoint predictor
+        self._held: tuple[np.ndarray, ...] = ()
 
     @property
     def wrist_reference(self) -> np.ndarray | None:
@@ -163,6 +178,7 @@ class ReactionlessController:
         self._wrist_reference = wrist_offset(state) if state.wrist is not None else None
         self._reference = state.theta.copy()
         self._hold = None
+        self._held = ()
 
     def resync(self, state: FreeFloatingState) -> None:
         """Restart theta_ref at the measured angles, keeping the wrist reference (taken from
@@ -172,6 +188,7 @@ class ReactionlessController:
             self._wrist_reference = wrist_offset(state)
         self._reference = state.theta.copy()
         self._hold = None
+        self._held = ()
 
     def end_hold(self, elapsed: float) -> None:
         """End the hold in progress after ``elapsed`` [s], which may differ from the period T.
@@ -193,6 +210,7 @@ class ReactionlessController:
     def configure(self, settings: ControllerSettings) -> None:
         """Swap settings between steps (run-time parameter changes)."""
         self.settings = settings
+        self._held = ()
 
     def step(self, state: FreeFloatingState, omega_ref) -> ControllerStep:
         """Evaluate the law for the coming period and advance theta_ref.
@@ -205,31 +223,98 @@ class ReactionlessController:
             self.reset(state)
         settings = self.settings
         omega_ref = as_vector(omega_ref, 3, "omega_ref")
-        evaluated = state
+        evaluated_theta = state.theta
         if settings.hold_correction is HoldCorrection.NAIVE:
-            rates = self._rates(state, omega_ref, settings.period)
+            output = control_output(
+                state, omega_ref, self._rates(state, omega_ref, settings.period)
+            )
         else:
-            # predictor of theta_dot over the coming period: the law at the sample; each
-            # iteration re-predicts from its own output. (Warm-starting from the previous period's
-            # output saves one evaluation but let SC oscillate: 1.4e-2 deg on own_device.)
-            rates = self._rates(state, omega_ref, settings.period)
-            for _ in range(settings.hold_iterations):
-                evaluated = state.with_joint_angles(
-                    state.theta + 0.5 * settings.period * rates.joint_velocity
-                )
-                # position limits: judged over the half period left after the midpoint
-                rates = self._rates(evaluated, omega_ref, 0.5 * settings.period)
-        output = control_output(evaluated, omega_ref, rates)
+            evaluated_theta, output = self._midpoint(state, omega_ref)
         theta_dot = output.joint_velocity
         start = self._reference
         self._reference = start + settings.period * theta_dot
         self._hold = (start, theta_dot)
+        self._held = (*self._held[-1:], theta_dot)
         return ControllerStep(
             output=output,
             joint_velocity=theta_dot,
             reference_positions=start,
-            evaluated_theta=evaluated.theta,
+            evaluated_theta=evaluated_theta,
         )
+
+    def _midpoint(
+        self, state: FreeFloatingState, omega_ref: np.ndarray
+    ) -> tuple[np.ndarray, ControlOutput]:
+        """The law at the predicted mid-period configuration theta_k + T/2 theta_dot_pred:
+        (evaluated theta, output).
+
+        Predictor: the held theta_dot extrapolated linearly from the last two periods (the
+        previous one alone after one period). It is checked, not trusted: an evaluation whose
+        output differs from its prediction by more than HOLD_CONSISTENCY T max|theta_dot| is
+        repeated from its own output (fixed-point iteration of the midpoint rule), up to
+        ``hold_iterations`` times. On the thesis scenarios at 100 Hz the extrapolation is ~60x
+        closer to the output than the law at the sample (median 7.6e-9 vs 5.0e-7 rad off the
+        midpoint, satellite observation) and passes at once in 73-100 % of the periods (1.00-1.27
+        evaluations per period; the repeats cluster where J-bar nears a singularity). Without
+        history (after reset, resync or configure) the predictor is the law at the sample,
+        followed by ``hold_iterations`` evaluations, as before. (Warm-starting from the previous
+        output alone, not extrapolated and not checked, let SC oscillate on the first geometry:
+        1.4e-2 deg on own_device.)
+        """
+        settings = self.settings
+        half = 0.5 * settings.period
+        held = self._held
+        if not held:
+            predicted = self._rates(state, omega_ref, settings.period).joint_velocity
+            for _ in range(settings.hold_iterations):
+                theta = state.theta + half * predicted
+                rates, output = self._midpoint_rates(state, theta, omega_ref)
+                predicted = rates.joint_velocity
+            return theta, output
+        predicted = 2.0 * held[1] - held[0] if len(held) == 2 else held[0]
+        for _ in range(1 + settings.hold_iterations):
+            theta = state.theta + half * predicted
+            rates, output = self._midpoint_rates(state, theta, omega_ref)
+            theta_dot = rates.joint_velocity
+            miss = float(np.abs(theta_dot - predicted).max())
+            speed = max(float(np.abs(theta_dot).max()), HOLD_SPEED_FLOOR)
+            if miss <= HOLD_CONSISTENCY * settings.period * speed:
+                break
+            predicted = theta_dot
+        return theta, output
+
+    def _midpoint_rates(
+        self, state: FreeFloatingState, theta: np.ndarray, omega_ref: np.ndarray
+    ) -> tuple[LawRates, ControlOutput]:
+        """The law at the predicted midpoint ``theta`` (base pose of ``state``); position limits
+        judged over the half period left after it. Exact either way: the closed form on
+        :class:`ArmKinematics` (no SVD, no P_RNS) where it applies, else the full state."""
+        settings = self.settings
+        horizon = 0.5 * settings.period
+        arm = state.arm_kinematics(theta)
+        closed = arm_law_rates(
+            self.robot,
+            arm,
+            omega_ref,
+            settings.method,
+            settings.gains,
+            self._wrist_reference,
+            horizon,
+            float(state.coupling_singular_values[0]),
+        )
+        if closed is not None:
+            rates, coupling_determinant = closed
+            output = arm_control_output(
+                arm.camera_angular_jacobian,
+                arm.coupling_angular_momentum_matrix,
+                coupling_determinant,
+                omega_ref,
+                rates,
+            )
+            return rates, output
+        evaluated = state.with_joint_angles(theta)
+        rates = self._rates(evaluated, omega_ref, horizon)
+        return rates, control_output(evaluated, omega_ref, rates)
 
     def _rates(self, state: FreeFloatingState, omega_ref: np.ndarray, horizon: float) -> LawRates:
         settings = self.settings

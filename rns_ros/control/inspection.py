@@ -29,6 +29,7 @@ import numpy as np
 from rns_ros.core.errors import ConfigError, ModelError
 from rns_ros.core.fastmath import (
     gram_determinant,
+    inverse_small,
     solve_small,
     svd_small,
     symmetric_eigenvalues,
@@ -44,7 +45,12 @@ from rns_ros.core.inverses import (
     sc_from_svd,
 )
 from rns_ros.core.model import FreeFloatingModel
-from rns_ros.core.state import Determinants, FreeFloatingState
+from rns_ros.core.state import (
+    GRAM_CONDITION_LIMIT,
+    ArmKinematics,
+    Determinants,
+    FreeFloatingState,
+)
 from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Singular values of J-bar below this fraction of sigma_max count as lost for P [-].
@@ -226,24 +232,119 @@ def control_output(
     state: FreeFloatingState, omega_ref: np.ndarray, rates: LawRates
 ) -> ControlOutput:
     """The :class:`ControlOutput` of ``rates`` (the law evaluated at ``state``)."""
-    theta_dot = rates.joint_velocity
-    j_omega = state.camera.jacobian[3:]
     sigma = state.coupling_singular_values.tolist()
+    return arm_control_output(
+        state.camera.jacobian[3:],
+        state.coupling_angular_momentum_matrix,
+        math.prod(value * value for value in sigma),
+        omega_ref,
+        rates,
+    )
+
+
+def arm_control_output(
+    camera_angular_jacobian: np.ndarray,
+    coupling: np.ndarray,
+    coupling_determinant: float,
+    omega_ref: np.ndarray,
+    rates: LawRates,
+) -> ControlOutput:
+    """The :class:`ControlOutput` of ``rates`` from the matrices it was evaluated with:
+    J_omega_e (3, n), M~_omega_m (3, n) and det(M~ M~^T) [(kg m^2)^6]."""
+    theta_dot = rates.joint_velocity
     return ControlOutput(
         joint_velocity=theta_dot,
         sigma_min=rates.sigma_min,
         determinants=Determinants(
-            kinematic=gram_determinant(j_omega),
-            coupling=math.prod(value * value for value in sigma),
+            kinematic=gram_determinant(camera_angular_jacobian),
+            coupling=coupling_determinant,
             algorithmic=rates.algorithmic,
         ),
         damping=rates.damping,
         speed_scale=rates.sc_scale * rates.limit_scale,
         limit_scale=rates.limit_scale,
         position_limited=rates.position_limited,
-        angular_residual=omega_ref - j_omega @ theta_dot,
-        coupling_momentum=state.coupling_angular_momentum_matrix @ theta_dot,
+        angular_residual=omega_ref - camera_angular_jacobian @ theta_dot,
+        coupling_momentum=coupling @ theta_dot,
     )
+
+
+def arm_law_rates(
+    robot: FreeFloatingModel,
+    arm: ArmKinematics,
+    omega_ref: np.ndarray,
+    method: Method,
+    gains: ControlGains,
+    wrist_reference: np.ndarray | None,
+    limit_horizon: float | None,
+    coupling_scale: float,
+) -> tuple[LawRates, float] | None:
+    """The law of :func:`law_rates` on :class:`ArmKinematics`, without P_RNS or an SVD.
+
+    With A = [J_omega_e; M~_omega_m / s] (6, n) (s = ``coupling_scale`` [kg m^2], e.g.
+    sigma_max of M~, only balances the rows) and Y = (A A^T)^-1 (6 x 6), the reactionless
+    minimum-norm solutions are A^+ = A^T Y: J-bar^+ omega = A^+ [omega; 0] (J-bar = J_omega_e
+    P_RNS, eq. 4.5), the projector of the wrist term P = P_RNS (E - J-bar^+ J-bar) = E - A^+ A,
+    and Y's upper-left 3 x 3 block is S^-1 with S = J-bar J-bar^T (the Schur complement of
+    M~ M~^T in A A^T), whose eigenvalues give sigma(J-bar). So, as in :func:`law_rates`,
+
+        theta_dot = A^T Y ([c omega_ref; 0] + k A g) - k g,  g = J_vw^T dp_w,
+
+    one 6 x 6 inverse. Returns (rates, det(M~ M~^T) [(kg m^2)^6]), or None where this form does
+    not apply: DLS inside its singular region (sigma_min(J-bar) <= epsilon), SC and pinv with
+    sigma_min <= _CLOSED_FORM_SIGMA, M~ closer to a coupling singularity than
+    GRAM_CONDITION_LIMIT, the conventional baseline; the caller then evaluates
+    :func:`law_rates` on the full state.
+    """
+    if method is Method.CONVENTIONAL:
+        return None
+    j_omega = arm.camera_angular_jacobian
+    coupling = arm.coupling_angular_momentum_matrix
+    stacked = np.concatenate((j_omega, coupling * (1.0 / coupling_scale)))
+    gram = stacked @ stacked.T
+    coupling_eigenvalues = symmetric_eigenvalues(gram[3:, 3:])
+    if coupling_eigenvalues[0] <= GRAM_CONDITION_LIMIT**2 * coupling_eigenvalues[-1]:
+        return None
+    inverse = inverse_small(gram)
+    inverse_eigenvalues = symmetric_eigenvalues(inverse[:3, :3]).tolist()  # 1 / sigma_i^2
+    sigma_min = 1.0 / math.sqrt(inverse_eigenvalues[-1])
+    if sigma_min <= (gains.epsilon if method is Method.DLS else _CLOSED_FORM_SIGMA):
+        return None
+    algorithmic = 1.0 / math.prod(inverse_eigenvalues)
+    sc_scale = gains.sc_gain * math.sqrt(algorithmic) if method is Method.SC else 1.0
+    rhs = np.zeros(6)
+    rhs[:3] = sc_scale * omega_ref
+    if wrist_reference is not None and gains.wrist_gain > 0.0:
+        gain = gains.wrist_gain * (algorithmic if method is Method.SC else 1.0)
+        gradient = arm.wrist_linear_jacobian.T @ (arm.wrist_offset - wrist_reference)
+        rhs += gain * (stacked @ gradient)
+        theta_dot = stacked.T @ (inverse @ rhs) - gain * gradient
+    else:
+        theta_dot = stacked.T @ (inverse @ rhs)
+    theta_dot, limit_scale, position_limited = _limited(robot, arm.theta, theta_dot, limit_horizon)
+    rates = LawRates(
+        theta_dot, sigma_min, algorithmic, 0.0, sc_scale, limit_scale, position_limited
+    )
+    coupling_determinant = math.prod(coupling_eigenvalues.tolist()) * coupling_scale**6
+    return rates, coupling_determinant
+
+
+def _limited(robot, theta, theta_dot, limit_horizon):
+    """(theta_dot, limit scale, position limited) after the uniform speed and position-limit
+    scaling of :func:`law_rates`."""
+    limit_scale = uniform_speed_scale(theta_dot, robot.velocity_limits)
+    if limit_scale < 1.0:
+        theta_dot = limit_scale * theta_dot
+    position_limited = False
+    if limit_horizon is not None:
+        position_scale = position_limit_scale(
+            theta, theta_dot, robot.lower_limits, robot.upper_limits, limit_horizon
+        )
+        if position_scale < 1.0:
+            position_limited = True
+            limit_scale *= position_scale
+            theta_dot = position_scale * theta_dot
+    return theta_dot, limit_scale, position_limited
 
 
 def law_rates(
@@ -299,18 +400,9 @@ def law_rates(
             theta_dot, damping, sc_scale, sigma_min, algorithmic = _svd_law(
                 state, restricted, omega_ref, method, gains, wrist_reference if wrist else None
             )
-    limit_scale = uniform_speed_scale(theta_dot, robot.velocity_limits)
-    if limit_scale < 1.0:
-        theta_dot = limit_scale * theta_dot
-    position_limited = False
-    if limit_horizon is not None:
-        position_scale = position_limit_scale(
-            state.theta, theta_dot, robot.lower_limits, robot.upper_limits, limit_horizon
-        )
-        if position_scale < 1.0:
-            position_limited = True
-            limit_scale *= position_scale
-            theta_dot = position_scale * theta_dot
+    theta_dot, limit_scale, position_limited = _limited(
+        robot, state.theta, theta_dot, limit_horizon
+    )
     return LawRates(
         theta_dot, sigma_min, algorithmic, damping, sc_scale, limit_scale, position_limited
     )

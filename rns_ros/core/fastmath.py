@@ -5,9 +5,9 @@ behind it, ``numpy.linalg._umath_linalg.solve1``, does the same LAPACK solve in 
 private numpy API (numpy is pinned exactly in requirements.txt), so it is looked up once with a
 fallback to the public function, and a test checks both agree. Use it only where the matrix is
 known to be well conditioned (it does not raise LinAlgError on a singular matrix). The SVD
-gufuncs (``svd_s``, ``svd_f``), the many-right-hand-side solve (``solve``) and the symmetric
-eigenvalues (``eigvalsh_lo``) are used the same way: same LAPACK routines as ``np.linalg``, about
-half the call time on the 3 x 3 and 3 x 7 matrices of the controller.
+gufuncs (``svd_s``, ``svd_f``), the many-right-hand-side solve (``solve``), the inverse (``inv``)
+and the symmetric eigenvalues (``eigvalsh_lo``) are used the same way: same LAPACK routines as
+``np.linalg``, about half the call time on the 3 x 3 to 6 x 7 matrices of the controller.
 """
 
 from __future__ import annotations
@@ -22,8 +22,9 @@ try:  # pragma: no branch - depends on the numpy build
     _SVD_THIN = getattr(_umath_linalg, "svd_s", None)
     _SVD_FULL = getattr(_umath_linalg, "svd_f", None)
     _EIGVALSH = getattr(_umath_linalg, "eigvalsh_lo", None)
+    _INV = getattr(_umath_linalg, "inv", None)
 except ImportError:  # pragma: no cover
-    _SOLVE1 = _SOLVE = _SVD_THIN = _SVD_FULL = _EIGVALSH = None
+    _SOLVE1 = _SOLVE = _SVD_THIN = _SVD_FULL = _EIGVALSH = _INV = None
 
 
 def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -38,6 +39,14 @@ def solve_small_many(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     if _SOLVE is None:
         return np.linalg.solve(matrix, rhs)
     return _SOLVE(matrix, rhs)
+
+
+def inverse_small(matrix: np.ndarray) -> np.ndarray:
+    """matrix^-1 of a square, well-conditioned ``matrix`` (k, k), for when blocks of the inverse
+    are needed (the Schur complement of the controller's midpoint law)."""
+    if _INV is None:
+        return np.linalg.inv(matrix)
+    return _INV(matrix)
 
 
 def symmetric_eigenvalues(matrix: np.ndarray) -> np.ndarray:

@@ -66,7 +66,8 @@ WHEELS_SUFFIX = "+wheels"
 METHODS = ("dls", "sc", "pinv", "conventional", "conventional+wheels")
 DEFAULT_METHODS = ("dls", "sc", "conventional")
 ETS_VII_ALLOWED_DEVIATION_DEG = 0.05  # thesis chapter 4, footnote 1
-#: Settling time after the operator's zeros before the run ends [s].
+#: Settling time after the operator's zeros before the run ends [s], on the run's clock (sim
+#: time off real time): the figures cover the same stretch of the run at any speed.
 SETTLE = 0.3
 
 
@@ -154,7 +155,7 @@ def run_method(
     )
     start = time.perf_counter()
     recording = None
-    with Harness(args.domain_id, args.ros_args) as stack:
+    with Harness(args.domain_id, args.ros_args, executor="events") as stack:
         streams = {
             "joints": stack.record(JointState, "joint_states"),
             "odom": stack.record(Odometry, "base_odom"),
@@ -190,20 +191,41 @@ def run_method(
         budget = 30.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
         if not stack.spin_until(lambda: operator.finished, timeout=budget):
             raise RnsError(f"{method}: the scenario did not finish within {budget:.0f} s")
-        stack.spin_for(SETTLE)
-        data = robot_arrays(streams)
-        energy = energy_figures(streams["energy"], streams["attitude"] if wheels else None)
+        # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
+        # so a wall-time settle would let figures depend on this machine's speed
+        end = operator.get_clock().now().nanoseconds * 1e-9 + SETTLE
+        states = [streams[name] for name in ("joints", "odom", "momentum")]
+        if not stack.spin_until(
+            lambda: all(len(log) and _stamp(log.latest()) >= end for log in states),
+            timeout=10.0 + SETTLE / max(args.real_time_factor, 1.0),
+        ):
+            raise RnsError(f"{method}: the robot state stopped before the settling time")
+        data = robot_arrays(streams, until=end)
+        energy = energy_figures(
+            streams["energy"], streams["attitude"] if wheels else None, until=end
+        )
     figures = run_figures(robot, scenario, **data)
     return DemoRow(method, figures, time.perf_counter() - start, recording, energy)
 
 
-def energy_figures(energy: TopicLog, attitude: TopicLog | None) -> EnergyFigures | None:
-    """C_max, C_sum, peak wheel energy from the ``energy`` topic (labels from its layout), and
-    the saturation time from the newest rns_attitude_control status; None without samples."""
+def _stamp(msg) -> float:
+    """A message's header stamp [s]."""
+    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+
+
+def energy_figures(
+    energy: TopicLog, attitude: TopicLog | None, until: float = np.inf
+) -> EnergyFigures | None:
+    """C_max, C_sum, peak wheel energy from the ``energy`` topic (labels from its layout; samples
+    up to simulated time ``until`` [s]), and the saturation time from the newest
+    rns_attitude_control status; None without samples."""
     if not len(energy):
         return None
     labels = energy.latest().layout.dim[0].label.split()
     rows = [dict(zip(labels, msg.data, strict=True)) for msg in energy.messages]
+    rows = [row for row in rows if row.get("time", -np.inf) <= until]
+    if not rows:
+        return None
     saturation = None
     if attitude is not None and len(attitude):
         values = {kv.key: kv.value for kv in attitude.latest().status[0].values}
@@ -229,9 +251,10 @@ def _add_logger(stack: Harness, method: str, args, timing: dict) -> str | None:
     return str(path) if sink == "save" else None
 
 
-def robot_arrays(streams: dict[str, TopicLog]) -> dict[str, np.ndarray]:
+def robot_arrays(streams: dict[str, TopicLog], until: float = np.inf) -> dict[str, np.ndarray]:
     """Robot samples where joint_states and base_odom share a stamp (the simulator publishes
-    both per step), plus momentum and commands."""
+    both per step), plus momentum and commands; only messages stamped up to ``until`` [s]."""
+    streams = {name: _up_to(log, until) for name, log in streams.items()}
     joints, odom = streams["joints"], streams["odom"]
     poses = {}
     for msg in odom.messages:
@@ -262,6 +285,19 @@ def robot_arrays(streams: dict[str, TopicLog]) -> dict[str, np.ndarray]:
             lambda m: [m.twist.angular.x, m.twist.angular.y, m.twist.angular.z]
         ).reshape(-1, 3),
     }
+
+
+def _up_to(log: TopicLog, until: float) -> TopicLog:
+    """``log`` without the messages stamped after ``until`` [s] (messages without a header
+    are kept)."""
+    if until == np.inf or not log.messages or not hasattr(log.messages[0], "header"):
+        return log
+    kept = TopicLog(log.topic)
+    for msg, received in zip(log.messages, log.received, strict=True):
+        if _stamp(msg) <= until:
+            kept.messages.append(msg)
+            kept.received.append(received)
+    return kept
 
 
 def format_table(rows: list[DemoRow]) -> str:

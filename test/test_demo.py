@@ -100,12 +100,42 @@ def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
 def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path):
     """--real-time-factor 0: the simulator waits for each control period's output and the
     controller keeps its ticks on the period grid, so sampling is synchronous and the base
-    stays within 2e-5 deg (1.6-1.9e-6 measured). Free-running it turned 1.7e-2 deg; with
-    commands served between ticks, 4e-4 deg."""
+    stays within 2e-5 deg (1.6-1.9e-6 measured with /clock every 1 ms step; the 20 s scenario
+    now matches the in-process loop). Free-running it turned 1.7e-2 deg; with commands served
+    between ticks, 4e-4 deg."""
     _, rows = _short_demo(tmp_path, "--no-record", "--real-time-factor", "0", "--methods", "dls")
     row = rows["dls"]
     assert row["max_base_deviation_deg"] < 2e-5
     assert row["final_camera_error_deg"] < 0.05
+
+
+def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():
+    """The run ends SETTLE after the operator on the stamps' clock: samples stamped later (a
+    lockstep run goes on at its own pace while the stack stops) are not part of the figures."""
+    from geometry_msgs.msg import TwistStamped, WrenchStamped
+    from nav_msgs.msg import Odometry
+    from sensor_msgs.msg import JointState
+
+    from rns_ros.harness import TopicLog
+    from rns_ros.nodes.simulator import stamp_from_seconds
+
+    logs = {name: TopicLog(name) for name in ("joints", "odom", "momentum", "commands")}
+    for k in range(100):
+        stamp = stamp_from_seconds(0.01 * k)
+        joints = JointState(position=[0.0] * 7, velocity=[0.0] * 7)
+        odom, momentum, twist = Odometry(), WrenchStamped(), TwistStamped()
+        odom.pose.pose.orientation.w = 1.0
+        for msg, name in ((joints, "joints"), (odom, "odom"), (momentum, "momentum")):
+            msg.header.stamp = stamp
+            logs[name]._append(msg)
+        if k % 2 == 0:
+            twist.header.stamp = stamp
+            logs["commands"]._append(twist)
+    data = demo.robot_arrays(logs, until=0.5)
+    assert data["times"][-1] == pytest.approx(0.5)
+    assert len(data["times"]) == len(data["angular_momentum"]) == 51
+    assert data["command_times"].max() <= 0.5
+    assert len(demo.robot_arrays(logs)["times"]) == 100
 
 
 def test_conventional_with_wheels_costs_orders_of_magnitude_more_energy(tmp_path):

@@ -27,7 +27,6 @@ from rns_ros.control.inspection import (
     ControlOutput,
     LawRates,
     Method,
-    arm_control_output,
     arm_law_rates,
     control_output,
     law_rates,
@@ -276,8 +275,8 @@ class ReactionlessController:
             theta = state.theta + half * predicted
             rates, output = self._midpoint_rates(state, theta, omega_ref)
             theta_dot = rates.joint_velocity
-            miss = float(np.abs(theta_dot - predicted).max())
-            speed = max(float(np.abs(theta_dot).max()), HOLD_SPEED_FLOOR)
+            miss = max(map(abs, (theta_dot - predicted).tolist()))
+            speed = max(max(map(abs, theta_dot.tolist())), HOLD_SPEED_FLOOR)
             if miss <= HOLD_CONSISTENCY * settings.period * speed:
                 break
             predicted = theta_dot
@@ -303,15 +302,7 @@ class ReactionlessController:
             float(state.coupling_singular_values[0]),
         )
         if closed is not None:
-            rates, coupling_determinant = closed
-            output = arm_control_output(
-                arm.camera_angular_jacobian,
-                arm.coupling_angular_momentum_matrix,
-                coupling_determinant,
-                omega_ref,
-                rates,
-            )
-            return rates, output
+            return closed
         evaluated = state.with_joint_angles(theta)
         rates = self._rates(evaluated, omega_ref, horizon)
         return rates, control_output(evaluated, omega_ref, rates)

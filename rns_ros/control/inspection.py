@@ -232,40 +232,23 @@ def control_output(
     state: FreeFloatingState, omega_ref: np.ndarray, rates: LawRates
 ) -> ControlOutput:
     """The :class:`ControlOutput` of ``rates`` (the law evaluated at ``state``)."""
-    sigma = state.coupling_singular_values.tolist()
-    return arm_control_output(
-        state.camera.jacobian[3:],
-        state.coupling_angular_momentum_matrix,
-        math.prod(value * value for value in sigma),
-        omega_ref,
-        rates,
-    )
-
-
-def arm_control_output(
-    camera_angular_jacobian: np.ndarray,
-    coupling: np.ndarray,
-    coupling_determinant: float,
-    omega_ref: np.ndarray,
-    rates: LawRates,
-) -> ControlOutput:
-    """The :class:`ControlOutput` of ``rates`` from the matrices it was evaluated with:
-    J_omega_e (3, n), M~_omega_m (3, n) and det(M~ M~^T) [(kg m^2)^6]."""
     theta_dot = rates.joint_velocity
+    j_omega = state.camera.jacobian[3:]
+    sigma = state.coupling_singular_values.tolist()
     return ControlOutput(
         joint_velocity=theta_dot,
         sigma_min=rates.sigma_min,
         determinants=Determinants(
-            kinematic=gram_determinant(camera_angular_jacobian),
-            coupling=coupling_determinant,
+            kinematic=gram_determinant(j_omega),
+            coupling=math.prod(value * value for value in sigma),
             algorithmic=rates.algorithmic,
         ),
         damping=rates.damping,
         speed_scale=rates.sc_scale * rates.limit_scale,
         limit_scale=rates.limit_scale,
         position_limited=rates.position_limited,
-        angular_residual=omega_ref - camera_angular_jacobian @ theta_dot,
-        coupling_momentum=coupling @ theta_dot,
+        angular_residual=omega_ref - j_omega @ theta_dot,
+        coupling_momentum=state.coupling_angular_momentum_matrix @ theta_dot,
     )
 
 
@@ -278,8 +261,9 @@ def arm_law_rates(
     wrist_reference: np.ndarray | None,
     limit_horizon: float | None,
     coupling_scale: float,
-) -> tuple[LawRates, float] | None:
-    """The law of :func:`law_rates` on :class:`ArmKinematics`, without P_RNS or an SVD.
+) -> tuple[LawRates, ControlOutput] | None:
+    """The law of :func:`law_rates` on :class:`ArmKinematics`, without P_RNS or an SVD, and its
+    :class:`ControlOutput`.
 
     With A = [J_omega_e; M~_omega_m / s] (6, n) (s = ``coupling_scale`` [kg m^2], e.g.
     sigma_max of M~, only balances the rows) and Y = (A A^T)^-1 (6 x 6), the reactionless
@@ -290,21 +274,26 @@ def arm_law_rates(
 
         theta_dot = A^T Y ([c omega_ref; 0] + k A g) - k g,  g = J_vw^T dp_w,
 
-    one 6 x 6 inverse. Returns (rates, det(M~ M~^T) [(kg m^2)^6]), or None where this form does
-    not apply: DLS inside its singular region (sigma_min(J-bar) <= epsilon), SC and pinv with
-    sigma_min <= _CLOSED_FORM_SIGMA, M~ closer to a coupling singularity than
+    one 6 x 6 inverse; A A^T also holds J_omega_e J_omega_e^T and M~ M~^T for the determinants,
+    and A theta_dot the achieved rate and the coupling momentum. Returns None where this form
+    does not apply: DLS inside its singular region (sigma_min(J-bar) <= epsilon), SC and pinv
+    with sigma_min <= _CLOSED_FORM_SIGMA, M~ closer to a coupling singularity than
     GRAM_CONDITION_LIMIT, the conventional baseline; the caller then evaluates
     :func:`law_rates` on the full state.
     """
     if method is Method.CONVENTIONAL:
         return None
-    j_omega = arm.camera_angular_jacobian
-    coupling = arm.coupling_angular_momentum_matrix
-    stacked = np.concatenate((j_omega, coupling * (1.0 / coupling_scale)))
+    stacked = np.concatenate((arm.camera_angular_jacobian, arm.coupling_angular_momentum_matrix))
+    stacked[3:] *= 1.0 / coupling_scale
     gram = stacked @ stacked.T
-    coupling_eigenvalues = symmetric_eigenvalues(gram[3:, 3:])
-    if coupling_eigenvalues[0] <= GRAM_CONDITION_LIMIT**2 * coupling_eigenvalues[-1]:
-        return None
+    coupling_gram = gram[3:, 3:].tolist()
+    coupling_determinant = _determinant_3x3(coupling_gram)  # of M~ M~^T / s^6
+    trace = coupling_gram[0][0] + coupling_gram[1][1] + coupling_gram[2][2]
+    # lambda_min / lambda_max >= det / trace^3: enough to show M~ far from a coupling singularity
+    if coupling_determinant <= GRAM_CONDITION_LIMIT**2 * trace**3:
+        eigenvalues = symmetric_eigenvalues(gram[3:, 3:])
+        if eigenvalues[0] <= GRAM_CONDITION_LIMIT**2 * eigenvalues[-1]:
+            return None
     inverse = inverse_small(gram)
     inverse_eigenvalues = symmetric_eigenvalues(inverse[:3, :3]).tolist()  # 1 / sigma_i^2
     sigma_min = 1.0 / math.sqrt(inverse_eigenvalues[-1])
@@ -312,21 +301,53 @@ def arm_law_rates(
         return None
     algorithmic = 1.0 / math.prod(inverse_eigenvalues)
     sc_scale = gains.sc_gain * math.sqrt(algorithmic) if method is Method.SC else 1.0
-    rhs = np.zeros(6)
-    rhs[:3] = sc_scale * omega_ref
+    command = sc_scale * omega_ref if method is Method.SC else omega_ref
     if wrist_reference is not None and gains.wrist_gain > 0.0:
         gain = gains.wrist_gain * (algorithmic if method is Method.SC else 1.0)
         gradient = arm.wrist_linear_jacobian.T @ (arm.wrist_offset - wrist_reference)
-        rhs += gain * (stacked @ gradient)
-        theta_dot = stacked.T @ (inverse @ rhs) - gain * gradient
+        gradient *= gain
+        rhs = stacked @ gradient
+        rhs[:3] += command
     else:
-        theta_dot = stacked.T @ (inverse @ rhs)
+        gradient = None
+        rhs = np.zeros(6)
+        rhs[:3] = command
+    # y = (A A^T)^-1 rhs with one step of iterative refinement: cond(A A^T) reaches 1e4-1e6 near
+    # the singular region, and M~ theta_dot = 0 rests on (A A^T) y = rhs (1e-9 kg m^2/s without,
+    # 1e-11 with, as P_RNS gives)
+    multipliers = inverse @ rhs
+    multipliers += inverse @ (rhs - gram @ multipliers)
+    theta_dot = stacked.T @ multipliers
+    if gradient is not None:
+        theta_dot -= gradient
     theta_dot, limit_scale, position_limited = _limited(robot, arm.theta, theta_dot, limit_horizon)
     rates = LawRates(
         theta_dot, sigma_min, algorithmic, 0.0, sc_scale, limit_scale, position_limited
     )
-    coupling_determinant = math.prod(coupling_eigenvalues.tolist()) * coupling_scale**6
-    return rates, coupling_determinant
+    achieved = stacked @ theta_dot  # [J_omega_e theta_dot; M~ theta_dot / s]
+    camera_gram = gram[:3, :3].tolist()
+    output = ControlOutput(
+        joint_velocity=theta_dot,
+        sigma_min=sigma_min,
+        determinants=Determinants(
+            kinematic=_determinant_3x3(camera_gram),
+            coupling=coupling_determinant * coupling_scale**6,
+            algorithmic=algorithmic,
+        ),
+        damping=0.0,
+        speed_scale=sc_scale * limit_scale,
+        limit_scale=limit_scale,
+        position_limited=position_limited,
+        angular_residual=omega_ref - achieved[:3],
+        coupling_momentum=coupling_scale * achieved[3:],
+    )
+    return rates, output
+
+
+def _determinant_3x3(matrix: list) -> float:
+    """det of a symmetric 3 x 3 matrix given as nested lists (closed form)."""
+    (a, b, c), (_, e, f), (_, _, i) = matrix
+    return a * (e * i - f * f) - b * (b * i - f * c) + c * (b * f - e * c)
 
 
 def _limited(robot, theta, theta_dot, limit_horizon):

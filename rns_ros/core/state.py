@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -91,8 +92,7 @@ class Determinants:
     algorithmic: float
 
 
-@dataclass(frozen=True)
-class ArmKinematics:
+class ArmKinematics(NamedTuple):
     """What the reactionless law (4.5) reads at a configuration, without P_RNS: the partial state
     the hold correction evaluates the law on (:meth:`FreeFloatingState.arm_kinematics`).
 

@@ -22,6 +22,7 @@ from rns_ros.control.inspection import (
     ControlGains,
     Method,
     arm_law_rates,
+    control_output,
     law_rates,
     position_limit_scale,
     reactionless_camera_control,
@@ -231,12 +232,19 @@ def test_closed_form_midpoint_law_is_the_law_on_the_full_state(robot, method):
             assert method == "dls"
             assert exact.sigma_min <= gains.epsilon
             continue
-        rates, coupling_determinant = closed
+        rates, output = closed
         np.testing.assert_allclose(rates.joint_velocity, exact.joint_velocity, atol=1e-11)
         assert rates.sigma_min == pytest.approx(exact.sigma_min, rel=1e-10)
         assert rates.algorithmic == pytest.approx(exact.algorithmic, rel=1e-9)
         assert rates.sc_scale == pytest.approx(exact.sc_scale, rel=1e-10)
-        assert coupling_determinant == pytest.approx(full.determinants.coupling, rel=1e-9)
+        expected = control_output(full, omega, exact)
+        for name in ("kinematic", "coupling", "algorithmic"):
+            assert getattr(output.determinants, name) == pytest.approx(
+                getattr(expected.determinants, name), rel=1e-9
+            )
+        np.testing.assert_allclose(output.angular_residual, expected.angular_residual, atol=1e-11)
+        np.testing.assert_allclose(output.coupling_momentum, expected.coupling_momentum, atol=1e-9)
+        assert output.speed_scale == pytest.approx(expected.speed_scale, rel=1e-10)
 
 
 def test_dls_inside_its_singular_region_falls_back_to_the_full_state(robot):

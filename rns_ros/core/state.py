@@ -211,8 +211,8 @@ class FreeFloatingState:
         camera = pin.getFrameJacobian(model, data, robot.camera_frame_id, reference)[3:, 6:]
         jacobian = offset = None
         if robot.wrist_frame_id is not None:
-            pin.updateFramePlacement(model, data, robot.wrist_frame_id)
-            offset = _sealed(data.oMf[robot.wrist_frame_id].translation - self.base_position)
+            placement = pin.updateFramePlacement(model, data, robot.wrist_frame_id)  # a copy
+            offset = _sealed(placement.translation - self.base_position)
             jacobian = pin.getFrameJacobian(model, data, robot.wrist_frame_id, reference)
             jacobian = _sealed(jacobian[:3, 6:])
         return ArmKinematics(

@@ -4,10 +4,12 @@
 rns_ptp with the 3-phase method and the JS-C / IJ-C / TJ-C baselines, in a Table 4.2-style table.
 
 For each method (default: reactionless ``dls``, reactionless ``sc``, ``conventional``) a fresh
-launch-free stack runs in this process (:class:`rns_ros.harness.Harness`, its own domain,
-localhost only): ``rns_simulator`` starting from the scenario's joint angles, ``rns_controller``
-with that method, ``rns_operator`` playing the scenario file, and ``rns_rerun_logger`` recording
-one ``.rrd`` per run (or a live viewer with ``--viewer``). The recorded topics give a comparison
+launch-free stack runs on its own domain, localhost only, each node as its own process
+(:class:`rns_ros.harness.ProcessStack`, as ``ros2 run`` starts them): ``rns_simulator``
+starting from the scenario's joint angles, ``rns_controller`` with that method, ``rns_operator``
+playing the scenario file, and ``rns_rerun_logger`` recording one ``.rrd`` per run (or a live
+viewer with ``--viewer``); this process records the topics (:class:`rns_ros.harness.Harness`).
+The point-to-point runs keep their nodes in this process. The recorded topics give a comparison
 table (:mod:`rns_ros.analysis.recorded_run`): max base attitude deviation, camera orientation
 error at the end, RMS angular-velocity tracking error, max wrist drift, max joint speed,
 angular momentum drift, wall time. ``--summary PATH`` writes it as JSON.
@@ -43,6 +45,7 @@ from rns_ros.demo_contact import (
     is_contact_scenario,
     non_finite_contact_figures,
     run_contact_method,
+    start_logger,
 )
 from rns_ros.demo_ptp import (
     PTP_METHODS,
@@ -52,12 +55,8 @@ from rns_ros.demo_ptp import (
     non_finite_ptp_figures,
     run_ptp_method,
 )
-from rns_ros.harness import Harness, TopicLog
-from rns_ros.nodes.attitude_control import AttitudeControlNode
+from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
-from rns_ros.nodes.controller import ControllerNode
-from rns_ros.nodes.operator import OperatorNode
-from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.resources import default_model_config, scenario_path
 
 #: ``conventional+wheels``: the conventional controller with rns_attitude_control holding the
@@ -137,7 +136,19 @@ def run_method(
     args: argparse.Namespace,
     scenario_file: Path,
 ) -> DemoRow:
-    """One full DDS run of the scenario with ``method``; returns its figures."""
+    """One full DDS run of the scenario with ``method``; returns its figures.
+
+    The nodes run as their own processes (:class:`~rns_ros.harness.ProcessStack`: the installed
+    ``rns_simulator``, ``rns_controller``, ``rns_operator``, ``rns_rerun_logger`` and, with
+    wheels, ``rns_attitude_control``, each on its own executor, as ``ros2 run`` starts them);
+    this process only records the topics. In one process the simulation thread and every
+    node shared one GIL: outputs came 15-40 ms apart instead of 10 (timer ticks waiting for
+    the lock) and reached the simulator 0.4-8 ms after they were published, which turned the
+    base by 0.6-1.9e-4 deg (dls) where separate processes give 2.6-2.8e-5 deg.
+
+    Raises:
+        RnsError: a node did not start, or the run did not finish in time.
+    """
     scenario = load_scenario(scenario_file)
     robot = load_model(default_model_config())
     sim_time = args.real_time_factor != 1.0
@@ -145,17 +156,19 @@ def run_method(
     wheels = method.endswith(WHEELS_SUFFIX)
     law = method.removesuffix(WHEELS_SUFFIX)
     controller_parameters = {"method": law, "rate": args.rate, **timing}
-    # Every node of a run shares this one Python process (and its GIL), where a joint state can
-    # arrive later than the 0.1 s wall-time watchdog on a 2-core machine (0.13 s seen in CI at
-    # real time); lockstep pauses off real time wait for the controller. Deployed nodes run in
-    # their own processes with the default.
-    controller_parameters["state_timeout"] = 1.0 if sim_time else 0.3
+    if sim_time:
+        # lockstep pauses wait for the controller: a state can come later than the 0.1 s
+        # wall-time default while the 2 cores are busy
+        controller_parameters["state_timeout"] = 1.0
     controller_parameters.update(
         {key: value for key, value in scenario.controller.items() if key != "method"}
     )
+    ros_args = list(args.ros_args[1:]) if args.ros_args else []
     start = time.perf_counter()
-    recording = None
-    with Harness(args.domain_id, args.ros_args, executor="events") as stack:
+    with (
+        ProcessStack(args.domain_id) as processes,
+        Harness(args.domain_id, args.ros_args, executor="events") as stack,
+    ):
         streams = {
             "joints": stack.record(JointState, "joint_states"),
             "odom": stack.record(Odometry, "base_odom"),
@@ -165,12 +178,14 @@ def run_method(
             "energy": stack.record(Float64MultiArray, "energy"),
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status"),
         }
-        # the logger first: its subscriptions exist (like the streams above) before the first
-        # robot state, so the recording holds the whole run
-        if not args.no_record:
-            recording = _add_logger(stack, method, args, timing)
-        stack.add(
-            SimulatorNode,
+        recording = start_logger(processes, method, args, sim_time=sim_time)
+        processes.start("rns_controller", controller_parameters, ros_args=ros_args)
+        if wheels:
+            processes.start(
+                "rns_attitude_control", {"rate": args.rate, **timing}, ros_args=ros_args
+            )
+        processes.start(
+            "rns_simulator",
             {
                 "initial_joint_positions": scenario.initial_theta.tolist(),
                 "mode": args.mode,
@@ -181,31 +196,91 @@ def run_method(
                 "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
                 "reaction_wheels": wheels,
             },
+            ros_args=ros_args,
         )
-        stack.add(ControllerNode, controller_parameters)
-        if wheels:
-            stack.add(AttitudeControlNode, {"rate": args.rate, **timing})
-        operator = stack.add(
-            OperatorNode, {"scenario": str(scenario_file), "start_delay": 0.5, **timing}
+        # the operator only once the robot runs and this process and the logger record it
+        # (a recorder matched late would miss the start of the task)
+        listeners = [NODE_NAMES["controller"]]
+        if recording is not None or args.viewer:
+            listeners.append(NODE_NAMES["logger"])
+        _wait_for_start(stack, processes, streams, listeners, method)
+        processes.start(
+            "rns_operator",
+            {
+                "scenario": str(scenario_file),
+                "start_delay": 0.5,
+                "zero_duration": OPERATOR_ZERO_DURATION,
+                # the controller, this process and the logger: the first to be matched no
+                # longer starts the profile while the controller still misses it
+                "min_subscribers": len(listeners) + 1,
+                **timing,
+            },
+            ros_args=ros_args,
         )
-        budget = 30.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
-        if not stack.spin_until(lambda: operator.finished, timeout=budget):
-            raise RnsError(f"{method}: the scenario did not finish within {budget:.0f} s")
+        commands = streams["commands"]
+        budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
+        if not stack.spin_until(lambda: len(commands) > 0, timeout=budget):
+            raise RnsError(f"{method}: no cmd_twist from rns_operator within {budget:.0f} s")
         # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
         # so a wall-time settle would let figures depend on this machine's speed
-        end = operator.get_clock().now().nanoseconds * 1e-9 + SETTLE
+        end = _stamp(commands.messages[0]) + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
         states = [streams[name] for name in ("joints", "odom", "momentum")]
         if not stack.spin_until(
             lambda: all(len(log) and _stamp(log.latest()) >= end for log in states),
-            timeout=10.0 + SETTLE / max(args.real_time_factor, 1.0),
+            timeout=budget,
         ):
-            raise RnsError(f"{method}: the robot state stopped before the settling time")
-        data = robot_arrays(streams, until=end)
+            raise RnsError(
+                f"{method}: the scenario did not finish within {budget:.0f} s{_exited(processes)}"
+            )
+        # from just before the task: the robot is at rest until the first command, and a
+        # recorder (the logger) matched a moment after the first state then has all of it
+        task = _stamp(commands.messages[0])
+        data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
     figures = run_figures(robot, scenario, **data)
     return DemoRow(method, figures, time.perf_counter() - start, recording, energy)
+
+
+#: Robot states before the first command that the figures include [s].
+TASK_MARGIN = 0.2
+#: Zero twists the operator sends after the profile [s] (its default).
+OPERATOR_ZERO_DURATION = 1.0
+#: Node names of the processes whose subscriptions the demo waits for.
+NODE_NAMES = {"controller": "rns_controller", "logger": "rns_rerun_logger"}
+
+
+def _wait_for_start(
+    stack: Harness,
+    processes: ProcessStack,
+    streams: dict[str, TopicLog],
+    listeners: list[str],
+    method: str,
+    timeout: float = 60.0,
+) -> None:
+    """Until this process records the robot state and ``listeners`` subscribe to it."""
+    probe = stack.probe()
+
+    def ready() -> bool:
+        if not all(len(streams[name]) for name in ("joints", "odom", "momentum")):
+            return False
+        nodes = {info.node_name for info in probe.get_subscriptions_info_by_topic("/base_odom")}
+        return all(name in nodes for name in listeners)
+
+    if not stack.spin_until(ready, timeout=timeout):
+        raise RnsError(
+            f"{method}: the robot state or its listeners ({', '.join(listeners)}) did not come "
+            f"up within {timeout:.0f} s{_exited(processes)}"
+        )
+
+
+def _exited(processes: ProcessStack) -> str:
+    """': <tail of the output of each process that exited>' or ''."""
+    outputs = "; ".join(
+        one_line(processes.output(p)[-300:]) for p in processes.processes if p.poll() is not None
+    )
+    return f": {outputs}" if outputs else ""
 
 
 def _stamp(msg) -> float:
@@ -251,10 +326,13 @@ def _add_logger(stack: Harness, method: str, args, timing: dict) -> str | None:
     return str(path) if sink == "save" else None
 
 
-def robot_arrays(streams: dict[str, TopicLog], until: float = np.inf) -> dict[str, np.ndarray]:
+def robot_arrays(
+    streams: dict[str, TopicLog], until: float = np.inf, since: float = -np.inf
+) -> dict[str, np.ndarray]:
     """Robot samples where joint_states and base_odom share a stamp (the simulator publishes
-    both per step), plus momentum and commands; only messages stamped up to ``until`` [s]."""
-    streams = {name: _up_to(log, until) for name, log in streams.items()}
+    both per step), plus momentum and commands; only messages stamped in [``since``,
+    ``until``] [s]."""
+    streams = {name: _up_to(log, until, since) for name, log in streams.items()}
     joints, odom = streams["joints"], streams["odom"]
     poses = {}
     for msg in odom.messages:
@@ -287,14 +365,15 @@ def robot_arrays(streams: dict[str, TopicLog], until: float = np.inf) -> dict[st
     }
 
 
-def _up_to(log: TopicLog, until: float) -> TopicLog:
-    """``log`` without the messages stamped after ``until`` [s] (messages without a header
-    are kept)."""
-    if until == np.inf or not log.messages or not hasattr(log.messages[0], "header"):
+def _up_to(log: TopicLog, until: float, since: float = -np.inf) -> TopicLog:
+    """``log`` without the messages stamped after ``until`` or before ``since`` [s] (messages
+    without a header are kept)."""
+    unbounded = until == np.inf and since == -np.inf
+    if unbounded or not log.messages or not hasattr(log.messages[0], "header"):
         return log
     kept = TopicLog(log.topic)
     for msg, received in zip(log.messages, log.received, strict=True):
-        if _stamp(msg) <= until:
+        if since <= _stamp(msg) <= until:
             kept.messages.append(msg)
             kept.received.append(received)
     return kept

@@ -175,7 +175,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)
         twists = stack.record(TwistStamped, "cmd_twist")
-        recording = _start_logger(processes, f"{scenario.name}_{method}", args, model_config)
+        recording = start_logger(processes, f"{scenario.name}_{method}", args, model_config)
         # the controller first: it is listening when the first state comes
         processes.start(
             "rns_force_controller",
@@ -303,10 +303,16 @@ def _state(msg: DiagnosticArray) -> str:
     return next((kv.value for kv in msg.status[0].values if kv.key == "state"), "unknown")
 
 
-def _start_logger(
-    processes: ProcessStack, name: str, args: argparse.Namespace, model_config: str
+def start_logger(
+    processes: ProcessStack,
+    name: str,
+    args: argparse.Namespace,
+    model_config: str | None = None,
+    *,
+    sim_time: bool = True,
 ) -> str | None:
-    """``rns_rerun_logger`` as a process: ``<output>/<name>.rrd``, or a live viewer."""
+    """``rns_rerun_logger`` as a process: ``<output>/<name>.rrd`` (returned), or a live viewer
+    (None); None with ``--no-record``. ``model_config``: None for the default model."""
     if args.no_record:
         return None
     args.output.mkdir(parents=True, exist_ok=True)
@@ -318,8 +324,8 @@ def _start_logger(
             "sink": sink,
             "rrd_path": str(path),
             "recording_name": name,
-            "model_config": model_config,
-            "use_sim_time": True,
+            **({"model_config": model_config} if model_config else {}),
+            "use_sim_time": sim_time,
         },
     )
     return str(path) if sink == "save" else None

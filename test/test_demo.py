@@ -70,12 +70,14 @@ def test_demo_recordings_load_back_with_the_documented_entities(demo_run):
     for method, row in rows.items():
         counts = recording_summary(row["recording"])
         assert row["recording"].endswith(f"{method}.rrd")
-        # one sample per robot state the demo saw (the logger listens to the same
-        # stream from before the first state); the logger is a best-effort observer, so on a
-        # loaded machine it may miss some (428 of 485 in a CI run, 401 of 462 here with two
-        # busy-loop processes), never most
+        # one sample per robot state: the figures' window runs from 0.2 s before the first
+        # command, which the logger (matched before the operator starts) covers, and the
+        # logger also logs the states at rest before it, never more than the simulator
+        # published (100 Hz over the run's wall time, real time); it is a best-effort
+        # observer, so on a loaded machine it may miss some (428 of 485 in a CI run, 401 of
+        # 462 here with two busy-loop processes), never most
         for path in (paths.BASE_ATTITUDE_TOTAL, paths.CAMERA_POINTING):
-            assert 0.75 * row["samples"] <= counts[path] <= 1.1 * row["samples"], path
+            assert 0.75 * row["samples"] <= counts[path] <= 100.0 * row["wall_time_s"], path
         assert counts[paths.SIGMA_MIN] > 200  # controller status at 100 Hz for > 3 s
         assert any(path.startswith(paths.JOINTS) for path in counts)
 

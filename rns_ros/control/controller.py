@@ -216,27 +216,33 @@ class ReactionlessController:
         self.settings = settings
         self._held = ()
 
-    def step(self, state: FreeFloatingState, omega_ref) -> ControllerStep:
-        """Evaluate the law for the coming period and advance theta_ref.
+    def step(
+        self, state: FreeFloatingState, omega_ref, hold: float | None = None
+    ) -> ControllerStep:
+        """Evaluate the law for the coming hold and advance theta_ref.
 
         Args:
-            state: the robot sampled now.
+            state: the robot sampled now (where the hold starts).
             omega_ref: commanded camera angular velocity, world axes [rad/s], shape (3,).
+            hold: how long this output will be held [s], > 0; default the period T. A
+                sampled controller that knows its next output comes early (a command served
+                between ticks, a late tick followed by one on the timer's grid) puts the
+                midpoint at theta_k + hold/2 theta_dot: the hold stays reactionless to second
+                order whatever its length.
         """
         if self._reference is None:
             self.reset(state)
         settings = self.settings
+        period = settings.period if hold is None else positive(hold, "hold", "s")
         omega_ref = as_vector(omega_ref, 3, "omega_ref")
         evaluated_theta = state.theta
         if settings.hold_correction is HoldCorrection.NAIVE:
-            output = control_output(
-                state, omega_ref, self._rates(state, omega_ref, settings.period)
-            )
+            output = control_output(state, omega_ref, self._rates(state, omega_ref, period))
         else:
-            evaluated_theta, output = self._midpoint(state, omega_ref)
+            evaluated_theta, output = self._midpoint(state, omega_ref, period)
         theta_dot = output.joint_velocity
         start = self._reference
-        self._reference = start + settings.period * theta_dot
+        self._reference = start + period * theta_dot
         self._hold = (start, theta_dot)
         self._held = (*self._held[-1:], theta_dot)
         return ControllerStep(
@@ -247,10 +253,10 @@ class ReactionlessController:
         )
 
     def _midpoint(
-        self, state: FreeFloatingState, omega_ref: np.ndarray
+        self, state: FreeFloatingState, omega_ref: np.ndarray, period: float
     ) -> tuple[np.ndarray, ControlOutput]:
-        """The law at the predicted mid-period configuration theta_k + T/2 theta_dot_pred:
-        (evaluated theta, output).
+        """The law at the predicted mid-hold configuration theta_k + h/2 theta_dot_pred (h =
+        ``period``, the hold [s]): (evaluated theta, output).
 
         Predictor: the held theta_dot extrapolated linearly from the last two periods (the
         previous one alone after one period). It is checked, not trusted: an evaluation whose
@@ -267,19 +273,19 @@ class ReactionlessController:
         1.4e-2 deg on own_device.)
         """
         settings = self.settings
-        half = 0.5 * settings.period
+        half = 0.5 * period
         held = self._held
         if not held:
-            predicted = self._rates(state, omega_ref, settings.period).joint_velocity
+            predicted = self._rates(state, omega_ref, period).joint_velocity
             for _ in range(settings.hold_iterations):
                 theta = state.theta + half * predicted
-                rates, output = self._midpoint_rates(state, theta, omega_ref)
+                rates, output = self._midpoint_rates(state, theta, omega_ref, half)
                 predicted = rates.joint_velocity
             return theta, output
         predicted = 2.0 * held[1] - held[0] if len(held) == 2 else held[0]
         for _ in range(1 + settings.hold_iterations):
             theta = state.theta + half * predicted
-            rates, output = self._midpoint_rates(state, theta, omega_ref)
+            rates, output = self._midpoint_rates(state, theta, omega_ref, half)
             theta_dot = rates.joint_velocity
             miss = max(map(abs, (theta_dot - predicted).tolist()))
             speed = max(max(map(abs, theta_dot.tolist())), HOLD_SPEED_FLOOR)
@@ -289,13 +295,13 @@ class ReactionlessController:
         return theta, output
 
     def _midpoint_rates(
-        self, state: FreeFloatingState, theta: np.ndarray, omega_ref: np.ndarray
+        self, state: FreeFloatingState, theta: np.ndarray, omega_ref: np.ndarray, horizon: float
     ) -> tuple[LawRates, ControlOutput]:
         """The law at the predicted midpoint ``theta`` (base pose of ``state``); position limits
-        judged over the half period left after it. Exact either way: the closed form on
-        :class:`ArmKinematics` (no SVD, no P_RNS) where it applies, else the full state."""
+        judged over the ``horizon`` [s] (half the hold) left after it. Exact either way: the
+        closed form on :class:`ArmKinematics` (no SVD, no P_RNS) where it applies, else the
+        full state."""
         settings = self.settings
-        horizon = 0.5 * settings.period
         arm = state.arm_kinematics(theta)
         closed = arm_law_rates(
             self.robot,

@@ -87,10 +87,12 @@ SUMMARY = "Reactionless camera-pointing controller: twist in, joint references o
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
-#: Default publish-to-receipt time of an output [s]: loopback DDS (0.4-0.6 ms measured).
-DEFAULT_OUTPUT_LATENCY = 5e-4
-#: Default plant update period [s]: rns_simulator's step_size.
-DEFAULT_PLANT_PERIOD = 1e-3
+#: Defaults of the output timing [s]: a plant that acts on a JointTrajectory from its stamp
+#: (rns_simulator, a joint trajectory controller) has neither latency nor update grid for it.
+#: Measured for a plant acting on receipt (rns_simulator with the velocity interface):
+#: output_latency 0.4-0.7 ms (loopback DDS), plant_period 1 ms (its step).
+DEFAULT_OUTPUT_LATENCY = 0.0
+DEFAULT_PLANT_PERIOD = 0.0
 #: Shortest interval between two ticks when commands are served at once [s]: a command flood
 #: cannot make the controller compute faster than this; a change within it waits for the tick.
 MIN_TICK_INTERVAL = 1e-3
@@ -240,8 +242,10 @@ PARAMETERS = (
     ParameterSpec(
         "output_latency",
         DEFAULT_OUTPUT_LATENCY,
-        "Publish-to-receipt time of an output at the plant, for predict_state. Wall clock "
-        "only: under use_sim_time it counts as 0 (a lockstep simulator waits for each output)",
+        "Publish-to-receipt time of an output at a plant that acts on receipt (the velocity "
+        "interface: ~0.5 ms on loopback), for predict_state; 0 for a plant that acts from the "
+        "output's stamp (JointTrajectory to rns_simulator or a trajectory controller). Wall "
+        "clock only: under use_sim_time it counts as 0 (a lockstep simulator waits for outputs)",
         "[s]",
         0.0,
         0.05,
@@ -250,9 +254,9 @@ PARAMETERS = (
     ParameterSpec(
         "plant_period",
         DEFAULT_PLANT_PERIOD,
-        "Update period of the plant (rns_simulator step_size, ros2_control update period), "
-        "on a grid through the joint_states stamps: an output acts at the first update after "
-        "it arrives; 0: at once",
+        "Update period of a plant that acts on receipt (rns_simulator step_size with the "
+        "velocity interface, the ros2_control update period), on a grid through the "
+        "joint_states stamps: an output acts at the first update after it arrives; 0: at once",
         "[s]",
         0.0,
         0.1,
@@ -300,6 +304,7 @@ class ControllerNode(Node):
         self._sim_time = bool(self.get_parameter("use_sim_time").value)
         # what this node published recently (node clock), for the prediction
         self._outputs: deque[PublishedOutput] = deque()
+        self._planned: Time | None = None  # the instant this tick's output is planned for
         # latency is a wall-clock matter; in simulated time, commands served between ticks
         # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
         self._immediate = params["immediate_reaction"] and not self._sim_time
@@ -465,11 +470,10 @@ class ControllerNode(Node):
         if fault is not None:
             self._hold_still(*fault)
             return
+        theta, hold = self._plan()
         state = FreeFloatingState.compute(
             self.robot,
-            self.robot.configuration(
-                self._predicted_theta(), self._base_position, self._base_orientation
-            ),
+            self.robot.configuration(theta, self._base_position, self._base_orientation),
         )
         if self._jump is not None:
             self.get_logger().warn(
@@ -489,7 +493,7 @@ class ControllerNode(Node):
             self.controller.resync(state)
         self._served = (gate.angular, gate.frame)
         omega = angular_velocity_in_world(state, gate.angular, gate.frame)
-        step = self.controller.step(state, omega)
+        step = self.controller.step(state, omega, hold)
         self._stopped = gate.stopped
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
         if not (np.all(np.isfinite(velocities)) and np.all(np.isfinite(step.reference_positions))):
@@ -497,7 +501,7 @@ class ControllerNode(Node):
                 ControllerState.INVALID_COMMAND, "the law produced a non-finite joint velocity"
             )
             return
-        self._publish_output(step.reference_positions, velocities)
+        self._publish_output(step.reference_positions, velocities, self._planned)
         state_now = self._state(step, gate, state)
         self._publish_status(state_now, gate.detail, self._step_values(step, gate))
 
@@ -527,25 +531,44 @@ class ControllerNode(Node):
         self._publish_output(positions, np.zeros(self.robot.n))
         self._publish_status(state, detail, {"method": self.controller.settings.method.value})
 
-    def _predicted_theta(self) -> np.ndarray:
-        """The measured angles moved on to where the joints are when this tick's output takes
-        effect (:func:`predict_joint_angles`): joint_states lag by up to one publish period,
-        the output reaches the plant a moment later and acts at its next update, and the
-        midpoint hold is reactionless only for the configuration it starts from."""
+    def _plan(self) -> tuple[np.ndarray, float | None]:
+        """Where this tick's output starts on the plant and how long it will be held there:
+        (joint angles [rad] (n,), hold [s] or None for the period T).
+
+        The angles are the measured ones moved on to when the output acts
+        (:func:`predict_joint_angles`): joint_states lag by up to one publish period, the output
+        reaches the plant a moment later and acts at its next update, and the midpoint hold is
+        reactionless only for the configuration it starts from. The hold runs until the next
+        output acts: the timer's next call (on its grid, so a late tick holds for less than T)
+        through the same latency and update grid."""
+        theta, hold = self._theta, self._next_tick_in()
+        now = self._planned = self.get_clock().now()
         if not self._predict or self._theta_rate is None or self._stopped:
-            return self._theta
-        now = self.get_clock().now()
+            return theta, hold
         age = (now - self._theta_stamp).nanoseconds * 1e-9
         if not 0.0 <= age < MAX_PREDICTION_AGE:
-            return self._theta  # clocks disagree or the state is stale: do not extrapolate
+            return theta, hold  # clocks disagree or the state is stale: do not extrapolate
         timing = OutputTiming(
             latency=0.0 if self._sim_time else self._params["output_latency"],
             plant_period=self._params["plant_period"],
         )
         stamp = self._theta_stamp.nanoseconds * 1e-9
-        return predict_joint_angles(
-            self._theta, self._theta_rate, stamp, stamp + age, self._outputs, timing
-        ).theta
+        start = predict_joint_angles(
+            theta, self._theta_rate, stamp, stamp + age, self._outputs, timing
+        )
+        if hold is not None:
+            ends = timing.acting_time(stamp + age + hold, stamp)
+            hold = ends - start.acting_time if ends > start.acting_time else None
+        return start.theta, hold
+
+    def _next_tick_in(self) -> float | None:
+        """Time until the control timer's next call [s], or None when it is not in (0, 1.5 T]
+        (a cancelled or badly late timer: assume the period)."""
+        until = self._timer.time_until_next_call()
+        if until is None:
+            return None
+        seconds = until * 1e-9
+        return seconds if 0.0 < seconds <= 1.5 * self._period else None
 
     def _state(
         self, step: ControllerStep, gate: GateOutput, state: FreeFloatingState
@@ -570,8 +593,12 @@ class ControllerNode(Node):
             "the motion is slowed or stopped (choose another direction)"
         )
 
-    def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
-        now = self.get_clock().now()
+    def _publish_output(
+        self, positions: np.ndarray, velocities: np.ndarray, at: Time | None = None
+    ) -> None:
+        """One joint command stamped ``at`` (default now): a tick stamps the instant its output
+        was planned for, which a plant acting from the stamp starts it at."""
+        now = self.get_clock().now() if at is None else at
         stamp = now.to_msg()
         seconds = now.nanoseconds * 1e-9
         self._outputs.append(PublishedOutput(seconds, velocities))

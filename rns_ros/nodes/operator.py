@@ -91,6 +91,15 @@ PARAMETERS = (
         "Start only once cmd_twist (motion_force: and force_setpoint) has a subscriber",
     ),
     ParameterSpec(
+        "min_subscribers",
+        1,
+        "With wait_for_subscriber: start once cmd_twist has at least this many subscribers "
+        "(a controller and recorders: discovery can match one seconds after another)",
+        "[-]",
+        1,
+        100,
+    ),
+    ParameterSpec(
         "zero_duration",
         1.0,
         "Publish zero twists (motion_force: and the held force setpoint) this long after the "
@@ -132,6 +141,7 @@ class OperatorNode(Node):
         self._start_delay = params["start_delay"]
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
+        self._min_subscribers = params["min_subscribers"]
         self._start: Time | None = None
         self.finished = False
         # True while the last thing published was part of the profile (motion or its zeros).
@@ -170,8 +180,10 @@ class OperatorNode(Node):
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
     def _subscribed(self) -> bool:
-        publishers = [self._publisher, self._force_publisher]
-        return all(p.get_subscription_count() > 0 for p in publishers if p is not None)
+        if self._publisher.get_subscription_count() < self._min_subscribers:
+            return False
+        force = self._force_publisher
+        return force is None or force.get_subscription_count() > 0
 
     def _on_tick(self) -> None:
         now = self.get_clock().now()

@@ -75,8 +75,10 @@ from builtin_interfaces.msg import Time as TimeMsg
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -112,6 +114,12 @@ SUMMARY = (
     "Free-floating space robot simulator (kinematic or dynamic mode, fixed-step RK4); contact "
     "mode (-p mode:=contact): the fixed-base Part II arm against a wall or cylinder, below."
 )
+#: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to (older: another clock
+#: or a stale command, acted on at receipt).
+MAX_CATCH_UP = 0.05
+#: Largest lag [s] of a state's stamp behind its publication (an overloaded simulator re-anchors
+#: its pace at 0.5 s behind).
+MAX_STAMP_LAG = 0.5
 #: A lockstep pause longer than this [s] (wall time) is reported and ends with one step, so a
 #: controller whose sim-time timer waits for a later /clock is never deadlocked.
 LOCKSTEP_PATIENCE = 2.0
@@ -255,6 +263,13 @@ PARAMETERS = (
         1e4,
     ),
     ParameterSpec(
+        "catch_up_late_commands",
+        True,
+        "Kinematic mode: a JointTrajectory acts from its header stamp, as a trajectory "
+        "controller samples it; one that arrives late (up to 50 ms) makes up the motion it "
+        "missed in the next step (false: it acts on receipt, at the next step)",
+    ),
+    ParameterSpec(
         "max_reference_error",
         0.25,
         "A JointTrajectory position farther than this from the current joint angle is rejected "
@@ -387,6 +402,7 @@ class SimulatorNode(Node):
         self._world_frame = params["world_frame"]
         self._dynamic = params["mode"] == "dynamic"
         self._max_reference_error = params["max_reference_error"]
+        self._catch_up = params["catch_up_late_commands"]
         self._reset_hold = params["reset_hold"]
         self._publish_period = 1.0 / params["publish_rate"]  # [s], wall time while faulted
 
@@ -395,6 +411,9 @@ class SimulatorNode(Node):
         self._stepping = threading.Lock()
         self._steps = 0  # since the start or the last reset
         self._stop = threading.Event()
+        # (wall anchor [s], simulated anchor [s], real-time factor) of the stepping thread's
+        # pace, for the stamps; None off real time (a step run from a command callback)
+        self._pace: tuple[float, float, float] | None = None
         self._reset_requested = False
         self._last_command = None  # monotonic receipt time of the active command
         # simulated time the lockstep period and the age of that command count from [s]: its
@@ -566,7 +585,9 @@ class SimulatorNode(Node):
         with self._lock:
             if self._fault or self._reset_requested or self.simulator.time < self._hold_until:
                 return  # changed since the check: the command is stale now
-            self.simulator.set_reference(positions, velocities, accelerations)
+            self.simulator.set_reference(
+                positions, velocities, accelerations, since=self._lateness(stamp)
+            )
             if self._last_command is None and self._lockstep > 0.0:
                 self._reanchor = True  # lockstep starts: leave the real-time pace of the wait
             self._last_command = time.monotonic()
@@ -636,6 +657,12 @@ class SimulatorNode(Node):
                     self.simulator.time,
                     False,
                 )
+            factor = self._real_time_factor
+            if self._lockstep > 0.0 and self._last_command is None:
+                # no controller yet: real time, so it joins before much simulated time passes
+                factor = 1.0
+            # real time: states are stamped with the instant the pace maps them to
+            self._pace = (wall_anchor, sim_anchor, factor) if factor > 0.0 else None
             with self._stepping:
                 # the command callback may have run to the pause since the check
                 if not forced and self._paused():
@@ -643,10 +670,6 @@ class SimulatorNode(Node):
                 sim_time = self._advance()
             if sim_time is None:
                 continue
-            factor = self._real_time_factor
-            if self._lockstep > 0.0 and self._last_command is None:
-                # no controller yet: real time, so it joins before much simulated time passes
-                factor = 1.0
             if factor > 0.0:
                 delay = wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
                 if delay > 0.0:
@@ -710,6 +733,7 @@ class SimulatorNode(Node):
         """Executor thread, after a command: step until the next lockstep pause (at most
         ``CALLBACK_STEPS`` steps; the simulation thread takes over beyond them)."""
         with self._stepping:
+            self._pace = None  # off real time: stamped when published
             for _ in range(CALLBACK_STEPS):
                 with self._lock:
                     if self._stop.is_set() or not self._steps_in_callback() or self._pauses_here():
@@ -815,9 +839,43 @@ class SimulatorNode(Node):
         self._publish_state(held, momentum, wheels)
 
     def _stamp(self, state: SimulationState) -> TimeMsg:
+        """The instant ``state`` describes: its simulated time on /clock; in real time, the
+        wall instant the pace maps it to. A step is computed when it starts, so the state after
+        it is published up to one step before that instant: stamping the publication instead
+        made every joint state ~1 ms early, and a controller predicting from its stamp (and
+        the update grid through it) acted on the wrong configuration."""
         if self._publish_clock:
             return stamp_from_seconds(state.time)
-        return self.get_clock().now().to_msg()
+        paced = self._paced_time(state.time)
+        return (paced if paced is not None else self.get_clock().now()).to_msg()
+
+    def _paced_time(self, sim_time: float) -> Time | None:
+        """The node-clock instant the real-time pace maps ``sim_time`` [s] to, or None off real
+        time (no pace: stamps are publication times)."""
+        pace = self._pace
+        if pace is None:
+            return None
+        wall_anchor, sim_anchor, factor = pace
+        lead = wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
+        lead = min(max(lead, -MAX_STAMP_LAG), self.simulator.dt / factor)
+        return self.get_clock().now() + Duration(nanoseconds=round(lead * 1e9))
+
+    def _lateness(self, stamp: float | None) -> float:
+        """How long before the next step a JointTrajectory stamped ``stamp`` [s] was meant to
+        act (kinematic mode, ``catch_up_late_commands``), on the stamp's clock [s]; 0 for none,
+        for a stamp ahead of it and for one older than MAX_CATCH_UP (another clock or a stale
+        command: it acts on receipt). Caller holds the lock."""
+        if stamp is None or self._dynamic or not self._catch_up:
+            return 0.0
+        if self._publish_clock:
+            starts = self.simulator.time
+        else:
+            paced = self._paced_time(self.simulator.time)
+            if paced is None:
+                return 0.0
+            starts = paced.nanoseconds * 1e-9
+        late = starts - stamp
+        return late if 0.0 < late <= MAX_CATCH_UP else 0.0
 
     def _publish_state(
         self, state: SimulationState, momentum: np.ndarray, wheels: WheelSnapshot | None = None

@@ -43,13 +43,14 @@ order and the quaternion stays unit.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from rns_ros.core.errors import ConfigError, SimulationDivergedError
+from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.fastmath import solve_small
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import Choice, as_vector, positive
@@ -267,6 +268,8 @@ class FreeFloatingSimulator:
         self.wheel_torque = np.zeros(3)
         self.wheel_saturated = np.zeros(3, dtype=bool)
         self._v = self._kinematic_velocity(self.q, np.zeros(n))
+        #: joint displacement [rad] (n,) still to make up in the next kinematic step
+        self._catch_up = np.zeros(n)
 
     @property
     def v(self) -> np.ndarray:
@@ -275,13 +278,26 @@ class FreeFloatingSimulator:
             self._v = self._kinematic_velocity(self.q, self.reference.velocities)
         return self._v
 
-    def set_reference(self, positions=None, velocities=None, accelerations=None) -> None:
+    def set_reference(
+        self, positions=None, velocities=None, accelerations=None, *, since: float = 0.0
+    ) -> None:
         """Set the joint reference held until the next call; omitted parts keep sensible values.
 
         Omitted positions follow the previous reference advanced by nothing (hold); omitted
         velocities/accelerations are zero. All arrays shape (n,), finite.
+
+        ``since`` [s], >= 0 (kinematic mode): the reference was meant to act that long ago, as
+        a trajectory stamped then that reached the plant late. The joints make up the motion
+        they missed, since * (theta_dot_new - theta_dot_old), during the next step (its base
+        reaction included), so they are back on the timed path after one step. A
+        trajectory-following plant (ros2_control's joint trajectory controller samples a
+        trajectory from its header stamp) does the same through its position loop.
         """
         n = self.robot.n
+        previous = self.reference.velocities
+        since = float(since)
+        if not (math.isfinite(since) and since >= 0.0):
+            raise InputError(f"since must be a finite time >= 0 s, got {since!r}")
         self.reference = JointReference(
             positions=self.reference.positions.copy()
             if positions is None
@@ -295,6 +311,7 @@ class FreeFloatingSimulator:
         )
         if self.mode is SimulationMode.KINEMATIC:
             self._v = None  # the joints take the new rates at once
+            self._catch_up = self._catch_up + since * (self.reference.velocities - previous)
 
     def set_wheel_torque(self, torque) -> None:
         """Motor torques of the three wheels [N m] (3,), base x y z, held until the next call;
@@ -413,6 +430,9 @@ class FreeFloatingSimulator:
         # Joint rates are held over the step, so only the base block varies between stages.
         model, q, dt = self._model, self.q, self.dt
         theta_dot = self.reference.velocities
+        if self._catch_up.any():  # a late reference: make up the missed motion (set_reference)
+            theta_dot = theta_dot + self._catch_up / dt
+            self._catch_up = np.zeros(self.robot.n)
         increment = np.empty(model.nv)
 
         def stage(fraction: float, base_rate: np.ndarray) -> np.ndarray:

@@ -317,3 +317,39 @@ def test_reset_resync_and_configure_drop_the_predictor_history(robot):
         else:
             getattr(controller, restart)(state)
         np.testing.assert_array_equal(controller.step(state, omega).joint_velocity, expected)
+
+
+def _base_turn_over_a_hold(robot, hold_steps: int, announced: bool) -> float:
+    """Base turn [rad] while the output of one step (period 10 ms) is held for hold_steps ms,
+    with or without announcing the hold to the controller."""
+    theta = np.deg2rad(SATELLITE_OBSERVATION_DEG)
+    state = FreeFloatingState.compute(robot, robot.configuration(theta))
+    controller = ReactionlessController(robot, ControllerSettings(period=0.01))
+    controller.reset(state)
+    hold = 1e-3 * hold_steps if announced else None
+    step = controller.step(state, np.array([0.3, -0.1, 0.2]), hold)
+    simulator = FreeFloatingSimulator(
+        robot, dt=1e-3, initial_q=state.q, initial_momentum=np.zeros(6)
+    )
+    simulator.set_reference(velocities=step.joint_velocity)
+    for _ in range(hold_steps):
+        simulator.step()
+    after = FreeFloatingState.compute(robot, simulator.q)
+    return attitude_deviation(state.base_rotation, after.base_rotation)
+
+
+def test_a_hold_shorter_than_the_period_is_reactionless_when_announced(robot):
+    """A command served between ticks cuts the hold short. Evaluated for T = 10 ms, a hold of
+    h leaves a residue of order h (T - h); announced (step(..., hold=h)) the midpoint moves to
+    h/2 and the residue is third order: 8x for twice the hold, and 10-330x smaller."""
+    announced = {h: _base_turn_over_a_hold(robot, h, True) for h in (2, 4, 7)}
+    for h, turn in announced.items():
+        assert turn < 0.2 * _base_turn_over_a_hold(robot, h, False), h
+    assert announced[4] / announced[2] == pytest.approx(8.0, rel=0.25)
+
+
+def test_a_bad_hold_is_rejected(robot):
+    state = FreeFloatingState.compute(robot, robot.configuration(np.zeros(7)))
+    controller = ReactionlessController(robot, ControllerSettings())
+    with pytest.raises(ConfigError, match="hold"):
+        controller.step(state, np.zeros(3), hold=-1e-3)

@@ -162,6 +162,35 @@ def test_kinematic_joints_follow_the_command_exactly(robot):
     assert np.allclose(simulator.reference.positions, simulator.q[7:])
 
 
+def test_a_late_reference_makes_up_the_missed_motion_in_one_step_with_its_reaction(robot):
+    """set_reference(since=d): the joints end the next step where a switch d earlier would
+    have put them, theta + dt v_new + d (v_new - v_old), and the base reacts to that motion
+    (momentum stays zero); after it they run at v_new. A step of 1 ms and d = 0.7 ms."""
+    simulator = _simulator(robot, "kinematic")
+    old = np.array([0.1, -0.2, 0.3, -0.1, 0.2, 0.4, -0.5])
+    new = np.array([-0.3, 0.1, 0.2, 0.25, -0.1, 0.0, 0.3])
+    simulator.set_reference(velocities=old)
+    for _ in range(20):
+        simulator.step()
+    momentum = simulator.centroidal_momentum()
+    theta = simulator.q[7:].copy()
+    simulator.set_reference(velocities=new, since=7e-4)
+    simulator.step()
+    np.testing.assert_allclose(simulator.q[7:], theta + 1e-3 * new + 7e-4 * (new - old), atol=1e-12)
+    np.testing.assert_allclose(simulator.centroidal_momentum(), momentum, atol=1e-10)
+    np.testing.assert_allclose(simulator.v[6:], new)
+    theta = simulator.q[7:].copy()
+    simulator.step()  # made up once only
+    np.testing.assert_allclose(simulator.q[7:], theta + 1e-3 * new, atol=1e-12)
+
+
+@pytest.mark.parametrize("since", [-1e-3, float("nan"), float("inf")])
+def test_a_negative_or_non_finite_lateness_is_rejected(robot, since):
+    simulator = _simulator(robot, "kinematic")
+    with pytest.raises(InputError, match="since"):
+        simulator.set_reference(velocities=np.zeros(7), since=since)
+
+
 def test_viscous_friction_is_internal_so_momentum_is_kept(robot):
     gains = ServoGains.critically_damped(robot.n, friction=1.0)
     simulator = _simulator(robot, "dynamic", gains=gains, momentum=MOMENTUM)

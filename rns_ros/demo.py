@@ -24,6 +24,7 @@ import sys
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -462,6 +463,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-record", action="store_true", help="no rerun recording")
     parser.add_argument("--viewer", action="store_true", help="live rerun viewer (needs display)")
     parser.add_argument("--summary", type=Path, default=None, help="also write the table as JSON")
+    parser.add_argument(
+        "--runs",
+        type=int,
+        default=1,
+        help="inspection scenarios: run every method this many times and add the min / median "
+        "/ max of the base deviation (in --summary too); [1, 100]",
+    )
     add_domain_id_argument(parser, 42, "of the runs")
     args = parser.parse_args(argv)
     args.ros_args = ros_args
@@ -480,6 +488,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         parser.error(f"--rate must be in [1, 1000] Hz, got {args.rate}")
     if not 0.0 <= args.real_time_factor <= 1000.0:
         parser.error(f"--real-time-factor must be in [0, 1000], got {args.real_time_factor}")
+    if not 1 <= args.runs <= 100:
+        parser.error(f"--runs must be in [1, 100], got {args.runs}")
+    if args.runs > 1 and (args.scenario in PTP_SCENARIOS or is_contact_scenario(args.scenario)):
+        parser.error("--runs is for the inspection scenarios")
     return args
 
 
@@ -505,10 +517,14 @@ def _main(argv: list[str] | None) -> int:
             f"ROS domain {args.domain_id} (localhost only)\n",
             flush=True,
         )
-        rows = []
-        for method in args.methods:
-            print(f"running {method} ...", flush=True)
-            rows.append(run_method(method, args, scenario_file))
+        runs: list[list[DemoRow]] = []
+        for run in range(args.runs):
+            rows = []
+            for method in args.methods:
+                label = f" (run {run + 1} of {args.runs})" if args.runs > 1 else ""
+                print(f"running {method}{label} ...", flush=True)
+                rows.append(run_method(method, args, scenario_file))
+            runs.append(rows)
     except RnsError as exc:
         print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return 2
@@ -516,16 +532,51 @@ def _main(argv: list[str] | None) -> int:
         {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
         | {"recording": row.recording}
         | {"energy": None if row.energy is None else asdict(row.energy)}
-        for row in rows
+        | ({"runs": spread(runs, row.method)._asdict()} if args.runs > 1 else {})
+        for row in runs[-1]
     ]
+    table = format_table(runs[-1])
+    if args.runs > 1:
+        table += "\n\n" + format_spread(runs)
     return _report(
         args,
-        rows,
-        format_table(rows),
-        non_finite_figures(rows),
+        runs[-1],
+        table,
+        [problem for rows in runs for problem in non_finite_figures(rows)],
         f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
         summary,
     )
+
+
+class Spread(NamedTuple):
+    """Max base deviation [deg] of one method over the runs: min, median, max, and each run."""
+
+    min: float
+    median: float
+    max: float
+    values: list[float]
+
+
+def spread(runs: list[list[DemoRow]], method: str) -> Spread:
+    """:class:`Spread` of ``method``'s max base deviation over ``runs`` (rows per run)."""
+    values = [
+        row.figures.max_base_deviation_deg for rows in runs for row in rows if row.method == method
+    ]
+    return Spread(min(values), float(np.median(values)), max(values), values)
+
+
+def format_spread(runs: list[list[DemoRow]]) -> str:
+    """The max base deviation of each method over the runs (the table above is the last run)."""
+    lines = [
+        f"max base dev [deg] over {len(runs)} runs (the table: the last run)",
+        f"{'method':<22}{'min':>12}{'median':>12}{'max':>12}",
+    ]
+    for row in runs[-1]:
+        figures = spread(runs, row.method)
+        lines.append(
+            f"{row.method:<22}{figures.min:>12.3e}{figures.median:>12.3e}{figures.max:>12.3e}"
+        )
+    return "\n".join(lines)
 
 
 def _report(args, rows, table: str, problems: list[str], epilogue: str, summary: list) -> int:

@@ -239,3 +239,30 @@ def test_demo_with_finite_figures_exits_0(tmp_path, monkeypatch):
         "sc",
         "conventional",
     ]
+
+
+def test_runs_report_the_spread_of_the_base_deviation(tmp_path, monkeypatch, capsys):
+    """--runs 3: every method three times; the min / median / max of each method's max base
+    deviation come from its own runs (printed and in --summary)."""
+    deviations = iter([1e-5, 3e-5, 4e-5, 9e-5, 2e-5, 6e-5])  # dls, sc per run
+
+    def fake_run(method, _args, _file):
+        return DemoRow(method, _figures(max_base_deviation_deg=next(deviations)), 1.0, None)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    summary = tmp_path / "summary.json"
+    argv = ["--no-record", "--methods", "dls,sc", "--runs", "3", "--summary", str(summary)]
+    assert main([*argv, "--domain-id", DOMAIN]) == 0
+    rows = {row["method"]: row["runs"] for row in json.loads(summary.read_text())}
+    assert rows["dls"]["values"] == [1e-5, 4e-5, 2e-5]
+    assert (rows["dls"]["min"], rows["dls"]["median"], rows["dls"]["max"]) == (1e-5, 2e-5, 4e-5)
+    assert (rows["sc"]["min"], rows["sc"]["median"], rows["sc"]["max"]) == (3e-5, 6e-5, 9e-5)
+    assert "over 3 runs" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [["--runs", "0"], ["--runs", "2", "--scenario", "wall_contact"]])
+def test_bad_runs_are_rejected(argv, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--no-record", "--domain-id", DOMAIN])
+    assert exit_info.value.code == 2
+    assert "--runs" in capsys.readouterr().err

@@ -179,7 +179,8 @@ def run_method(
             "energy": stack.record(Float64MultiArray, "energy"),
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status"),
         }
-        recording = start_logger(processes, method, args, sim_time=sim_time)
+        recording = start_logger(processes, method, args, sim_time=sim_time, ros_args=ros_args)
+        logger = processes.processes[-1] if processes.processes else None
         processes.start("rns_controller", controller_parameters, ros_args=ros_args)
         if wheels:
             processes.start(
@@ -240,10 +241,16 @@ def run_method(
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
+        processes.stop()  # the logger writes its summary line as it closes the recording
+        if logger is not None:
+            closed = [line for line in processes.output(logger).splitlines() if CLOSED in line]
+            print("\n".join(closed[-1:]), flush=True)
     figures = run_figures(robot, scenario, **data)
     return DemoRow(method, figures, time.perf_counter() - start, recording, energy)
 
 
+#: What rns_rerun_logger's summary line on closing its recording contains.
+CLOSED = "recording closed"
 #: Robot states before the first command that the figures include [s].
 TASK_MARGIN = 0.2
 #: Zero twists the operator sends after the profile [s] (its default).

@@ -175,7 +175,9 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)
         twists = stack.record(TwistStamped, "cmd_twist")
-        recording = start_logger(processes, f"{scenario.name}_{method}", args, model_config)
+        recording = start_logger(
+            processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
+        )
         # the controller first: it is listening when the first state comes
         processes.start(
             "rns_force_controller",
@@ -310,9 +312,11 @@ def start_logger(
     model_config: str | None = None,
     *,
     sim_time: bool = True,
+    ros_args: list[str] | None = None,
 ) -> str | None:
     """``rns_rerun_logger`` as a process: ``<output>/<name>.rrd`` (returned), or a live viewer
-    (None); None with ``--no-record``. ``model_config``: None for the default model."""
+    (None); None with ``--no-record``. ``model_config``: None for the default model;
+    ``ros_args``: the run's ROS arguments (remaps of the whole stack)."""
     if args.no_record:
         return None
     args.output.mkdir(parents=True, exist_ok=True)
@@ -327,6 +331,7 @@ def start_logger(
             **({"model_config": model_config} if model_config else {}),
             "use_sim_time": sim_time,
         },
+        ros_args=ros_args or [],
     )
     return str(path) if sink == "save" else None
 

@@ -423,7 +423,16 @@ def measure_latency(
         probe = _LatencyProbe(stack, joint_names)
         controller = processes.start(
             executable,
-            {"method": "dls", "rate": float(rate), "wrist_gain": 0.0, **(parameters or {})},
+            # predict_state off: this probe's joint state stands still while the controller
+            # would predict the joints on along its own outputs, and a constant twist must give
+            # a constant output to be recognised
+            {
+                "method": "dls",
+                "rate": float(rate),
+                "wrist_gain": 0.0,
+                "predict_state": False,
+                **(parameters or {}),
+            },
         )
 
         def fail(what: str) -> RuntimeError:

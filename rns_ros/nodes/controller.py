@@ -237,7 +237,8 @@ PARAMETERS = (
         "Extrapolate the last joint_states to where the joints are when the new output takes "
         "effect (its arrival, output_latency after the tick, rounded up to the plant's next "
         "update): at their measured rates, then at this controller's own outputs from when "
-        "they act (the sample lags by up to one publish period)",
+        "they act (the sample lags by up to one publish period); and hold for the time until "
+        "the next tick. false: the sample as it is, held for the period",
     ),
     ParameterSpec(
         "output_latency",
@@ -541,9 +542,11 @@ class ControllerNode(Node):
         reactionless only for the configuration it starts from. The hold runs until the next
         output acts: the timer's next call (on its grid, so a late tick holds for less than T)
         through the same latency and update grid."""
-        theta, hold = self._theta, self._next_tick_in()
         now = self._planned = self.get_clock().now()
-        if not self._predict or self._theta_rate is None or self._stopped:
+        if not self._predict:
+            return self._theta, None  # the sample as it is, held for T
+        theta, hold = self._theta, self._next_tick_in()
+        if self._theta_rate is None or self._stopped:
             return theta, hold
         age = (now - self._theta_stamp).nanoseconds * 1e-9
         if not 0.0 <= age < MAX_PREDICTION_AGE:

@@ -108,7 +108,11 @@ def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path):
     _, rows = _short_demo(tmp_path, "--no-record", "--real-time-factor", "0", "--methods", "dls")
     row = rows["dls"]
     assert row["max_base_deviation_deg"] < 2e-5
-    assert row["final_camera_error_deg"] < 0.05
+    # the operator's twist and the controller's tick fall on the same simulated instant; with
+    # the nodes in separate processes the twist lands before or after the tick, so a twist is
+    # held for one, two or three periods: 0.03-0.08 deg of a 30 deg roll (the base is not
+    # affected: every output is reactionless whatever command it serves)
+    assert row["final_camera_error_deg"] < 0.15
 
 
 def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():

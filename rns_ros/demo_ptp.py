@@ -26,12 +26,12 @@ from sensor_msgs.msg import JointState
 
 from rns_ros.analysis.reproduce.chapter4_ptp import FINAL_DEG, INITIAL_DEG, THESIS_TABLE
 from rns_ros.core import RnsError
+from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.harness import Harness, TopicLog
 from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
-from rns_ros.viz.quantities import rotation_from_quaternion
 
 #: rns_ptp methods in Table 4.2 order, with the thesis' labels.
 PTP_METHODS = {

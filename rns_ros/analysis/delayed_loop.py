@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pinocchio as pin
 
 from rns_ros.control.controller import (
     ControllerSettings,
@@ -37,6 +36,7 @@ from rns_ros.control.controller import (
 )
 from rns_ros.control.prediction import OutputTiming, PublishedOutput, predict_joint_angles
 from rns_ros.control.scenario import Scenario, load_scenario
+from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.model import FreeFloatingModel
@@ -162,12 +162,6 @@ def _command_at(
     return scenario.angular_velocity(k * timing.command_period) if k >= 0 else np.zeros(3)
 
 
-def _base_rotation(q: np.ndarray) -> np.ndarray:
-    """World <- base rotation of a configuration (free-flyer quaternion x y z w), (3, 3)."""
-    x, y, z, w = q[3:7]
-    return pin.Quaternion(w, x, y, z).normalized().toRotationMatrix()
-
-
 def run_delayed_loop(
     robot: FreeFloatingModel,
     scenario: Scenario,
@@ -251,7 +245,8 @@ def run_delayed_loop(
         while pending and pending[0][0] <= k:
             simulator.set_reference(velocities=heapq.heappop(pending)[2])
         simulator.step()
-        worst = max(worst, attitude_deviation(base_0, _base_rotation(simulator.q)))
+        base = rotation_from_quaternion(simulator.q[3:7])
+        worst = max(worst, attitude_deviation(base_0, base))
     return DelayedLoopResult(
         max_base_deviation_deg=float(np.rad2deg(worst)),
         ticks=len(ticks),

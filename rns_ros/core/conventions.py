@@ -14,7 +14,26 @@ M_thesis = T^T M_pin T with T = blkdiag(S^T, E_n): see :func:`thesis_inertia_blo
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import pinocchio as pin
+
+from rns_ros.core.errors import InputError
+from rns_ros.core.validation import as_vector
+
+
+def rotation_from_quaternion(quaternion_xyzw) -> np.ndarray:
+    """Rotation matrix (3, 3) of a quaternion (x, y, z, w), normalized first.
+
+    Raises:
+        InputError: the quaternion is not finite or has norm < 1e-9.
+    """
+    x, y, z, w = as_vector(quaternion_xyzw, 4, "quaternion (x, y, z, w)")
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if norm < 1e-9:
+        raise InputError("quaternion (x, y, z, w) must be non-zero, got [0, 0, 0, 0]")
+    return pin.Quaternion(w / norm, x / norm, y / norm, z / norm).toRotationMatrix()
 
 
 def base_rotation_blocks(rotation: np.ndarray) -> np.ndarray:

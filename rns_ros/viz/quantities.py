@@ -14,22 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from rns_ros.core.errors import InputError
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.core.validation import as_vector
-
-
-def rotation_from_quaternion(quaternion_xyzw) -> np.ndarray:
-    """Rotation matrix (3, 3) of a quaternion (x, y, z, w), normalized first.
-
-    Raises:
-        InputError: the quaternion is not finite or has norm < 1e-9.
-    """
-    x, y, z, w = as_vector(quaternion_xyzw, 4, "quaternion (x, y, z, w)")
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    if norm < 1e-9:
-        raise InputError("quaternion (x, y, z, w) must be non-zero, got [0, 0, 0, 0]")
-    return pin.Quaternion(w / norm, x / norm, y / norm, z / norm).toRotationMatrix()
 
 
 def roll_pitch_yaw(rotation: np.ndarray) -> np.ndarray:

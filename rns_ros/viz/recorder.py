@@ -30,6 +30,7 @@ import numpy as np
 import rerun as rr
 
 from rns_ros.control.controller import TwistFrame
+from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import FreeFloatingState
@@ -43,7 +44,6 @@ from rns_ros.viz.quantities import (
     RateLimiter,
     Trail,
     achieved_angular_velocity,
-    rotation_from_quaternion,
 )
 from rns_ros.viz.robot import RobotView
 from rns_ros.viz.sinks import OpenSink, SinkSettings, open_sink

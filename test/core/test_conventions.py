@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
+import pytest
 from hypothesis import given, settings
 from rns_testing import configurations, unit_quaternions, vectors
 
-from rns_ros.core import FreeFloatingState
+from rns_ros.core import FreeFloatingState, InputError
 from rns_ros.core.conventions import (
     base_twist_to_base,
     base_twist_to_world,
     pinocchio_velocity,
+    rotation_from_quaternion,
     thesis_inertia_blocks,
 )
 
@@ -48,3 +52,13 @@ def test_world_frame_base_twist_moves_the_base_as_stated(robot):
     v = pinocchio_velocity(state.base_rotation, base_twist, np.zeros(7))
     moved = pin.integrate(robot.model, q, 0.5 * v)
     assert np.allclose(moved[:3] - q[:3], 0.5 * base_twist[:3])
+
+
+def test_rotation_from_quaternion_normalizes_and_rejects_zero():
+    rotation = rotation_from_quaternion([0.0, 0.0, 2.0 * math.sin(0.25), 2.0 * math.cos(0.25)])
+    expected = pin.AngleAxis(0.5, np.array([0.0, 0.0, 1.0])).toRotationMatrix()
+    assert rotation == pytest.approx(expected, abs=1e-12)
+    with pytest.raises(InputError, match="non-zero"):
+        rotation_from_quaternion([0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match="finite"):
+        rotation_from_quaternion([0.0, 0.0, math.nan, 1.0])

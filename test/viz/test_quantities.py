@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 from rns_testing import SATELLITE_OBSERVATION_DEG
 
-from rns_ros.core import FreeFloatingState, InputError
+from rns_ros.core import FreeFloatingState
 from rns_ros.viz.quantities import (
     AttitudeDeviation,
     ControllerStatus,
@@ -17,7 +17,6 @@ from rns_ros.viz.quantities import (
     Trail,
     achieved_angular_velocity,
     roll_pitch_yaw,
-    rotation_from_quaternion,
 )
 
 
@@ -53,15 +52,6 @@ def test_attitude_deviation_is_relative_to_the_first_rotation_in_degrees():
     assert rpy[:3] == pytest.approx(np.degrees([roll, pitch, yaw]), abs=1e-9)
     angle = np.linalg.norm(pin.log3(_rz(yaw) @ _ry(pitch) @ _rx(roll)))
     assert rpy[3] == pytest.approx(math.degrees(angle), abs=1e-9)
-
-
-def test_rotation_from_quaternion_normalizes_and_rejects_zero():
-    rotation = rotation_from_quaternion([0.0, 0.0, 2.0 * math.sin(0.25), 2.0 * math.cos(0.25)])
-    assert rotation == pytest.approx(_rz(0.5), abs=1e-12)
-    with pytest.raises(InputError, match="non-zero"):
-        rotation_from_quaternion([0.0, 0.0, 0.0, 0.0])
-    with pytest.raises(InputError, match="finite"):
-        rotation_from_quaternion([0.0, 0.0, math.nan, 1.0])
 
 
 def test_achieved_angular_velocity_matches_the_camera_rotation_rate(robot):

@@ -179,8 +179,9 @@ def run_method(
             "energy": stack.record(Float64MultiArray, "energy"),
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status"),
         }
-        recording = start_logger(processes, method, args, sim_time=sim_time, ros_args=ros_args)
-        logger = processes.processes[-1] if processes.processes else None
+        recording, logger = start_logger(
+            processes, method, args, sim_time=sim_time, ros_args=ros_args
+        )
         processes.start("rns_controller", controller_parameters, ros_args=ros_args)
         if wheels:
             processes.start(
@@ -203,7 +204,7 @@ def run_method(
         # the operator only once the robot runs and this process and the logger record it
         # (a recorder matched late would miss the start of the task)
         listeners = [NODE_NAMES["controller"]]
-        if recording is not None or args.viewer:
+        if logger is not None:
             listeners.append(NODE_NAMES["logger"])
         _wait_for_start(stack, processes, streams, listeners, method)
         processes.start(
@@ -225,18 +226,19 @@ def run_method(
             raise RnsError(f"{method}: no cmd_twist from rns_operator within {budget:.0f} s")
         # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
         # so a wall-time settle would let figures depend on this machine's speed
-        end = _stamp(commands.messages[0]) + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
+        task = _stamp(commands.messages[0])
+        end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
         states = [streams[name] for name in ("joints", "odom", "momentum")]
         if not stack.spin_until(
             lambda: all(len(log) and _stamp(log.latest()) >= end for log in states),
             timeout=budget,
         ):
             raise RnsError(
-                f"{method}: the scenario did not finish within {budget:.0f} s{_exited(processes)}"
+                f"{method}: the scenario did not finish within {budget:.0f} s"
+                f"{processes.exit_report()}"
             )
         # from just before the task: the robot is at rest until the first command, and a
         # recorder (the logger) matched a moment after the first state then has all of it
-        task = _stamp(commands.messages[0])
         data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
@@ -279,16 +281,8 @@ def _wait_for_start(
     if not stack.spin_until(ready, timeout=timeout):
         raise RnsError(
             f"{method}: the robot state or its listeners ({', '.join(listeners)}) did not come "
-            f"up within {timeout:.0f} s{_exited(processes)}"
+            f"up within {timeout:.0f} s{processes.exit_report()}"
         )
-
-
-def _exited(processes: ProcessStack) -> str:
-    """': <tail of the output of each process that exited>' or ''."""
-    outputs = "; ".join(
-        one_line(processes.output(p)[-300:]) for p in processes.processes if p.poll() is not None
-    )
-    return f": {outputs}" if outputs else ""
 
 
 def _stamp(msg) -> float:
@@ -340,7 +334,7 @@ def robot_arrays(
     """Robot samples where joint_states and base_odom share a stamp (the simulator publishes
     both per step), plus momentum and commands; only messages stamped in [``since``,
     ``until``] [s]."""
-    streams = {name: _up_to(log, until, since) for name, log in streams.items()}
+    streams = {name: _within(log, since, until) for name, log in streams.items()}
     joints, odom = streams["joints"], streams["odom"]
     poses = {}
     for msg in odom.messages:
@@ -373,7 +367,7 @@ def robot_arrays(
     }
 
 
-def _up_to(log: TopicLog, until: float, since: float = -np.inf) -> TopicLog:
+def _within(log: TopicLog, since: float, until: float) -> TopicLog:
     """``log`` without the messages stamped after ``until`` or before ``since`` [s] (messages
     without a header are kept)."""
     unbounded = until == np.inf and since == -np.inf

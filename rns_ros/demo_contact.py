@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import subprocess
 import time
 from dataclasses import dataclass
 
@@ -38,7 +39,6 @@ from rns_ros.analysis.part2_scenarios import (
     scenario_kind,
 )
 from rns_ros.analysis.recorded_contact import ContactRunFigures, contact_run_figures
-from rns_ros.cli import one_line
 from rns_ros.core import ConfigError, RnsError
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
@@ -175,7 +175,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)
         twists = stack.record(TwistStamped, "cmd_twist")
-        recording = start_logger(
+        recording, _ = start_logger(
             processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
         )
         # the controller first: it is listening when the first state comes
@@ -239,12 +239,9 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         values = _status_values(status)
         states = {_state(msg) for msg in status.messages}
         if not done:
-            outputs = "; ".join(
-                one_line(processes.output(p)[-300:]) for p in processes.processes if p.poll()
-            )
             raise RnsError(
                 f"{label}: the scenario did not finish within {budget:.0f} s (controller state "
-                f"{values.get('state')}){': ' + outputs if outputs else ''}"
+                f"{values.get('state')}){processes.exit_report()}"
             )
     failed = sorted(states & set(FAILED_STATES) - {"WAITING_FOR_STATE"})
     if failed:
@@ -313,16 +310,17 @@ def start_logger(
     *,
     sim_time: bool = True,
     ros_args: list[str] | None = None,
-) -> str | None:
-    """``rns_rerun_logger`` as a process: ``<output>/<name>.rrd`` (returned), or a live viewer
-    (None); None with ``--no-record``. ``model_config``: None for the default model;
-    ``ros_args``: the run's ROS arguments (remaps of the whole stack)."""
+) -> tuple[str | None, subprocess.Popen | None]:
+    """``rns_rerun_logger`` as a process writing ``<output>/<name>.rrd``, or a live viewer:
+    (the .rrd path or None for the viewer, the process); (None, None) with ``--no-record``.
+    ``model_config``: None for the default model; ``ros_args``: the run's ROS arguments
+    (remaps of the whole stack)."""
     if args.no_record:
-        return None
+        return None, None
     args.output.mkdir(parents=True, exist_ok=True)
     path = (args.output / f"{name}.rrd").resolve()
     sink = "spawn" if args.viewer else "save"
-    processes.start(
+    process = processes.start(
         "rns_rerun_logger",
         {
             "sink": sink,
@@ -333,7 +331,7 @@ def start_logger(
         },
         ros_args=ros_args or [],
     )
-    return str(path) if sink == "save" else None
+    return (str(path) if sink == "save" else None), process
 
 
 def _latest_time(errors: TopicLog) -> float:

@@ -49,7 +49,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from rns_ros.cli import DOMAIN_ID_RANGE
+from rns_ros.cli import DOMAIN_ID_RANGE, one_line
 from rns_ros.core.errors import ConfigError
 
 #: DDS discovery never leaves the machine.
@@ -313,6 +313,14 @@ class ProcessStack:
         log.flush()
         log.seek(0)
         return log.read()
+
+    def exit_report(self, tail: int = 300) -> str:
+        """': <last ``tail`` characters of the output of each process that exited>' on one
+        line, or '' while all run (for an error that says why a stack stopped)."""
+        outputs = "; ".join(
+            one_line(self.output(p)[-tail:]) for p in self.processes if p.poll() is not None
+        )
+        return f": {outputs}" if outputs else ""
 
     def stop(self, timeout: float = 5.0) -> list[int]:
         """SIGINT every process, wait up to ``timeout`` [s] each, kill the rest; exit codes."""

@@ -305,7 +305,6 @@ class ControllerNode(Node):
         self._sim_time = bool(self.get_parameter("use_sim_time").value)
         # what this node published recently (node clock), for the prediction
         self._outputs: deque[PublishedOutput] = deque()
-        self._planned: Time | None = None  # the instant this tick's output is planned for
         # latency is a wall-clock matter; in simulated time, commands served between ticks
         # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
         self._immediate = params["immediate_reaction"] and not self._sim_time
@@ -471,7 +470,7 @@ class ControllerNode(Node):
         if fault is not None:
             self._hold_still(*fault)
             return
-        theta, hold = self._plan()
+        planned, theta, hold = self._plan()
         state = FreeFloatingState.compute(
             self.robot,
             self.robot.configuration(theta, self._base_position, self._base_orientation),
@@ -502,7 +501,7 @@ class ControllerNode(Node):
                 ControllerState.INVALID_COMMAND, "the law produced a non-finite joint velocity"
             )
             return
-        self._publish_output(step.reference_positions, velocities, self._planned)
+        self._publish_output(step.reference_positions, velocities, planned)
         state_now = self._state(step, gate, state)
         self._publish_status(state_now, gate.detail, self._step_values(step, gate))
 
@@ -532,9 +531,10 @@ class ControllerNode(Node):
         self._publish_output(positions, np.zeros(self.robot.n))
         self._publish_status(state, detail, {"method": self.controller.settings.method.value})
 
-    def _plan(self) -> tuple[np.ndarray, float | None]:
-        """Where this tick's output starts on the plant and how long it will be held there:
-        (joint angles [rad] (n,), hold [s] or None for the period T).
+    def _plan(self) -> tuple[Time, np.ndarray, float | None]:
+        """When this tick's output is planned for (now), where it starts on the plant and how
+        long it will be held there: (instant, joint angles [rad] (n,), hold [s] or None for the
+        period T).
 
         The angles are the measured ones moved on to when the output acts
         (:func:`predict_joint_angles`): joint_states lag by up to one publish period, the output
@@ -542,27 +542,24 @@ class ControllerNode(Node):
         reactionless only for the configuration it starts from. The hold runs until the next
         output acts: the timer's next call (on its grid, so a late tick holds for less than T)
         through the same latency and update grid."""
-        now = self._planned = self.get_clock().now()
+        now = self.get_clock().now()
         if not self._predict:
-            return self._theta, None  # the sample as it is, held for T
+            return now, self._theta, None  # the sample as it is, held for T
         theta, hold = self._theta, self._next_tick_in()
         if self._theta_rate is None or self._stopped:
-            return theta, hold
-        age = (now - self._theta_stamp).nanoseconds * 1e-9
-        if not 0.0 <= age < MAX_PREDICTION_AGE:
-            return theta, hold  # clocks disagree or the state is stale: do not extrapolate
+            return now, theta, hold
+        seconds, stamp = now.nanoseconds * 1e-9, self._theta_stamp.nanoseconds * 1e-9
+        if not 0.0 <= seconds - stamp < MAX_PREDICTION_AGE:
+            return now, theta, hold  # clocks disagree or the state is stale: do not extrapolate
         timing = OutputTiming(
             latency=0.0 if self._sim_time else self._params["output_latency"],
             plant_period=self._params["plant_period"],
         )
-        stamp = self._theta_stamp.nanoseconds * 1e-9
-        start = predict_joint_angles(
-            theta, self._theta_rate, stamp, stamp + age, self._outputs, timing
-        )
+        start = predict_joint_angles(theta, self._theta_rate, stamp, seconds, self._outputs, timing)
         if hold is not None:
-            ends = timing.acting_time(stamp + age + hold, stamp)
+            ends = timing.acting_time(seconds + hold, stamp)
             hold = ends - start.acting_time if ends > start.acting_time else None
-        return start.theta, hold
+        return now, start.theta, hold
 
     def _next_tick_in(self) -> float | None:
         """Time until the control timer's next call [s], or None when it is not in (0, 1.5 T]

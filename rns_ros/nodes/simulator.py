@@ -334,6 +334,13 @@ class WheelSnapshot(NamedTuple):
     torques: np.ndarray
 
 
+def pace_lead(pace: tuple[float, float, float], sim_time: float) -> float:
+    """Wall time [s] until the real-time pace (wall anchor [s], simulated anchor [s], real-time
+    factor > 0) reaches ``sim_time`` [s]; negative once it is past."""
+    wall_anchor, sim_anchor, factor = pace
+    return wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
+
+
 def stamp_from_seconds(seconds: float) -> TimeMsg:
     """builtin_interfaces/Time for a simulated time [s], rounded to the nanosecond (so a time
     summed from steps, 1.9999999999 s, is 2 s: the tick a sim-time timer waits for)."""
@@ -662,7 +669,8 @@ class SimulatorNode(Node):
                 # no controller yet: real time, so it joins before much simulated time passes
                 factor = 1.0
             # real time: states are stamped with the instant the pace maps them to
-            self._pace = (wall_anchor, sim_anchor, factor) if factor > 0.0 else None
+            pace = (wall_anchor, sim_anchor, factor) if factor > 0.0 else None
+            self._pace = pace
             with self._stepping:
                 # the command callback may have run to the pause since the check
                 if not forced and self._paused():
@@ -670,8 +678,8 @@ class SimulatorNode(Node):
                 sim_time = self._advance()
             if sim_time is None:
                 continue
-            if factor > 0.0:
-                delay = wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
+            if pace is not None:
+                delay = pace_lead(pace, sim_time)
                 if delay > 0.0:
                     self._stop.wait(delay)
                 elif delay < -0.5:
@@ -855,9 +863,7 @@ class SimulatorNode(Node):
         pace = self._pace
         if pace is None:
             return None
-        wall_anchor, sim_anchor, factor = pace
-        lead = wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
-        lead = min(max(lead, -MAX_STAMP_LAG), self.simulator.dt / factor)
+        lead = min(max(pace_lead(pace, sim_time), -MAX_STAMP_LAG), self.simulator.dt / pace[2])
         return self.get_clock().now() + Duration(nanoseconds=round(lead * 1e9))
 
     def _lateness(self, stamp: float | None) -> float:

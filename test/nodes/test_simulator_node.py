@@ -45,6 +45,13 @@ def _simulator(ros, **overrides) -> SimulatorNode:
     return ros.add(SimulatorNode(context=ros.context, parameter_overrides=parameters))
 
 
+def _lockstep_simulator(ros, period: float, **overrides) -> SimulatorNode:
+    """As fast as possible on /clock, in lockstep with a controller of ``period`` [s]."""
+    return _simulator(
+        ros, real_time_factor=0.0, publish_clock=True, lockstep_period=period, **overrides
+    )
+
+
 def _trajectory(velocities, names=JOINTS, positions=()):
     return JointTrajectory(
         joint_names=list(names),
@@ -168,13 +175,7 @@ def test_lockstep_pauses_one_period_past_each_command(ros):
     newest one, and the next command releases it. Free-running, as before the first command,
     0.1 s of wall time is seconds of simulation."""
     period = 0.01
-    node = _simulator(
-        ros,
-        real_time_factor=0.0,
-        publish_clock=True,
-        lockstep_period=period,
-        command_interface="velocity",
-    )
+    node = _lockstep_simulator(ros, period, command_interface="velocity")
     probe = ros.probe()
     joints = Recorder(probe, JointState, "joint_states")
     command = probe.create_publisher(Float64MultiArray, "joint_velocities", COMMAND_QOS)
@@ -205,7 +206,7 @@ def test_lockstep_clock_comes_with_the_states_and_pauses_follow_the_command_stam
     one state per period is published, at the controller's ticks. /clock comes with the
     states only (not every 1 ms step): a sim-time timer elsewhere fires at those instants."""
     period = 0.01
-    node = _simulator(ros, real_time_factor=0.0, publish_clock=True, lockstep_period=period)
+    node = _lockstep_simulator(ros, period)
     probe = ros.probe()
     joints = Recorder(probe, JointState, "joint_states", qos=1000)
     clock = Recorder(probe, Clock, "/clock", qos=1000)
@@ -242,14 +243,7 @@ def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
     time) one step is taken and published with its /clock, so a controller whose sim-time
     timer waits for a later time gets it."""
     period = 0.01
-    node = _simulator(
-        ros,
-        real_time_factor=0.0,
-        publish_clock=True,
-        lockstep_period=period,
-        command_interface="velocity",
-        command_timeout=60.0,
-    )
+    node = _lockstep_simulator(ros, period, command_interface="velocity", command_timeout=60.0)
     probe = ros.probe()
     joints = Recorder(probe, JointState, "joint_states", qos=1000)
     clock = Recorder(probe, Clock, "/clock", qos=1000)

@@ -88,8 +88,11 @@ def predict_joint_angles(
         theta: measured joint angles at ``stamp`` [rad], shape (n,).
         rate: measured joint rates at ``stamp`` [rad/s], shape (n,): what the plant ran at then.
         stamp, now: sample time and publish time, one clock [s]; ``now`` >= ``stamp``.
-        outputs: the controller's recent outputs, oldest first. Those acting at or before
-            ``stamp`` are already in ``rate``.
+        outputs: the controller's recent outputs, oldest first. Those acting before ``stamp``
+            are already in ``rate``; one acting at the stamp itself is not (a plant publishes
+            the rate it ran at up to the stamp: rns_simulator's state at a lockstep pause
+            comes before the next output), and if it were, replacing the rate by the same
+            velocity from the stamp on changes nothing.
         timing: latency and update grid of the plant (the grid runs through ``stamp``).
 
     Returns:
@@ -100,7 +103,7 @@ def predict_joint_angles(
     later = []
     for output in reversed(outputs):
         starts = timing.acting_time(output.time, stamp)
-        if starts <= stamp:
+        if starts < stamp - GRID_SLACK:
             break
         if starts < target:
             later.append((starts, output.velocity))

@@ -46,6 +46,22 @@ def test_an_output_published_after_the_stamp_switches_the_rate_where_it_acts():
     np.testing.assert_allclose(result.theta, [0.001, 0.015], atol=1e-12)
 
 
+def test_an_output_acting_at_the_stamp_is_not_yet_in_the_measured_rate():
+    """Lockstep with output_lead: the state at a pause carries the rate of the period before
+    it; the output stamped at that instant (published a period earlier) runs from it."""
+    period = 0.01
+    timing = OutputTiming(latency=period)  # each output acts one period after its tick
+    theta, before, next_ = np.array([0.2, -0.1]), np.array([1.0, 2.0]), np.array([-3.0, 0.5])
+    # ticked at 0.99 s: acts at 1.00 s, the stamp of the state sampled for the 1.00 s tick
+    outputs = [PublishedOutput(0.98, before), PublishedOutput(0.99, next_)]
+    result = predict_joint_angles(theta, before, 1.0, 1.0, outputs, timing)
+    assert result.acting_time == pytest.approx(1.01)
+    np.testing.assert_allclose(result.theta, theta + period * next_, atol=1e-12)
+    # a plant whose state already showed that output predicts the same
+    same = predict_joint_angles(theta, next_, 1.0, 1.0, outputs, timing)
+    np.testing.assert_allclose(same.theta, result.theta, atol=1e-12)
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     stamp=st.floats(0.0, 1.0),
@@ -66,7 +82,8 @@ def test_prediction_is_the_integral_of_the_applied_rate(stamp, age, latency, per
     switches = [
         (timing.acting_time(o.time, stamp), o.velocity)
         for o in outputs
-        if timing.acting_time(o.time, stamp) > stamp
+        # from the stamp on: one acting at the stamp is not in ``rate`` (the rate before it)
+        if timing.acting_time(o.time, stamp) >= stamp - 1e-9
     ]
     expected = _brute_force(theta, rate, stamp, result.acting_time, switches)
     np.testing.assert_allclose(result.theta, expected, atol=1e-5)

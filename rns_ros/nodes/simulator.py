@@ -30,7 +30,12 @@ before the first command it runs in real time, and a controller that stops answe
 (after ``LOCKSTEP_PATIENCE`` of wall time one step is taken, with its state and /clock).
 The period counts from the command's header stamp when /clock is published and the stamp lies
 within the last period (a controller ticking on this clock: the next pause is its next tick,
-whatever the command's latency), else from its receipt. ``command_timeout`` then counts
+whatever the command's latency) or at most one period ahead, else from its receipt. A
+JointTrajectory stamped ahead of the simulated time (with /clock, by at most
+``lockstep_period``, or ``MAX_CATCH_UP`` without lockstep) waits for its stamp, as a trajectory
+controller starts a trajectory at its header stamp: a controller that stamps its output one
+period after its tick (rns_controller ``output_lead``) computes while this node simulates the
+period before it, so the two run side by side instead of in turn. ``command_timeout`` then counts
 simulated time, and the state is also published at each pause (off the ``publish_rate`` grid
 if the controller's ticks are), so the controller's tick there samples that instant. At
 ``real_time_factor`` 0 the command callback itself steps to the next pause (up to
@@ -427,6 +432,9 @@ class SimulatorNode(Node):
         # stamp when that is a recent simulated time (see _command_anchor), else its receipt
         self._command_sim_time = 0.0
         self._command_arrived = threading.Event()
+        # a JointTrajectory stamped ahead (sim time): (stamp [s], positions, velocities,
+        # accelerations), set as the reference at the first step from its stamp
+        self._pending: tuple | None = None
         self._paused_since: float | None = None  # monotonic start of a lockstep pause [s]
         self._stale_logged = False
         self._reanchor = True
@@ -448,12 +456,24 @@ class SimulatorNode(Node):
             if self._publish_clock
             else None
         )
+        # reused messages: only the stamp and the values change from one state to the next
+        self._joints_msg = JointState(name=list(self.robot.joint_names))
+        self._odom_msg = Odometry(child_frame_id=self.robot.base_link)
+        self._odom_msg.header.frame_id = self._world_frame
+        self._momentum_msg = WrenchStamped()
+        self._momentum_msg.header.frame_id = self._world_frame
+        self._clock_msg = Clock()
         # Commands: best effort, depth 1 - the newest command is the only one that matters, and
         # a best-effort subscription accepts reliable and best-effort publishers alike.
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         if params["command_interface"] == "trajectory":
+            # depth 10: a trajectory stamped ahead (lockstep side by side) follows the one
+            # before it, so none may be dropped while a callback steps; they are taken in order
             self.create_subscription(
-                JointTrajectory, "joint_references", self._on_trajectory, command_qos
+                JointTrajectory,
+                "joint_references",
+                self._on_trajectory,
+                QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT),
             )
         else:
             self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
@@ -592,9 +612,13 @@ class SimulatorNode(Node):
         with self._lock:
             if self._fault or self._reset_requested or self.simulator.time < self._hold_until:
                 return  # changed since the check: the command is stale now
-            self.simulator.set_reference(
-                positions, velocities, accelerations, since=self._lateness(stamp)
-            )
+            if self._ahead(stamp):
+                self._pending = (stamp, positions, velocities, accelerations)
+            else:
+                self._pending = None  # a newer command replaces one still waiting
+                self.simulator.set_reference(
+                    positions, velocities, accelerations, since=self._lateness(stamp)
+                )
             if self._last_command is None and self._lockstep > 0.0:
                 self._reanchor = True  # lockstep starts: leave the real-time pace of the wait
             self._last_command = time.monotonic()
@@ -607,19 +631,41 @@ class SimulatorNode(Node):
         if in_callback:
             self._run_to_pause()
 
+    def _ahead(self, stamp: float | None) -> bool:
+        """A command stamped ``stamp`` [s] waits for it: /clock is published and the stamp lies
+        after the next step's start, by at most ``lockstep_period`` (``MAX_CATCH_UP`` without
+        lockstep). Caller holds the lock."""
+        if stamp is None or not self._publish_clock:
+            return False
+        now, dt = self.simulator.time, self.simulator.dt
+        lead = self._lockstep if self._lockstep > 0.0 else MAX_CATCH_UP
+        return now + 0.5 * dt < stamp <= now + lead + 0.5 * dt
+
+    def _start_pending(self) -> None:
+        """The waiting command becomes the reference once the next step starts at its stamp.
+        Caller holds the lock."""
+        if (
+            self._pending is not None
+            and self.simulator.time + 0.5 * self.simulator.dt >= (self._pending[0])
+        ):
+            _, positions, velocities, accelerations = self._pending
+            self._pending = None
+            self.simulator.set_reference(positions, velocities, accelerations)
+
     def _command_anchor(self, stamp: float | None) -> float:
         """Simulated time [s] a command's lockstep period counts from: its header ``stamp``
         [s] when /clock is published and the stamp lies within the period before now (a
         controller ticking on this clock stamps the instant it sampled), so the next pause falls
-        on that controller's next tick whatever the latency of this command; else (no stamp, a
-        wall-clock stamp, a stamp that would put the pause behind the current step) the
-        simulated time of receipt. Caller holds the lock."""
+        on that controller's next tick whatever the latency of this command; a command waiting
+        for its stamp (:meth:`_ahead`) counts from the stamp too; else (no stamp, a wall-clock
+        stamp, a stamp that would put the pause behind the current step) the simulated time of
+        receipt. Caller holds the lock."""
         now, dt = self.simulator.time, self.simulator.dt
         if (
             stamp is not None
             and self._publish_clock
             and self._lockstep > 0.0
-            and now - self._lockstep + 0.5 * dt < stamp <= now + 0.5 * dt
+            and now - self._lockstep + 0.5 * dt < stamp <= now + self._lockstep + 0.5 * dt
         ):
             return stamp
         return now
@@ -691,6 +737,7 @@ class SimulatorNode(Node):
         with self._lock:
             if self._reset_requested:
                 self.simulator.reset()
+                self._pending = None
                 self._last_command, self._reset_requested, self._reanchor = None, False, True
                 self._command_sim_time = 0.0
                 self._hold_until = self.simulator.time + self._reset_hold
@@ -699,6 +746,7 @@ class SimulatorNode(Node):
                 self._energy_cost = EnergyCost()
                 self._steps = 0
             self._expire_stale_command()
+            self._start_pending()
             try:
                 self.simulator.step()
             except SimulationDivergedError as exc:
@@ -718,13 +766,17 @@ class SimulatorNode(Node):
             momentum = self.simulator.centroidal_momentum() if publish else None
             wheels = self._wheel_snapshot() if publish else None
             sim_time = self.simulator.time
-        # the state first: a sim-time timer woken by this clock tick should find it there
-        if snapshot is not None:
-            self._publish_state(snapshot, momentum, wheels)
         # lockstep: /clock only with the states (so at every pause); without it, every step
-        if self._clock_pub is not None and (snapshot is not None or self._lockstep <= 0.0):
-            self._clock_pub.publish(Clock(clock=stamp_from_seconds(sim_time)))
+        clock = self._clock_pub is not None and (snapshot is not None or self._lockstep <= 0.0)
+        if snapshot is not None:
+            self._publish_state(snapshot, momentum, wheels, clock=clock)
+        elif clock:
+            self._send_clock(sim_time)
         return sim_time
+
+    def _send_clock(self, sim_time: float) -> None:
+        self._clock_msg.clock = stamp_from_seconds(sim_time)
+        self._clock_pub.publish(self._clock_msg)
 
     def _steps_in_callback(self) -> bool:
         """Lockstep as fast as possible once a controller answers: the command callback steps
@@ -773,27 +825,42 @@ class SimulatorNode(Node):
         if self._lockstep <= 0.0:
             return False
         with self._lock:
-            if not self._pauses_here():
-                self._paused_since = None
-                return False
-            now = time.monotonic()
-            if self._paused_since is None:
-                self._paused_since = now
-            elif now - self._paused_since > LOCKSTEP_PATIENCE:
-                # one step: a controller whose timer waits for a later /clock gets it
-                self.get_logger().warn(
-                    f"lockstep: no joint command for {LOCKSTEP_PATIENCE} s at "
-                    f"t = {self.simulator.time:.3f} s; one step on",
-                    throttle_duration_sec=5.0,
-                )
-                self._paused_since = now
-                return True
-            self._command_arrived.clear()
-            # the callback steps at real_time_factor 0: wake for the patience only (and for a
-            # reset, a parameter change, the end of a callback's run: they set the event)
-            wait = 0.005 if self._real_time_factor > 0.0 else 0.1
+            wait = self._pause_wait()
+        if wait is None:
+            return False
+        if wait == 0.0:
+            return True
         self._command_arrived.wait(wait)
         return None
+
+    def _pause_wait(self) -> float | None:
+        """For :meth:`_await_command`: None to step, 0 for the one step after the patience,
+        else the wait [s] for the command event. Caller holds the lock."""
+        if not self._pauses_here():
+            self._paused_since = None
+            if not self._steps_in_callback() or self._command_arrived.is_set():
+                return None
+            # a command callback is stepping to the pause: only wait (racing it for the
+            # stepping lock cost both threads a GIL hand-off per period); it sets the event
+            # when it hands on
+            self._command_arrived.clear()
+            return 0.1
+        now = time.monotonic()
+        if self._paused_since is None:
+            self._paused_since = now
+        elif now - self._paused_since > LOCKSTEP_PATIENCE:
+            # one step: a controller whose timer waits for a later /clock gets it
+            self.get_logger().warn(
+                f"lockstep: no joint command for {LOCKSTEP_PATIENCE} s at "
+                f"t = {self.simulator.time:.3f} s; one step on",
+                throttle_duration_sec=5.0,
+            )
+            self._paused_since = now
+            return 0.0
+        self._command_arrived.clear()
+        # the callback steps at real_time_factor 0: wake for the patience only (and for a
+        # reset, a parameter change, the end of a callback's run: they set the event)
+        return 0.005 if self._real_time_factor > 0.0 else 0.1
 
     def _wheel_snapshot(self) -> WheelSnapshot | None:
         if not self._wheels:
@@ -884,8 +951,17 @@ class SimulatorNode(Node):
         return late if 0.0 < late <= MAX_CATCH_UP else 0.0
 
     def _publish_state(
-        self, state: SimulationState, momentum: np.ndarray, wheels: WheelSnapshot | None = None
+        self,
+        state: SimulationState,
+        momentum: np.ndarray,
+        wheels: WheelSnapshot | None = None,
+        clock: bool = False,
     ) -> None:
+        """The state topics of ``state``, in the order consumers need them: what controllers
+        read (joint_states, base_odom, wheel_states), then /clock at its time (with ``clock``:
+        a sim-time timer woken by it finds the state there), then the monitoring topics
+        (momentum, energy), which no control loop waits for. The messages are reused: each is
+        serialized when published."""
         values = (state.q, state.v, state.effort, momentum)
         if wheels is not None:
             values += tuple(wheels)
@@ -897,19 +973,16 @@ class SimulatorNode(Node):
             )
             return
         stamp = self._stamp(state)
-        joints = JointState()
+        joints = self._joints_msg
         joints.header.stamp = stamp
-        joints.name = list(self.robot.joint_names)
         joints.position = state.q[7:].tolist()
         joints.velocity = state.v[6:].tolist()
         if self._dynamic:
             joints.effort = state.effort.tolist()
         self._joint_pub.publish(joints)
 
-        odom = Odometry()
+        odom = self._odom_msg
         odom.header.stamp = stamp
-        odom.header.frame_id = self._world_frame
-        odom.child_frame_id = self.robot.base_link
         position, orientation = odom.pose.pose.position, odom.pose.pose.orientation
         position.x, position.y, position.z = state.q[:3].tolist()
         orientation.x, orientation.y, orientation.z, orientation.w = state.q[3:7].tolist()
@@ -917,14 +990,6 @@ class SimulatorNode(Node):
         linear.x, linear.y, linear.z = state.v[:3].tolist()
         angular.x, angular.y, angular.z = state.v[3:6].tolist()
         self._odom_pub.publish(odom)
-
-        wrench = WrenchStamped()
-        wrench.header.stamp = stamp
-        wrench.header.frame_id = self._world_frame
-        force, torque = wrench.wrench.force, wrench.wrench.torque
-        force.x, force.y, force.z = momentum[:3].tolist()
-        torque.x, torque.y, torque.z = momentum[3:].tolist()
-        self._momentum_pub.publish(wrench)
 
         if wheels is not None:
             wheel_states = JointState()
@@ -935,6 +1000,15 @@ class SimulatorNode(Node):
             wheel_states.velocity = wheels.speeds.tolist()
             wheel_states.effort = wheels.torques.tolist()
             self._wheel_pub.publish(wheel_states)
+        if clock:
+            self._send_clock(state.time)
+
+        wrench = self._momentum_msg
+        wrench.header.stamp = stamp
+        force, torque = wrench.wrench.force, wrench.wrench.torque
+        force.x, force.y, force.z = momentum[:3].tolist()
+        torque.x, torque.y, torque.z = momentum[3:].tolist()
+        self._momentum_pub.publish(wrench)
         self._state_publications += 1
         if self._energy_every and (self._state_publications - 1) % self._energy_every == 0:
             self._publish_energy(state, wheels)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from pathlib import Path
@@ -236,6 +237,49 @@ def test_lockstep_clock_comes_with_the_states_and_pauses_follow_the_command_stam
     assert ticks == sorted(ticks)
     assert len(ticks) >= len(locked)
     assert set(np.round(ticks, 9)) <= set(np.round(stamps, 9))  # /clock only with a state
+
+
+def test_lockstep_a_command_stamped_ahead_waits_for_its_stamp(ros):
+    """A controller that stamps each output one period after the state it sampled (output_lead)
+    lets the simulation run on meanwhile: the output acts from its stamp, not on receipt, and
+    the next pause is one period past that stamp. Kinematic mode: over each period the joints
+    move at the rate of the newest command stamped at or before its start."""
+    period = 0.01
+    node = _lockstep_simulator(ros, period)
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states", qos=1000)
+    command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
+    assert ros.spin_until(lambda: len(joints.messages) >= 3)
+    sent = {}  # stamp [ns] -> commanded rate [rad/s]
+    for k in range(30):
+        count = len(joints.messages)
+        sampled = joints.messages[-1].header.stamp
+        acts = sampled.sec * 1_000_000_000 + sampled.nanosec + round(period * 1e9)
+        rate = 0.01 * (k + 1)  # a new rate every period: acting early would show
+        msg = _trajectory([rate] * 7)
+        msg.header.stamp = stamp_from_seconds(acts * 1e-9)
+        command.publish(msg)
+        sent[acts] = rate
+        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=2.0)
+    ros.spin_for(0.1)
+    assert node.simulator.time == pytest.approx(max(sent) * 1e-9 + period)  # paused there
+    first = min(sent)
+    states = [m for m in joints.messages if _nanoseconds(m.header.stamp) >= first]
+    assert len(states) >= 25
+    checked = 0
+    for before, after in itertools.pairwise(states):
+        start, end = _nanoseconds(before.header.stamp), _nanoseconds(after.header.stamp)
+        assert end - start == round(period * 1e9)  # one state per period
+        applied = sent[max(stamp for stamp in sent if stamp <= start)]
+        moved = (np.array(after.position) - np.array(before.position)) / period
+        np.testing.assert_allclose(moved, applied, atol=1e-9)
+        np.testing.assert_allclose(after.velocity, applied, atol=1e-12)  # the rate up to it
+        checked += 1
+    assert checked >= 25
+
+
+def _nanoseconds(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
@@ -516,9 +560,15 @@ def test_a_diverged_step_stops_the_simulation_until_reset(ros):
     simulator._acceleration = nan_once
     assert ros.spin_until(lambda: node._fault, timeout=5.0)
     simulator._acceleration = healthy
-    start = len(joints.messages)
-    assert ros.spin_until(lambda: len(joints.messages) > start + 20, timeout=5.0)
-    held = joints.messages[-15:]  # (earlier ones may have been published before the fault)
+    fault_time = simulator.time  # the last finite state's
+
+    def held_states():
+        # states published before the fault may still arrive after it (at real_time_factor 0
+        # the simulation ran flat out): the held ones are those stamped at the fault
+        return [m for m in joints.messages if _sim_seconds(m) >= fault_time - 1e-9]
+
+    assert ros.spin_until(lambda: len(held_states()) > 15, timeout=5.0)
+    held = held_states()
     assert np.isfinite([m.position for m in joints.messages]).all()
     assert np.isfinite([m.velocity for m in joints.messages]).all()
     assert np.array_equal([m.position for m in held], [held[0].position] * len(held))

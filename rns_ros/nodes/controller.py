@@ -42,6 +42,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
+from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory
@@ -253,6 +254,18 @@ PARAMETERS = (
         read_only=False,
     ),
     ParameterSpec(
+        "output_lead",
+        0.0,
+        "Under use_sim_time: stamp each output this long after the tick that computed it, and "
+        "predict the joints to then. rns_simulator starts a JointTrajectory at its stamp and, in "
+        "lockstep, simulates up to it meanwhile, so controller and simulator compute side by "
+        "side (rns_demo off real time: one period). 0: the output acts from its tick. Wall "
+        "clock: not used (a real plant's lead is its latency, output_latency)",
+        "[s]",
+        0.0,
+        0.1,
+    ),
+    ParameterSpec(
         "plant_period",
         DEFAULT_PLANT_PERIOD,
         "Update period of a plant that acts on receipt (rns_simulator step_size with the "
@@ -303,6 +316,12 @@ class ControllerNode(Node):
         self._stopped = True
         self._predict = params["predict_state"]
         self._sim_time = bool(self.get_parameter("use_sim_time").value)
+        # [s] from a tick to its output's stamp (sim time only: lockstep side by side)
+        self._lead = params["output_lead"] if self._sim_time else 0.0
+        if params["output_lead"] and not self._sim_time:
+            self.get_logger().warn("output_lead is for use_sim_time (lockstep) only: not used")
+        self._clock_grid: int | None = None  # newest tick instant served from /clock [ns]
+        self._clock_type = self.get_clock().clock_type
         # what this node published recently (node clock), for the prediction
         self._outputs: deque[PublishedOutput] = deque()
         # latency is a wall-clock matter; in simulated time, commands served between ticks
@@ -322,7 +341,9 @@ class ControllerNode(Node):
         self._advisories: list[str] = []
         self._warned_types: set[str] = set()
         self._last_state = ControllerState.WAITING_FOR_STATE
-        self._last_status: DiagnosticStatus | None = None
+        # (level, message, key values) of the newest status; the message is built only for a
+        # subscriber of ~/status and for /diagnostics (a status per tick costs ~0.2 ms)
+        self._last_status: tuple[int, str, dict] | None = None
 
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._command_type = TwistStamped if params["twist_stamped"] else Twist
@@ -351,7 +372,20 @@ class ControllerNode(Node):
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
         )
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        self._timer = self.create_timer(self._period, self._on_tick)
+        if self._lead:
+            # ticks from /clock itself: the events executor can run a sim-time timer two or
+            # three times for one /clock message and then skip as many periods, and each
+            # output here acts the period after its tick, so a lockstep simulator needs every
+            # one (a missed tick stalls it; a repeated one sends a period twice)
+            self._timer = None
+            self.create_subscription(
+                ClockMsg,
+                "/clock",
+                self._on_clock,
+                QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT),
+            )
+        else:
+            self._timer = self.create_timer(self._period, self._on_tick)
         # wall clock: diagnostics and the graph check go on while sim time is paused
         self.create_timer(
             DIAGNOSTICS_PERIOD,
@@ -453,7 +487,25 @@ class ControllerNode(Node):
 
     # --- control period -------------------------------------------------------------------------
     def _on_tick(self) -> None:
-        now = time.monotonic()
+        self._run_ticks([self.get_clock().now()])
+
+    def _on_clock(self, msg: ClockMsg) -> None:
+        """With ``output_lead``: one tick for each period instant this /clock passed since the
+        last one (at most two: the events executor may hand over two /clock messages at once;
+        farther behind, after a pause or a reset, the grid restarts at this instant)."""
+        now = Time.from_msg(msg.clock, clock_type=self.get_clock().clock_type).nanoseconds
+        last, period = self._clock_grid, round(self._period * 1e9)
+        if last is None:
+            ticks = [now]  # the grid starts here
+        else:
+            passed = (now - last + period // 4) // period
+            if passed <= 0:
+                return  # /clock between two instants: nothing due
+            ticks = [now] if passed > 2 else [last + k * period for k in range(1, passed + 1)]
+        self._clock_grid = ticks[-1]
+        self._run_ticks([Time(nanoseconds=tick, clock_type=self._clock_type) for tick in ticks])
+
+    def _run_ticks(self, ticks: list[Time]) -> None:
         if self._theta is None:
             self._publish_status(
                 ControllerState.WAITING_FOR_STATE,
@@ -461,16 +513,22 @@ class ControllerNode(Node):
                 {"method": self.controller.settings.method.value},
             )
             return
+        for tick in ticks:
+            self._tick(tick)
+
+    def _tick(self, tick: Time) -> None:
+        """One control period for the instant ``tick`` (node clock)."""
+        now = time.monotonic()
         # the previous output was held this long on the plant's clock (sim time under /clock)
-        clock_now = self.get_clock().now().nanoseconds * 1e-9
+        clock_now = tick.nanoseconds * 1e-9
         if self._last_tick_clock is not None:
             self.controller.end_hold(clock_now - self._last_tick_clock)
         self._last_tick, self._last_tick_clock = now, clock_now
         fault = self._input_fault(now)
         if fault is not None:
-            self._hold_still(*fault)
+            self._hold_still(*fault, at=tick)
             return
-        planned, theta, hold = self._plan()
+        planned, theta, hold = self._plan(tick)
         state = FreeFloatingState.compute(
             self.robot,
             self.robot.configuration(theta, self._base_position, self._base_orientation),
@@ -498,10 +556,12 @@ class ControllerNode(Node):
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
         if not (np.all(np.isfinite(velocities)) and np.all(np.isfinite(step.reference_positions))):
             self._hold_still(
-                ControllerState.INVALID_COMMAND, "the law produced a non-finite joint velocity"
+                ControllerState.INVALID_COMMAND,
+                "the law produced a non-finite joint velocity",
+                at=tick,
             )
             return
-        self._publish_output(step.reference_positions, velocities, planned)
+        self._publish_output(step.reference_positions, velocities, planned, self._lead)
         state_now = self._state(step, gate, state)
         self._publish_status(state_now, gate.detail, self._step_values(step, gate))
 
@@ -517,9 +577,11 @@ class ControllerNode(Node):
         )
         return None if problem is None else (ControllerState(problem[0]), problem[1])
 
-    def _hold_still(self, state: ControllerState, detail: str) -> None:
+    def _hold_still(self, state: ControllerState, detail: str, at: Time | None = None) -> None:
         """Publish zero velocity where the reference stands, report ``state``; the next good
-        tick restarts the reference at the measured angles and ramps the command up."""
+        tick restarts the reference at the measured angles and ramps the command up. ``at``:
+        the tick's instant (its output is stamped ``output_lead`` later, as a tick's is);
+        None: now."""
         if self._last_state is not state:
             self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
         self._gate.stop()
@@ -528,10 +590,11 @@ class ControllerNode(Node):
         positions = self.controller.reference_positions
         if positions is None or not np.all(np.isfinite(positions)):
             positions = self._theta
-        self._publish_output(positions, np.zeros(self.robot.n))
+        lead = self._lead if at is not None else 0.0
+        self._publish_output(positions, np.zeros(self.robot.n), at, lead)
         self._publish_status(state, detail, {"method": self.controller.settings.method.value})
 
-    def _plan(self) -> tuple[Time, np.ndarray, float | None]:
+    def _plan(self, now: Time) -> tuple[Time, np.ndarray, float | None]:
         """When this tick's output is planned for (now), where it starts on the plant and how
         long it will be held there: (instant, joint angles [rad] (n,), hold [s] or None for the
         period T).
@@ -541,18 +604,20 @@ class ControllerNode(Node):
         reaches the plant a moment later and acts at its next update, and the midpoint hold is
         reactionless only for the configuration it starts from. The hold runs until the next
         output acts: the timer's next call (on its grid, so a late tick holds for less than T)
-        through the same latency and update grid."""
-        now = self.get_clock().now()
+        through the same latency and update grid. ``now``: the tick's instant
+        (:meth:`_on_clock`); a state up to ``output_lead`` newer than it (a late tick in
+        lockstep) is taken from its stamp."""
         if not self._predict:
             return now, self._theta, None  # the sample as it is, held for T
-        theta, hold = self._theta, self._next_tick_in()
+        # with output_lead the ticks lie on the period grid (_on_clock)
+        theta, hold = self._theta, self._period if self._lead else self._next_tick_in(now)
         if self._theta_rate is None or self._stopped:
             return now, theta, hold
         seconds, stamp = now.nanoseconds * 1e-9, self._theta_stamp.nanoseconds * 1e-9
-        if not 0.0 <= seconds - stamp < MAX_PREDICTION_AGE:
+        if not -self._lead <= seconds - stamp < MAX_PREDICTION_AGE:
             return now, theta, hold  # clocks disagree or the state is stale: do not extrapolate
         timing = OutputTiming(
-            latency=0.0 if self._sim_time else self._params["output_latency"],
+            latency=self._lead if self._sim_time else self._params["output_latency"],
             plant_period=self._params["plant_period"],
         )
         start = predict_joint_angles(theta, self._theta_rate, stamp, seconds, self._outputs, timing)
@@ -561,13 +626,13 @@ class ControllerNode(Node):
             hold = ends - start.acting_time if ends > start.acting_time else None
         return now, start.theta, hold
 
-    def _next_tick_in(self) -> float | None:
-        """Time until the control timer's next call [s], or None when it is not in (0, 1.5 T]
-        (a cancelled or badly late timer: assume the period)."""
+    def _next_tick_in(self, tick: Time) -> float | None:
+        """Time from ``tick`` to the control timer's next call [s], or None when it is not in
+        (0, 1.5 T] (a cancelled or badly late timer: assume the period)."""
         until = self._timer.time_until_next_call()
         if until is None:
             return None
-        seconds = until * 1e-9
+        seconds = (self.get_clock().now() - tick).nanoseconds * 1e-9 + until * 1e-9
         return seconds if 0.0 < seconds <= 1.5 * self._period else None
 
     def _state(
@@ -594,12 +659,18 @@ class ControllerNode(Node):
         )
 
     def _publish_output(
-        self, positions: np.ndarray, velocities: np.ndarray, at: Time | None = None
+        self,
+        positions: np.ndarray,
+        velocities: np.ndarray,
+        at: Time | None = None,
+        lead: float = 0.0,
     ) -> None:
-        """One joint command stamped ``at`` (default now): a tick stamps the instant its output
-        was planned for, which a plant acting from the stamp starts it at."""
+        """One joint command planned at ``at`` (default now), stamped ``lead`` [s] later: a tick
+        stamps the instant its output was planned to act from, which a plant acting from the
+        stamp starts it at. The record for the prediction keeps ``at`` (the timing adds the
+        lead)."""
         now = self.get_clock().now() if at is None else at
-        stamp = now.to_msg()
+        stamp = (now + Duration(nanoseconds=round(lead * 1e9)) if lead else now).to_msg()
         seconds = now.nanoseconds * 1e-9
         self._outputs.append(PublishedOutput(seconds, velocities))
         while self._outputs and self._outputs[0].time < seconds - 2 * MAX_PREDICTION_AGE:
@@ -634,29 +705,30 @@ class ControllerNode(Node):
             level = max(level, DiagnosticStatus.WARN, key=level_rank)
             message = "; ".join([message, *self._advisories])
         self._last_state = state
+        self._last_status = (level, message, {"state": state.value, **values})
+        if self._status.get_subscription_count():
+            self._status.publish(self._status_message())
+
+    def _status_message(self) -> DiagnosticArray:
+        """The newest status as a DiagnosticArray stamped now."""
+        level, message, values = self._last_status
         status = DiagnosticStatus(
             level=level,
             name=f"{self.get_name()}: reactionless control",
             message=message,
             hardware_id=self.robot.name,
-            values=[
-                KeyValue(key=key, value=status_text(value))
-                for key, value in {"state": state.value, **values}.items()
-            ],
+            values=[KeyValue(key=key, value=status_text(value)) for key, value in values.items()],
         )
-        self._last_status = status
         msg = DiagnosticArray(status=[status])
         msg.header.stamp = self.get_clock().now().to_msg()
-        self._status.publish(msg)
+        return msg
 
     # --- once a second: who publishes our inputs, /diagnostics --------------------------------
     def _on_diagnostics(self) -> None:
         self._check_publishers()
         if self._last_status is None:
             return
-        msg = DiagnosticArray(status=[self._last_status])
-        msg.header.stamp = self.get_clock().now().to_msg()
-        self._diagnostics.publish(msg)
+        self._diagnostics.publish(self._status_message())
 
     def _check_publishers(self) -> None:
         """Read the graph: more than one joint_states source is a fault (two robots' states

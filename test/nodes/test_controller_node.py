@@ -21,6 +21,7 @@ from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rns_testing import Recorder
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory
@@ -28,7 +29,7 @@ from trajectory_msgs.msg import JointTrajectory
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.controller import PARAMETERS, ControllerNode
-from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.nodes.simulator import SimulatorNode, stamp_from_seconds
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -566,6 +567,52 @@ def test_a_jump_in_the_measured_state_restarts_the_reference_and_ramps(ros):
     assert _speeds(after[restart : restart + 1])[0] < 0.5 * _speeds(references.messages[:count])[-1]
     states = [_state(m)["state"] for m in status.messages[-20:]]
     assert "RAMPING" in states
+
+
+def test_with_output_lead_each_clock_period_gets_one_output_stamped_a_period_later(ros):
+    """Lockstep side by side (use_sim_time, output_lead one period): the ticks come from /clock,
+    one per period instant it passes. A /clock repeated or between two instants gives none;
+    one that passes two instants (two messages handed over at once) gives both, in order. Each
+    output is stamped a period after its tick, where the simulator starts it."""
+    period = 0.01
+    _node(
+        ros,
+        ControllerNode,
+        use_sim_time=True,
+        output_lead=period,
+        state_timeout=TEST_STATE_TIMEOUT,
+    )
+    probe = ros.probe()
+    references = Recorder(probe, JointTrajectory, "joint_references", qos=100)
+    states = probe.create_publisher(JointState, "joint_states", 10)
+    odom = probe.create_publisher(Odometry, "base_odom", 10)
+    clock = probe.create_publisher(Clock, "/clock", 10)
+    angles = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0]).tolist()
+
+    def simulate(t, state=True):
+        stamp = stamp_from_seconds(t)
+        if state:
+            joints = JointState(name=JOINTS, position=angles, velocity=[0.0] * 7)
+            joints.header.stamp = stamp
+            states.publish(joints)
+            pose = Odometry()
+            pose.header.stamp, pose.pose.pose.orientation.w = stamp, 1.0
+            odom.publish(pose)
+            ros.spin_for(0.05)  # the state first, as rns_simulator publishes it
+        count = len(references.messages)
+        clock.publish(Clock(clock=stamp))
+        ros.spin_until(lambda: len(references.messages) > count, timeout=0.3)
+
+    for t, state in [(1.0, True), (1.01, True), (1.01, False), (1.03, True), (1.035, False)]:
+        simulate(t, state)
+    simulate(1.04)
+    ros.spin_for(0.1)
+    stamps = [round(_seconds(m.header.stamp), 9) for m in references.messages]
+    assert stamps == [1.01, 1.02, 1.03, 1.04, 1.05]
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
 
 
 def test_base_is_a_frame_id_and_the_base_link_a_default_frame(ros):

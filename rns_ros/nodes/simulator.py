@@ -122,6 +122,9 @@ SUMMARY = (
 #: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to (older: another clock
 #: or a stale command, acted on at receipt).
 MAX_CATCH_UP = 0.05
+#: Lockstep: a command stamped up to this long [s] before the simulated time still puts the
+#: pauses on its stamp's grid (older: another clock; the period counts from its receipt).
+MAX_GRID_AGE = 1.0
 #: Largest lag [s] of a state's stamp behind its publication (an overloaded simulator re-anchors
 #: its pace at 0.5 s behind).
 MAX_STAMP_LAG = 0.5
@@ -653,22 +656,26 @@ class SimulatorNode(Node):
             self.simulator.set_reference(positions, velocities, accelerations)
 
     def _command_anchor(self, stamp: float | None) -> float:
-        """Simulated time [s] a command's lockstep period counts from: its header ``stamp``
-        [s] when /clock is published and the stamp lies within the period before now (a
-        controller ticking on this clock stamps the instant it sampled), so the next pause falls
-        on that controller's next tick whatever the latency of this command; a command waiting
-        for its stamp (:meth:`_ahead`) counts from the stamp too; else (no stamp, a wall-clock
-        stamp, a stamp that would put the pause behind the current step) the simulated time of
-        receipt. Caller holds the lock."""
+        """Simulated time [s] a command's lockstep period counts from, on the grid of its
+        header ``stamp`` [s] when /clock is published and the stamp is a recent simulated
+        time (a controller ticking on this clock stamps the instant it sampled or, with a lead,
+        the instant its output starts): the stamp itself when it lies within the period before
+        now or waits ahead (:meth:`_ahead`); a later point of its grid, stamp + k
+        ``lockstep_period``, the last one not after now, when the command is older (the first
+        one reaches a simulation still running in real time a few periods late), so the next
+        pause falls on that controller's next tick whatever the latency. Else (no stamp, a
+        wall-clock stamp, one older than ``MAX_GRID_AGE``) the simulated time of receipt.
+        Caller holds the lock."""
         now, dt = self.simulator.time, self.simulator.dt
         if (
-            stamp is not None
-            and self._publish_clock
-            and self._lockstep > 0.0
-            and now - self._lockstep + 0.5 * dt < stamp <= now + self._lockstep + 0.5 * dt
+            stamp is None
+            or not self._publish_clock
+            or self._lockstep <= 0.0
+            or not now - MAX_GRID_AGE <= stamp <= now + self._lockstep + 0.5 * dt
         ):
-            return stamp
-        return now
+            return now
+        behind = math.floor((now + 0.5 * dt - stamp) / self._lockstep)
+        return stamp + max(behind, 0) * self._lockstep
 
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected joint command: {reason}", throttle_duration_sec=1.0)

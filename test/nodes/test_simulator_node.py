@@ -29,6 +29,7 @@ from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import base_twist_from_momentum
 from rns_ros.nodes.simulator import (
     LOCKSTEP_PATIENCE,
+    MAX_GRID_AGE,
     PARAMETERS,
     SATELLITE_OBSERVATION_RAD,
     SimulatorNode,
@@ -276,6 +277,26 @@ def test_lockstep_a_command_stamped_ahead_waits_for_its_stamp(ros):
         np.testing.assert_allclose(after.velocity, applied, atol=1e-12)  # the rate up to it
         checked += 1
     assert checked >= 25
+
+
+def test_lockstep_a_late_command_counts_its_period_on_its_stamp_grid(ros):
+    """The first command can reach a simulation still running in real time a few periods
+    after its stamp (seen: 11 ms). Its period then counts from the last point of its stamp's
+    grid before now, so the pauses fall where a controller ticking on /clock ticks; counted
+    from the receipt, every later pause stayed 1 ms off that grid and each command was late."""
+    period = 0.01
+    node = _lockstep_simulator(ros, period)
+    node._stop.set()  # the simulated time stays where this test puts it
+    node._command_arrived.set()
+    node._thread.join(timeout=2.0)
+    node.simulator.time = 0.091
+    with node._lock:
+        assert node._command_anchor(0.08) == pytest.approx(0.09)  # late: on its grid
+        assert node._command_anchor(0.05) == pytest.approx(0.09)
+        assert node._command_anchor(0.085) == pytest.approx(0.085)  # within the period
+        assert node._command_anchor(0.095) == pytest.approx(0.095)  # waits ahead
+        assert node._command_anchor(0.091 - 2 * MAX_GRID_AGE) == pytest.approx(0.091)
+        assert node._command_anchor(None) == pytest.approx(0.091)  # unstamped: receipt
 
 
 def _nanoseconds(stamp) -> int:

@@ -42,7 +42,6 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
-from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory
@@ -68,6 +67,7 @@ from rns_ros.control.teleop import (
 from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError, RnsError
+from rns_ros.nodes.clock_ticks import ClockTicks
 from rns_ros.nodes.parameters import (
     JOINTS,
     MODEL_CONFIG,
@@ -320,8 +320,6 @@ class ControllerNode(Node):
         self._lead = params["output_lead"] if self._sim_time else 0.0
         if params["output_lead"] and not self._sim_time:
             self.get_logger().warn("output_lead is for use_sim_time (lockstep) only: not used")
-        self._clock_grid: int | None = None  # newest tick instant served from /clock [ns]
-        self._clock_type = self.get_clock().clock_type
         # what this node published recently (node clock), for the prediction
         self._outputs: deque[PublishedOutput] = deque()
         # latency is a wall-clock matter; in simulated time, commands served between ticks
@@ -378,12 +376,7 @@ class ControllerNode(Node):
             # output here acts the period after its tick, so a lockstep simulator needs every
             # one (a missed tick stalls it; a repeated one sends a period twice)
             self._timer = None
-            self.create_subscription(
-                ClockMsg,
-                "/clock",
-                self._on_clock,
-                QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT),
-            )
+            ClockTicks(self, self._period, self._serve)
         else:
             self._timer = self.create_timer(self._period, self._on_tick)
         # wall clock: diagnostics and the graph check go on while sim time is paused
@@ -487,25 +480,11 @@ class ControllerNode(Node):
 
     # --- control period -------------------------------------------------------------------------
     def _on_tick(self) -> None:
-        self._run_ticks([self.get_clock().now()])
+        self._serve(self.get_clock().now())
 
-    def _on_clock(self, msg: ClockMsg) -> None:
-        """With ``output_lead``: one tick for each period instant this /clock passed since the
-        last one (at most two: the events executor may hand over two /clock messages at once;
-        farther behind, after a pause or a reset, the grid restarts at this instant)."""
-        now = Time.from_msg(msg.clock, clock_type=self.get_clock().clock_type).nanoseconds
-        last, period = self._clock_grid, round(self._period * 1e9)
-        if last is None:
-            ticks = [now]  # the grid starts here
-        else:
-            passed = (now - last + period // 4) // period
-            if passed <= 0:
-                return  # /clock between two instants: nothing due
-            ticks = [now] if passed > 2 else [last + k * period for k in range(1, passed + 1)]
-        self._clock_grid = ticks[-1]
-        self._run_ticks([Time(nanoseconds=tick, clock_type=self._clock_type) for tick in ticks])
-
-    def _run_ticks(self, ticks: list[Time]) -> None:
+    def _serve(self, tick: Time) -> None:
+        """The control period of the instant ``tick``: the timer's call, or with
+        ``output_lead`` each period instant /clock passes (:class:`ClockTicks`)."""
         if self._theta is None:
             self._publish_status(
                 ControllerState.WAITING_FOR_STATE,
@@ -513,8 +492,7 @@ class ControllerNode(Node):
                 {"method": self.controller.settings.method.value},
             )
             return
-        for tick in ticks:
-            self._tick(tick)
+        self._tick(tick)
 
     def _tick(self, tick: Time) -> None:
         """One control period for the instant ``tick`` (node clock)."""
@@ -605,11 +583,11 @@ class ControllerNode(Node):
         reactionless only for the configuration it starts from. The hold runs until the next
         output acts: the timer's next call (on its grid, so a late tick holds for less than T)
         through the same latency and update grid. ``now``: the tick's instant
-        (:meth:`_on_clock`); a state up to ``output_lead`` newer than it (a late tick in
+        (:meth:`_serve`); a state up to ``output_lead`` newer than it (a late tick in
         lockstep) is taken from its stamp."""
         if not self._predict:
             return now, self._theta, None  # the sample as it is, held for T
-        # with output_lead the ticks lie on the period grid (_on_clock)
+        # with output_lead the ticks lie on the period grid (ClockTicks)
         theta, hold = self._theta, self._period if self._lead else self._next_tick_in(now)
         if self._theta_rate is None or self._stopped:
             return now, theta, hold

@@ -6,6 +6,8 @@ omega(t) = angle * s_dot(t) * axis in the scenario's frame (``header.frame_id`` 
 ``base_frame`` or ``camera_frame``), then zeros for ``zero_duration``, then nothing (a controller
 then stops on its own timeout). Time is the node clock (sim time with ``use_sim_time``); the
 profile starts once ``cmd_twist`` has a subscriber (``wait_for_subscriber``) plus ``start_delay``.
+With ``use_sim_time`` the samples come at the period instants /clock passes
+(:class:`~rns_ros.nodes.clock_ticks.ClockTicks`), one each, not from an rclpy timer.
 
 Part II scenario files (``kind: motion_force``, :mod:`rns_ros.analysis.part2_scenarios`,
 docs/part2_ros.md): at ``rate`` (500 Hz suggested: the force controller runs at 1 kHz) BOTH
@@ -48,6 +50,7 @@ from rns_ros.analysis.part2_scenarios import (
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
+from rns_ros.nodes.clock_ticks import ClockTicks
 from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import scenario_path
@@ -157,7 +160,12 @@ class OperatorNode(Node):
             if self.motion_force
             else None
         )
-        self._timer = self.create_timer(1.0 / params["rate"], self._on_tick)
+        if self.get_parameter("use_sim_time").value:
+            # one sample per period instant of /clock: the events executor's sim-time timer
+            # skipped and repeated samples in a fast lockstep run (rns_ros.nodes.clock_ticks)
+            ClockTicks(self, 1.0 / params["rate"], self._play)
+        else:
+            self.create_timer(1.0 / params["rate"], self._on_tick)
         self.get_logger().info(
             f"scenario {self.scenario.name!r}: {self.scenario.description or 'no description'} "
             f"({self.scenario.duration} s, frame {self._frame_id})"
@@ -186,7 +194,10 @@ class OperatorNode(Node):
         return force is None or force.get_subscription_count() > 0
 
     def _on_tick(self) -> None:
-        now = self.get_clock().now()
+        self._play(self.get_clock().now())
+
+    def _play(self, now: Time) -> None:
+        """The sample of the instant ``now`` (node clock), published stamped ``now``."""
         if self._start is None:
             if self._wait and not self._subscribed():
                 return

@@ -22,6 +22,7 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -73,13 +74,29 @@ SETTLE = 0.3
 
 @dataclass(frozen=True)
 class DemoRow:
-    """One run of the comparison table."""
+    """One run of the comparison table.
+
+    Attributes:
+        wall_time_s: the whole run, node start-up included [s].
+        task_wall_s: wall time from the operator's first command until every state stream
+            reached the end of the task [s] (None: not measured).
+        task_sim_s: simulated time of that stretch: duration + zero twists + settle [s].
+    """
 
     method: str
     figures: RunFigures
     wall_time_s: float
     recording: str | None
     energy: EnergyFigures | None = None
+    task_wall_s: float | None = None
+    task_sim_s: float | None = None
+
+    @property
+    def real_time_factor(self) -> float | None:
+        """Simulated task seconds per wall second (None when not measured)."""
+        if self.task_wall_s is None or self.task_sim_s is None or self.task_wall_s <= 0.0:
+            return None
+        return self.task_sim_s / self.task_wall_s
 
 
 @dataclass(frozen=True)
@@ -161,6 +178,9 @@ def run_method(
         # lockstep pauses wait for the controller: a state can come later than the 0.1 s
         # wall-time default while the 2 cores are busy
         controller_parameters["state_timeout"] = 1.0
+        # each output acts one period after its tick: the simulator computes that period
+        # while the controller computes the next output (two cores side by side)
+        controller_parameters["output_lead"] = 1.0 / args.rate
     controller_parameters.update(
         {key: value for key, value in scenario.controller.items() if key != "method"}
     )
@@ -175,7 +195,6 @@ def run_method(
             "odom": stack.record(Odometry, "base_odom"),
             "momentum": stack.record(WrenchStamped, "momentum"),
             "commands": stack.record(TwistStamped, "cmd_twist"),
-            "status": stack.record(DiagnosticArray, "rns_controller/status"),
             "energy": stack.record(Float64MultiArray, "energy"),
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status"),
         }
@@ -227,6 +246,7 @@ def run_method(
         # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
         # so a wall-time settle would let figures depend on this machine's speed
         task = _stamp(commands.messages[0])
+        task_started = time.perf_counter()
         end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
         states = [streams[name] for name in ("joints", "odom", "momentum")]
         if not stack.spin_until(
@@ -237,6 +257,7 @@ def run_method(
                 f"{method}: the scenario did not finish within {budget:.0f} s"
                 f"{processes.exit_report()}"
             )
+        task_wall = time.perf_counter() - task_started
         # from just before the task: the robot is at rest until the first command, and a
         # recorder (the logger) matched a moment after the first state then has all of it
         data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
@@ -248,7 +269,15 @@ def run_method(
             closed = [line for line in processes.output(logger).splitlines() if CLOSED in line]
             print("\n".join(closed[-1:]), flush=True)
     figures = run_figures(robot, scenario, **data)
-    return DemoRow(method, figures, time.perf_counter() - start, recording, energy)
+    return DemoRow(
+        method,
+        figures,
+        time.perf_counter() - start,
+        recording,
+        energy,
+        task_wall_s=task_wall,
+        task_sim_s=end - task,
+    )
 
 
 #: What rns_rerun_logger's summary line on closing its recording contains.
@@ -395,6 +424,8 @@ def format_table(rows: list[DemoRow]) -> str:
         ("wheel KE [J]", 14),
         ("wheel sat [s]", 15),
         ("wall [s]", 10),
+        ("task [s]", 10),
+        ("× real time", 13),
     )
     header = "".join(
         f"{title:<{width}}" if i == 0 else f"{title:>{width}}"
@@ -407,9 +438,17 @@ def format_table(rows: list[DemoRow]) -> str:
             f"{row.method:<{columns[0][1]}}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
             f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
             f"{f.angular_momentum_drift:>14.2e}{_energy_columns(row.energy)}"
-            f"{row.wall_time_s:>10.1f}"
+            f"{row.wall_time_s:>10.1f}{_task_columns(row)}"
         )
     return "\n".join(lines)
+
+
+def _task_columns(row: DemoRow) -> str:
+    """Wall time of the task [s] and its real-time factor, or dashes."""
+    factor = row.real_time_factor
+    if factor is None:
+        return f"{'-':>10}{'-':>13}"
+    return f"{row.task_wall_s:>10.2f}{factor:>13.2f}"
 
 
 def _energy_columns(energy: EnergyFigures | None) -> str:
@@ -531,9 +570,17 @@ def _main(argv: list[str] | None) -> int:
         return 2
     summary = [
         {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
+        | {"task_wall_s": row.task_wall_s, "task_sim_s": row.task_sim_s}
         | {"recording": row.recording}
         | {"energy": None if row.energy is None else asdict(row.energy)}
-        | ({"runs": spread(runs, row.method)._asdict()} if args.runs > 1 else {})
+        | (
+            {
+                "runs": spread(runs, row.method)._asdict(),
+                "task_wall_runs": spread(runs, row.method, _task_wall)._asdict(),
+            }
+            if args.runs > 1
+            else {}
+        )
         for row in runs[-1]
     ]
     table = format_table(runs[-1])
@@ -550,7 +597,7 @@ def _main(argv: list[str] | None) -> int:
 
 
 class Spread(NamedTuple):
-    """Max base deviation [deg] of one method over the runs: min, median, max, and each run."""
+    """One figure of one method over the runs: min, median, max, and each run."""
 
     min: float
     median: float
@@ -558,24 +605,45 @@ class Spread(NamedTuple):
     values: list[float]
 
 
-def spread(runs: list[list[DemoRow]], method: str) -> Spread:
-    """:class:`Spread` of ``method``'s max base deviation over ``runs`` (rows per run)."""
+def _base_deviation(row: DemoRow) -> float:
+    return row.figures.max_base_deviation_deg
+
+
+def spread(
+    runs: list[list[DemoRow]],
+    method: str,
+    figure: Callable[[DemoRow], float | None] = _base_deviation,
+) -> Spread:
+    """:class:`Spread` of ``figure(row)`` (default: the max base deviation [deg]) of
+    ``method``'s rows over ``runs`` (rows per run); runs without the figure are left out."""
     values = [
-        row.figures.max_base_deviation_deg for rows in runs for row in rows if row.method == method
+        value
+        for rows in runs
+        for row in rows
+        if row.method == method and (value := figure(row)) is not None
     ]
+    if not values:
+        return Spread(np.nan, np.nan, np.nan, [])
     return Spread(min(values), float(np.median(values)), max(values), values)
 
 
+def _task_wall(row: DemoRow) -> float | None:
+    return row.task_wall_s
+
+
 def format_spread(runs: list[list[DemoRow]]) -> str:
-    """The max base deviation of each method over the runs (the table above is the last run)."""
+    """The max base deviation and the task's wall time of each method over the runs (the table
+    above is the last run)."""
     lines = [
-        f"max base dev [deg] over {len(runs)} runs (the table: the last run)",
-        f"{'method':<22}{'min':>12}{'median':>12}{'max':>12}",
+        f"over {len(runs)} runs (the table: the last run)",
+        f"{'method':<22}{'max base dev [deg]: min':>26}{'median':>12}{'max':>12}"
+        f"{'task [s]: min':>16}{'median':>10}{'max':>10}",
     ]
     for row in runs[-1]:
-        figures = spread(runs, row.method)
+        base, task = spread(runs, row.method), spread(runs, row.method, _task_wall)
         lines.append(
-            f"{row.method:<22}{figures.min:>12.3e}{figures.median:>12.3e}{figures.max:>12.3e}"
+            f"{row.method:<22}{base.min:>26.3e}{base.median:>12.3e}{base.max:>12.3e}"
+            f"{task.min:>16.2f}{task.median:>10.2f}{task.max:>10.2f}"
         )
     return "\n".join(lines)
 

@@ -264,6 +264,30 @@ def test_runs_report_the_spread_of_the_base_deviation(tmp_path, monkeypatch, cap
     assert "over 3 runs" in capsys.readouterr().out
 
 
+def test_runs_report_the_task_wall_time_and_its_real_time_factor(tmp_path, monkeypatch, capsys):
+    """The task's own wall time (start-up excluded) and simulated s per wall s, per run and
+    over the runs; a run that did not measure it shows dashes."""
+    walls = iter([2.0, 4.0, 3.0])
+
+    def fake_run(method, _args, _file):
+        return DemoRow(method, _figures(), 9.0, None, task_wall_s=next(walls), task_sim_s=21.3)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    summary = tmp_path / "summary.json"
+    argv = ["--no-record", "--methods", "dls", "--runs", "3", "--summary", str(summary)]
+    assert main([*argv, "--domain-id", DOMAIN]) == 0
+    (row,) = json.loads(summary.read_text())
+    assert (row["task_wall_s"], row["task_sim_s"]) == (3.0, 21.3)  # the last run
+    assert row["task_wall_runs"]["median"] == 3.0
+    assert DemoRow(
+        "dls", _figures(), 9.0, None, task_wall_s=3.0, task_sim_s=21.3
+    ).real_time_factor == pytest.approx(7.1)
+    assert DemoRow("dls", _figures(), 9.0, None).real_time_factor is None
+    out = capsys.readouterr().out
+    assert "7.10" in out  # x real time of the last run in the table
+    assert "over 3 runs" in out
+
+
 @pytest.mark.parametrize("argv", [["--runs", "0"], ["--runs", "2", "--scenario", "wall_contact"]])
 def test_bad_runs_are_rejected(argv, capsys):
     with pytest.raises(SystemExit) as exit_info:

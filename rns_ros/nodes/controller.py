@@ -2,7 +2,9 @@
 
 The law is :class:`rns_ros.control.controller.ReactionlessController`; command safety is
 :class:`rns_ros.control.teleop.CommandGate`. This node only converts messages and runs them once per
-control period from an executor timer.
+control period from an executor timer; with ``output_lead`` (use_sim_time, lockstep side by side)
+from each period instant /clock passes (:class:`rns_ros.nodes.clock_ticks.ClockTicks`), its output
+stamped that lead later.
 
 Subscribes:
     cmd_twist     geometry_msgs/TwistStamped (``twist_stamped: true``) or geometry_msgs/Twist;
@@ -20,9 +22,9 @@ Publishes (joint commands only once a joint state has arrived):
     joint_velocities  std_msgs/Float64MultiArray, theta_dot [rad/s] in the order of the ``joints``
                       parameter (``output_interface: velocity``; the ros2_control
                       forward_command_controller convention: remap to <controller>/commands)
-    ~/status          diagnostic_msgs/DiagnosticArray every period from start-up: state,
-                      sigma_min, the three determinants, lambda^2, speed scale, unachieved twist,
-                      predicted coupling momentum (telemetry)
+    ~/status          diagnostic_msgs/DiagnosticArray every period from start-up while it has a
+                      subscriber: state, sigma_min, the three determinants, lambda^2, speed
+                      scale, unachieved twist, predicted coupling momentum (telemetry)
     /diagnostics      diagnostic_msgs/DiagnosticArray at 1 Hz (wall clock): the newest status,
                       hardware_id = robot name (what diagnostic_updater users aggregate)
 """

@@ -502,7 +502,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--output-lead",
         action="store_true",
         help="off real time: the controller stamps each output one period after its tick, so "
-        "simulator and controller compute side by side (about 1.5x faster; experimental: under "
+        "simulator and controller compute side by side (about 1.3x faster; experimental: under "
         "CPU load about 1 run in 5 turned the base 5e-5 deg instead of 2.6e-7)",
     )
     parser.add_argument(

@@ -261,7 +261,7 @@ PARAMETERS = (
         "Under use_sim_time: stamp each output this long after the tick that computed it, and "
         "predict the joints to then. rns_simulator starts a JointTrajectory at its stamp and, in "
         "lockstep, simulates up to it meanwhile, so controller and simulator compute side by "
-        "side (rns_demo off real time: one period). 0: the output acts from its tick. Wall "
+        "side (rns_demo --output-lead: one period). 0: the output acts from its tick. Wall "
         "clock: not used (a real plant's lead is its latency, output_latency)",
         "[s]",
         0.0,
@@ -494,10 +494,6 @@ class ControllerNode(Node):
                 {"method": self.controller.settings.method.value},
             )
             return
-        self._tick(tick)
-
-    def _tick(self, tick: Time) -> None:
-        """One control period for the instant ``tick`` (node clock)."""
         now = time.monotonic()
         # the previous output was held this long on the plant's clock (sim time under /clock)
         clock_now = tick.nanoseconds * 1e-9
@@ -590,7 +586,7 @@ class ControllerNode(Node):
         if not self._predict:
             return now, self._theta, None  # the sample as it is, held for T
         # with output_lead the ticks lie on the period grid (ClockTicks)
-        theta, hold = self._theta, self._period if self._lead else self._next_tick_in(now)
+        theta, hold = self._theta, self._period if self._lead else self._next_tick_in()
         if self._theta_rate is None or self._stopped:
             return now, theta, hold
         seconds, stamp = now.nanoseconds * 1e-9, self._theta_stamp.nanoseconds * 1e-9
@@ -606,13 +602,14 @@ class ControllerNode(Node):
             hold = ends - start.acting_time if ends > start.acting_time else None
         return now, start.theta, hold
 
-    def _next_tick_in(self, tick: Time) -> float | None:
-        """Time from ``tick`` to the control timer's next call [s], or None when it is not in
-        (0, 1.5 T] (a cancelled or badly late timer: assume the period)."""
+    def _next_tick_in(self) -> float | None:
+        """Time until the control timer's next call [s], or None when it is not in (0, 1.5 T]
+        (a cancelled or badly late timer: assume the period). Timer ticks only: their instant
+        is now."""
         until = self._timer.time_until_next_call()
         if until is None:
             return None
-        seconds = (self.get_clock().now() - tick).nanoseconds * 1e-9 + until * 1e-9
+        seconds = until * 1e-9
         return seconds if 0.0 < seconds <= 1.5 * self._period else None
 
     def _state(

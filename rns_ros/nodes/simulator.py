@@ -28,9 +28,10 @@ With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simu
 the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
 before the first command it runs in real time, and a controller that stops answering pauses it
 (after ``LOCKSTEP_PATIENCE`` of wall time one step is taken, with its state and /clock).
-The period counts from the command's header stamp when /clock is published and the stamp lies
-within the last period (a controller ticking on this clock: the next pause is its next tick,
-whatever the command's latency) or at most one period ahead, else from its receipt. A
+The period counts on the grid of the command's header stamp when /clock is published and the
+stamp is a recent simulated time (from the stamp itself, or from the last point of its grid
+before now for a command older than a period; a controller ticking on this clock: the next
+pause is its next tick, whatever the command's latency), else from its receipt. A
 JointTrajectory stamped ahead of the simulated time (with /clock, by at most
 ``lockstep_period``, or ``MAX_CATCH_UP`` without lockstep) waits for its stamp, as a trajectory
 controller starts a trajectory at its header stamp: a controller that stamps its output one
@@ -649,7 +650,7 @@ class SimulatorNode(Node):
         Caller holds the lock."""
         if (
             self._pending is not None
-            and self.simulator.time + 0.5 * self.simulator.dt >= (self._pending[0])
+            and self.simulator.time + 0.5 * self.simulator.dt >= self._pending[0]
         ):
             _, positions, velocities, accelerations = self._pending
             self._pending = None

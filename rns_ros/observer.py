@@ -6,7 +6,8 @@ ROS domain of its environment (``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANG
 ``ROS_STATIC_PEERS`` are used as given, unlike :class:`rns_ros.harness.Harness`, which forces
 localhost), records what the robot side publishes (``joint_states``, ``base_odom``,
 ``momentum``) and what the operator side sends (``cmd_twist``, ``joint_references``), and writes
-a JSON report: per topic the message count, receive rate and serialized payload bytes, how long
+a JSON report: per topic the message count, the publisher's rate (header stamps), the arrival
+rate and longest arrival gap, and the serialized payload bytes, how long
 the robot took to appear, and, with ``--scenario``, the run's figures
 (:func:`rns_ros.analysis.recorded_run.run_figures`) plus the camera rotation between the first
 and the last robot state. See docs/two_hosts.md.
@@ -178,12 +179,30 @@ def _commands_done(commands: TopicLog, idle: float) -> bool:
     return len(commands) > 0 and time.monotonic() - commands.received[-1] > idle
 
 
+def _rate(times: np.ndarray) -> float:
+    """Messages per second over ``times`` [s], shape (samples,); 0 without a span."""
+    span = float(times[-1] - times[0]) if len(times) > 1 else 0.0
+    return (len(times) - 1) / span if span > 0 else 0.0
+
+
 def _topic_summary(log: TopicLog) -> dict[str, Any]:
+    """Count, rates and payload of one topic.
+
+    ``rate_hz`` is the publisher's rate, from the header stamps (what the robot sends, whatever
+    the link or this process's scheduling does to the arrivals); where stamps are missing (zero)
+    or do not increase it falls back to the arrivals. ``receipt_rate_hz`` and
+    ``max_receipt_gap_s`` describe the arrivals: a stalled receiver that then drains a backlog
+    shows a burst, a gap, or both, while the stamps still show the robot's own rate.
+    """
     count = len(log)
-    span = log.received[-1] - log.received[0] if count > 1 else 0.0
+    received = np.asarray(log.received, dtype=float)
+    stamps = log.stamps() if count else np.zeros(0)
+    stamped = count > 1 and bool(np.all(stamps > 0.0)) and bool(np.all(np.diff(stamps) > 0.0))
     return {
         "count": count,
-        "rate_hz": (count - 1) / span if span > 0 else 0.0,
+        "rate_hz": _rate(stamps if stamped else received),
+        "receipt_rate_hz": _rate(received),
+        "max_receipt_gap_s": float(np.max(np.diff(received))) if count > 1 else 0.0,
         # what crossed the wire at least: the CDR payload, without RTPS / UDP / IP headers
         "payload_bytes": sum(len(serialize_message(msg)) for msg in log.messages),
     }

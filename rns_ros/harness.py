@@ -32,6 +32,7 @@ from __future__ import annotations
 import os
 import shutil
 import signal
+import struct
 import subprocess
 import sys
 import tempfile
@@ -48,6 +49,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 
 from rns_ros.cli import DOMAIN_ID_RANGE, one_line
 from rns_ros.core.errors import ConfigError
@@ -86,23 +88,60 @@ def _domain(domain_id: int | None) -> int:
 
 
 class TopicLog:
-    """Every message of one topic with its receipt time (monotonic [s])."""
+    """Every message of one topic with its receipt time (monotonic [s]).
 
-    def __init__(self, topic: str) -> None:
+    A raw log (``msg_type`` given, :meth:`Harness.record` with ``raw=True``) keeps the serialized
+    messages and deserializes them on first use of :attr:`messages`: recording costs no Python
+    message per sample, which in a fast lockstep run is CPU the stack under test needs.
+    :meth:`latest_stamp` reads a raw message's header stamp without deserializing it.
+    """
+
+    def __init__(self, topic: str, msg_type: type | None = None) -> None:
         self.topic = topic
-        self.messages: list[Any] = []
+        self.msg_type = msg_type
+        self._messages: list[Any] = []
+        self._raw: list[bytes] = []  # serialized, received after every one in _messages
         self.received: list[float] = []
 
     def _append(self, msg) -> None:
-        self.messages.append(msg)
+        self._messages.append(msg)
         self.received.append(time.monotonic())
 
+    def _append_raw(self, data: bytes) -> None:
+        self._raw.append(data)
+        self.received.append(time.monotonic())
+
+    @property
+    def messages(self) -> list[Any]:
+        """The messages in receipt order (a raw log deserializes what it has not yet)."""
+        if self._raw:
+            self._messages.extend(deserialize_message(data, self.msg_type) for data in self._raw)
+            self._raw = []
+        return self._messages
+
+    @messages.setter
+    def messages(self, messages: list[Any]) -> None:
+        self._messages, self._raw = list(messages), []
+
     def __len__(self) -> int:
-        return len(self.messages)
+        return len(self._messages) + len(self._raw)
 
     def latest(self):
         """The newest message, or None."""
-        return self.messages[-1] if self.messages else None
+        if self._raw:
+            return deserialize_message(self._raw[-1], self.msg_type)
+        return self._messages[-1] if self._messages else None
+
+    def latest_stamp(self) -> float | None:
+        """Header stamp [s] of the newest message (one with a header first), or None."""
+        if self._raw:
+            stamp = cdr_header_stamp(self._raw[-1])
+            if stamp is not None:
+                return stamp
+        latest = self.latest()
+        if latest is None:
+            return None
+        return latest.header.stamp.sec + 1e-9 * latest.header.stamp.nanosec
 
     def array(self, field: Callable[[Any], Any]) -> np.ndarray:
         """``field(msg)`` of every message stacked: shape (samples, ...) as float."""
@@ -111,6 +150,22 @@ class TopicLog:
     def stamps(self) -> np.ndarray:
         """Header stamps [s], shape (samples,) (messages with a header)."""
         return self.array(lambda m: m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec)
+
+
+#: CDR encapsulation identifiers (the first two bytes of a serialized message) -> struct byte
+#: order: plain CDR big- and little-endian (XCDR1), the encodings rmw_fastrtps writes.
+_CDR_BYTE_ORDER = {b"\x00\x00": ">", b"\x00\x01": "<"}
+
+
+def cdr_header_stamp(data: bytes) -> float | None:
+    """The header stamp [s] of a serialized message whose first field is a std_msgs/Header, read
+    from its CDR bytes: after the 4-byte encapsulation, ``stamp.sec`` (int32) and
+    ``stamp.nanosec`` (uint32) come first. None for another encapsulation or too few bytes."""
+    order = _CDR_BYTE_ORDER.get(bytes(data[:2]))
+    if order is None or len(data) < 12:
+        return None
+    sec, nanosec = struct.unpack_from(order + "iI", data, 4)
+    return sec + 1e-9 * nanosec
 
 
 class Harness:
@@ -206,10 +261,18 @@ class Harness:
             self._probe = self.add(rclpy.create_node(name, context=self.context))
         return self._probe
 
-    def record(self, msg_type, topic: str, qos: QoSProfile = RECORD_QOS) -> TopicLog:
-        """Start recording ``topic`` now; returns the growing :class:`TopicLog`."""
-        log = TopicLog(topic)
-        self.probe().create_subscription(msg_type, topic, log._append, qos)
+    def record(
+        self, msg_type, topic: str, qos: QoSProfile = RECORD_QOS, *, raw: bool = False
+    ) -> TopicLog:
+        """Start recording ``topic`` now; returns the growing :class:`TopicLog`. ``raw``: keep
+        the serialized messages and deserialize them when the log is read (cheaper while the
+        stack runs)."""
+        if raw:
+            log = TopicLog(topic, msg_type)
+            self.probe().create_subscription(msg_type, topic, log._append_raw, qos, raw=True)
+        else:
+            log = TopicLog(topic)
+            self.probe().create_subscription(msg_type, topic, log._append, qos)
         return log
 
     # --- running --------------------------------------------------------------------------------

@@ -167,6 +167,8 @@ def test_conventional_with_wheels_costs_orders_of_magnitude_more_energy(tmp_path
         (["--methods", "magic"], "--methods for satellite_observation must be"),
         (["--rate", "0"], "--rate must be in"),
         (["--real-time-factor", "-1"], "--real-time-factor must be in"),
+        (["--sim-step", "0.003"], "--sim-step must divide the control period 1/rate = 0.01 s"),
+        (["--sim-step", "0.2", "--rate", "1"], "and lie in [1e-05, 0.1] s, got 0.2"),
     ],
 )
 def test_demo_rejects_bad_arguments(argv, message, capsys):

@@ -328,6 +328,10 @@ class ControllerNode(Node):
         # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
         self._immediate = params["immediate_reaction"] and not self._sim_time
         self._last_tick = -np.inf  # monotonic time of the last tick [s]
+        # output_lead: the newest instant served [s] (node clock); a late tick is served at the
+        # state's instant (_lead_instant) and the instants it skipped are not served after it
+        self._served_instant: float | None = None
+        self._clock_tick: float | None = None  # the newest tick's instant as /clock gave it [s]
         self._last_tick_clock: float | None = None  # node-clock time of the last tick [s]
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._theta_rate: np.ndarray | None = None
@@ -494,6 +498,10 @@ class ControllerNode(Node):
                 {"method": self.controller.settings.method.value},
             )
             return
+        if self._lead:
+            tick = self._lead_instant(tick)
+            if tick is None:
+                return
         now = time.monotonic()
         # the previous output was held this long on the plant's clock (sim time under /clock)
         clock_now = tick.nanoseconds * 1e-9
@@ -540,6 +548,41 @@ class ControllerNode(Node):
         self._publish_output(step.reference_positions, velocities, planned, self._lead)
         state_now = self._state(step, gate, state)
         self._publish_status(state_now, gate.detail, self._step_values(step, gate))
+
+    def _lead_instant(self, tick: Time) -> Time | None:
+        """With ``output_lead``: the instant to serve for the /clock tick ``tick``, or None to
+        skip it.
+
+        In lockstep side by side the simulator runs at most ``output_lead`` past a tick before
+        that tick's output arrives. A state stamped later than that (by half a period more)
+        means the simulation got ahead of the ticks (a first command reaching it while it ran
+        in real time, a patience step): the tick's output would start late, and every later
+        one too, each letting the simulation run one more period (the lockstep period counts
+        from the newest command), so the lag would last the whole run, with the missed motion
+        made up after the controller had predicted it (measured: the base turned 1.7e-3 deg,
+        or the camera fell short when the lag passed 50 ms). Such a tick is served at the
+        state's instant instead (its output acts a lead later, as usual), and the ticks up to
+        that instant, still coming from /clock, are skipped. A clock that went back (a reset)
+        starts over."""
+        seconds = tick.nanoseconds * 1e-9
+        previous, self._clock_tick = self._clock_tick, seconds
+        if previous is not None and seconds < previous - 0.5 * self._period:
+            self._served_instant = None  # the clock went back
+        if self._served_instant is not None and seconds <= self._served_instant + 1e-9:
+            return None
+        if self._theta_stamp is not None:
+            stamp = self._theta_stamp.nanoseconds * 1e-9
+            if stamp - seconds >= self._lead + 0.5 * self._period:
+                # expected once at the start: the first command reaches a simulation that
+                # still runs in real time
+                self.get_logger().info(
+                    f"late tick {seconds:.3f} s: the simulation is at {stamp:.3f} s; served "
+                    "there (the ticks in between are skipped)",
+                    throttle_duration_sec=1.0,
+                )
+                seconds, tick = stamp, self._theta_stamp
+        self._served_instant = seconds
+        return tick
 
     def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:
         """(state, detail) when the measured state cannot be trusted: stale or two sources."""

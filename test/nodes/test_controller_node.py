@@ -616,6 +616,52 @@ def test_with_output_lead_each_clock_period_gets_one_output_stamped_a_period_lat
     assert stamps == [1.01, 1.02, 1.03, 1.04, 1.05]
 
 
+def test_with_output_lead_a_simulation_ahead_of_the_ticks_is_caught_up(ros):
+    """Lockstep side by side: a state stamped more than the lead past the tick (the simulation
+    got ahead, e.g. a first command reaching it while it ran in real time) would make that
+    tick's output, and every later one, start late: the tick is served at the state's instant
+    instead, and the ticks /clock still brings up to it give no output. Without the catch-up
+    the outputs stay stamped 1.02, 1.03, ... behind the simulation at 1.04."""
+    period = 0.01
+    _node(
+        ros,
+        ControllerNode,
+        use_sim_time=True,
+        output_lead=period,
+        state_timeout=TEST_STATE_TIMEOUT,
+    )
+    probe = ros.probe()
+    references = Recorder(probe, JointTrajectory, "joint_references", qos=100)
+    states = probe.create_publisher(JointState, "joint_states", 10)
+    odom = probe.create_publisher(Odometry, "base_odom", 10)
+    clock = probe.create_publisher(Clock, "/clock", 10)
+    angles = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0]).tolist()
+
+    def publish_state(t):
+        joints = JointState(name=JOINTS, position=angles, velocity=[0.0] * 7)
+        joints.header.stamp = stamp_from_seconds(t)
+        states.publish(joints)
+        pose = Odometry()
+        pose.header.stamp, pose.pose.pose.orientation.w = stamp_from_seconds(t), 1.0
+        odom.publish(pose)
+        ros.spin_for(0.05)
+
+    def tick(t):
+        clock.publish(Clock(clock=stamp_from_seconds(t)))
+        ros.spin_for(0.05)
+
+    publish_state(1.0)
+    tick(1.0)  # in step: output for 1.01
+    publish_state(1.04)  # the simulation ran ahead of the ticks
+    for t in (1.01, 1.02, 1.03, 1.04):
+        tick(t)  # 1.01 is served at 1.04 (output for 1.05); 1.02-1.04 are skipped
+    publish_state(1.05)
+    tick(1.05)  # in step again: output for 1.06
+    ros.spin_for(0.1)
+    stamps = [round(_seconds(m.header.stamp), 9) for m in references.messages]
+    assert stamps == [1.01, 1.05, 1.06]
+
+
 def _seconds(stamp) -> float:
     return stamp.sec + 1e-9 * stamp.nanosec
 

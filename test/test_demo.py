@@ -99,13 +99,16 @@ def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
     assert row["angular_momentum_drift"] < 1e-9
 
 
-def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path):
+@pytest.mark.parametrize("turns", ["--output-lead", "--no-output-lead"])
+def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path, turns):
     """--real-time-factor 0: the simulator waits for each control period's output and the
     controller keeps its ticks on the period grid, so sampling is synchronous and the base
     stays within 2e-5 deg (1.6-1.9e-6 measured with /clock every 1 ms step; the 20 s scenario
     now matches the in-process loop). Free-running it turned 1.7e-2 deg; with commands served
-    between ticks, 4e-4 deg."""
-    _, rows = _short_demo(tmp_path, "--no-record", "--real-time-factor", "0", "--methods", "dls")
+    between ticks, 4e-4 deg. Side by side (the default) and in turn alike."""
+    _, rows = _short_demo(
+        tmp_path, "--no-record", "--real-time-factor", "0", "--methods", "dls", turns
+    )
     row = rows["dls"]
     assert row["max_base_deviation_deg"] < 2e-5
     # the operator's twist and the controller's tick fall on the same simulated instant; with

@@ -6,6 +6,7 @@ Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller|
         .venv/bin/python scripts/benchmark.py --only latency [--commands N] [--rates HZ ...]
                                               [--domain-id ID]
         .venv/bin/python scripts/benchmark.py --only cratio [--workers N]
+        .venv/bin/python scripts/benchmark.py --only lockstep [--runs N] [--domain-id ID]
 
 core       median / p99 of one FreeFloatingState, the DLS and SC inverses, one P_RNS projection.
 simulator  step time (median, p99) of FreeFloatingSimulator at 1 ms RK4 in kinematic and dynamic
@@ -31,6 +32,13 @@ latency    end to end, over DDS on localhost: an operator twist's publish() on c
            Goal: p99 <= one control period + 2 ms. Opt-in (not in the default run): it starts
            ROS processes and takes ~30-40 s per rate with a responsive controller, up to ~2.5 min
            per rate when it stalls (each lost command costs MATCH_TIMEOUT).
+lockstep   `rns_demo --real-time-factor 0` over DDS (satellite observation, dls, every node its own
+           process): the task's wall time (21.3 s simulated) side by side (the default) and in
+           turn (--no-output-lead), with the base deviation, alternated --runs times (default 3)
+           with the in-process core loop over the same 21.3 s (rns_ros.analysis.closed_loop, one
+           RK4 step per period, as the demo's simulator). Goal of issue 18: >= 10x real time
+           side by side. The machine's speed varies here by 1.5x from hour to hour; the ratio
+           task / in-process loop, timed side by side in one run, does not. Opt-in (~20 s a run).
 cratio     the chapter-5 C_ratio map of the 7-DoF positioning subchain (Fig. 5.3,
            rns_ros.analysis.energy_maps): points per second on a 1/10 sub-grid (5 of the 50
            theta_2 values, 625000 points) in one process and on --workers local processes
@@ -579,6 +587,50 @@ def cratio(workers: int | None) -> None:
     print(f"full map mean C_ratio {values.mean():.6f} (goal: wall < 60 s; {cores} cores here)")
 
 
+def lockstep(runs: int, domain_id: int) -> None:
+    """See the module docstring (lockstep)."""
+    from rns_ros import demo  # the demo's own run, as `rns_demo` makes it
+
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    scenario_file = demo.scenario_path("satellite_observation")
+    scenario = load_scenario(scenario_file)
+    robot = load_model(default_model_config())
+    settle = demo.OPERATOR_ZERO_DURATION + demo.SETTLE
+    simulated = scenario.duration + settle
+    common = ["--methods", "dls", "--real-time-factor", "0", "--no-record"]
+    modes = {"side by side": "--output-lead", "in turn": "--no-output-lead"}
+    print(
+        f"\nlockstep over DDS: {scenario_file.stem}, dls, {simulated:.1f} s simulated, domain "
+        f"{domain_id}, localhost; goal: side by side >= 10x real time"
+    )
+    print(
+        f"{'run':>4}{'in-process [s]':>16}"
+        + "".join(f"{name + ' [s]':>20}{'x real time':>13}{'/ in-process':>14}" for name in modes)
+        + f"{'base dev [deg]':>16}"
+    )
+    factors = {name: [] for name in modes}
+    for k in range(runs):
+        start = time.perf_counter()
+        run_scenario(robot, scenario, method="dls", simulation_step=0.01, settle=settle)
+        reference = time.perf_counter() - start
+        line, deviations = f"{k + 1:>4}{reference:>16.2f}", []
+        for name, flag in modes.items():
+            args = demo.parse_args([*common, flag, "--domain-id", str(domain_id)])
+            row = demo.run_method("dls", args, scenario_file)
+            factors[name].append(simulated / row.task_wall_s)
+            deviations.append(row.figures.max_base_deviation_deg)
+            line += (
+                f"{row.task_wall_s:>20.2f}{simulated / row.task_wall_s:>13.1f}"
+                f"{row.task_wall_s / reference:>14.2f}"
+            )
+        print(line + f"{max(deviations):>16.2e}", flush=True)
+    for name, values in factors.items():
+        print(
+            f"{name}: x real time min / median / max {min(values):.1f} / "
+            f"{float(np.median(values)):.1f} / {max(values):.1f}"
+        )
+
+
 def force_controller(samples: int) -> None:
     """rns_force_controller's step (rns_ros.control.force_teleop) on the LWR wall task, one
     stroke closed around the in-process ContactSimulator, and the simulator's contact step."""
@@ -636,11 +688,19 @@ def main() -> None:
         description=__doc__.splitlines()[0],
         epilog="Without --only: core, simulator and controller. latency is opt-in (--only "
         "latency): it starts rns_controller subprocesses and takes ~0.5-2.5 min per rate. "
-        "cratio is opt-in too (~30 s on 2 cores).",
+        "cratio (~30 s on 2 cores) and lockstep (~20 s a run) are opt-in too.",
     )
     parser.add_argument(
         "--only",
-        choices=("core", "simulator", "controller", "force_controller", "latency", "cratio"),
+        choices=(
+            "core",
+            "simulator",
+            "controller",
+            "force_controller",
+            "latency",
+            "cratio",
+            "lockstep",
+        ),
         help="run one section (latency only this way)",
     )
     parser.add_argument("--samples", type=int, default=5000, help="repetitions per operation")
@@ -655,14 +715,21 @@ def main() -> None:
         help="latency: controller rates [Hz]",
     )
     parser.add_argument(
-        "--domain-id", type=int, default=55, help="latency: ROS_DOMAIN_ID of every node"
+        "--domain-id",
+        type=int,
+        default=55,
+        help="latency, lockstep: ROS_DOMAIN_ID of every node",
     )
+    parser.add_argument("--runs", type=int, default=3, help="lockstep: runs of each mode")
     parser.add_argument(
         "--workers", type=int, default=None, help="cratio: local processes (default: one per core)"
     )
     args = parser.parse_args()
     if args.only == "cratio":
         cratio(args.workers)
+        return
+    if args.only == "lockstep":
+        lockstep(args.runs, args.domain_id)
         return
     robot = load_model(default_model_config())
     if args.only in (None, "core"):

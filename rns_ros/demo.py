@@ -269,6 +269,8 @@ def run_method(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
         processes.stop()  # the logger writes its summary line as it closes the recording
+        for line in processes.problems():  # a watchdog that stopped the arm, a rejection
+            print(f"  {line}", flush=True)
         if logger is not None:
             closed = [line for line in processes.output(logger).splitlines() if CLOSED in line]
             print("\n".join(closed[-1:]), flush=True)

@@ -327,6 +327,7 @@ class ProcessStack:
         self.bin_dir = Path(bin_dir) if bin_dir else Path(sys.executable).parent
         self.processes: list[subprocess.Popen] = []
         self._logs: dict[int, Any] = {}
+        self._names: dict[int, str] = {}  # pid -> executable, kept after stop()
 
     def command(
         self,
@@ -367,12 +368,30 @@ class ProcessStack:
             text=True,
         )
         self._logs[process.pid] = log
+        self._names[process.pid] = executable
         self.processes.append(process)
         return process
 
+    def problems(self, limit: int = 5) -> list[str]:
+        """The first ``limit`` WARN / ERROR log lines of each process started so far (stopped
+        ones included), each prefixed with its executable: what a watchdog or a rejected
+        command said during a run."""
+        lines = []
+        for pid, name in self._names.items():
+            found = [
+                line
+                for line in self._text(pid).splitlines()
+                if "[WARN]" in line or "[ERROR]" in line
+            ]
+            lines += [f"{name}: {line}" for line in found[:limit]]
+        return lines
+
     def output(self, process: subprocess.Popen) -> str:
         """Everything ``process`` printed so far."""
-        log = self._logs[process.pid]
+        return self._text(process.pid)
+
+    def _text(self, pid: int) -> str:
+        log = self._logs[pid]
         log.flush()
         log.seek(0)
         return log.read()
@@ -408,3 +427,4 @@ class ProcessStack:
         for log in self._logs.values():
             log.close()
         self._logs.clear()
+        self._names.clear()

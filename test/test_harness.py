@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -128,6 +129,21 @@ def test_installed_executables_run_as_subprocesses_with_ros_args():
         assert list(joints.latest().position) == pytest.approx([0.1] * 7)
         assert processes.stop() == [0]
         assert "kinematic simulation" in processes.output(simulator)
+
+
+def test_process_warnings_are_collected_after_stop():
+    """ProcessStack.problems(): the WARN / ERROR lines of every process started, also once it
+    has been stopped (rns_demo prints them under each run: a watchdog that stopped the arm)."""
+    with ProcessStack(DOMAIN) as processes:
+        controller = processes.start("rns_controller", {"output_lead": 0.01})  # wall clock
+        deadline = time.monotonic() + 20.0
+        while "waiting for" not in processes.output(controller) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert processes.stop() == [0]
+        problems = processes.problems()
+    assert len(problems) == 1, problems
+    assert problems[0].startswith("rns_controller: [WARN]")
+    assert "output_lead is for use_sim_time" in problems[0]
 
 
 def test_environment_stays_on_localhost():

@@ -261,8 +261,9 @@ PARAMETERS = (
         "Under use_sim_time: stamp each output this long after the tick that computed it, and "
         "predict the joints to then. rns_simulator starts a JointTrajectory at its stamp and, in "
         "lockstep, simulates up to it meanwhile, so controller and simulator compute side by "
-        "side (rns_demo --output-lead: one period). 0: the output acts from its tick. Wall "
-        "clock: not used (a real plant's lead is its latency, output_latency)",
+        "side (rns_demo off real time: one period); a tick whose state is already stamped past "
+        "its output's instant is served at the state's instant. 0: the output acts from its "
+        "tick. Wall clock: not used (a real plant's lead is its latency, output_latency)",
         "[s]",
         0.0,
         0.1,

@@ -660,11 +660,24 @@ def test_energy_topic_follows_the_moving_arm(ros):
     command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
     velocities = [0.2, -0.3, 0.25, 0.4, -0.5, 0.6, 0.7]
 
+    def matched() -> int:
+        """Energy samples whose moving joint state and base pose were both recorded (at real
+        time factor 0 a busy recorder may miss some of the states: wait for enough)."""
+        moving = {
+            (m.header.stamp.sec, m.header.stamp.nanosec)
+            for m in joints.messages
+            if np.abs(m.velocity).max(initial=0.0) > 0.0
+        } & set(odom.by_stamp())
+        return sum(
+            divmod(round(_energy(m)["time"] * 1e9), 1_000_000_000) in moving
+            for m in energy.messages
+        )
+
     def keep_commanding():
         command.publish(_trajectory(velocities))
-        return len(energy.messages) > 40
+        return len(energy.messages) > 40 and matched() > 20
 
-    assert ros.spin_until(keep_commanding, timeout=20.0)
+    assert ros.spin_until(keep_commanding, timeout=30.0), (len(energy.messages), matched())
     robot = node.robot
     odom_by_stamp = odom.by_stamp()
     samples = [_energy(m) for m in energy.messages]

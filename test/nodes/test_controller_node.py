@@ -574,46 +574,60 @@ def test_a_jump_in_the_measured_state_restarts_the_reference_and_ramps(ros):
     assert "RAMPING" in states
 
 
+class _LockstepPlant:
+    """A controller with output_lead one period (use_sim_time) and, published by hand, what a
+    lockstep rns_simulator gives it: a state (joints at rest, base pose) and /clock."""
+
+    def __init__(self, ros) -> None:
+        _node(
+            ros,
+            ControllerNode,
+            use_sim_time=True,
+            output_lead=0.01,
+            state_timeout=TEST_STATE_TIMEOUT,
+        )
+        probe = ros.probe()
+        self.ros = ros
+        self.references = Recorder(probe, JointTrajectory, "joint_references", qos=100)
+        self._states = probe.create_publisher(JointState, "joint_states", 10)
+        self._odom = probe.create_publisher(Odometry, "base_odom", 10)
+        self._clock = probe.create_publisher(Clock, "/clock", 10)
+        self._angles = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0]).tolist()
+
+    def state(self, t: float) -> None:
+        """The state at ``t`` [s], before its /clock, as rns_simulator publishes it."""
+        joints = JointState(name=JOINTS, position=self._angles, velocity=[0.0] * 7)
+        joints.header.stamp = stamp_from_seconds(t)
+        self._states.publish(joints)
+        pose = Odometry()
+        pose.header.stamp, pose.pose.pose.orientation.w = stamp_from_seconds(t), 1.0
+        self._odom.publish(pose)
+        self.ros.spin_for(0.05)
+
+    def clock(self, t: float) -> None:
+        """/clock at ``t`` [s]; waits (briefly) for the output it may cause."""
+        count = len(self.references.messages)
+        self._clock.publish(Clock(clock=stamp_from_seconds(t)))
+        self.ros.spin_until(lambda: len(self.references.messages) > count, timeout=0.3)
+
+    def output_stamps(self) -> list[float]:
+        self.ros.spin_for(0.1)
+        return [round(_seconds(m.header.stamp), 9) for m in self.references.messages]
+
+
 def test_with_output_lead_each_clock_period_gets_one_output_stamped_a_period_later(ros):
     """Lockstep side by side (use_sim_time, output_lead one period): the ticks come from /clock,
     one per period instant it passes. A /clock repeated or between two instants gives none;
     one that passes two instants (two messages handed over at once) gives both, in order. Each
     output is stamped a period after its tick, where the simulator starts it."""
-    period = 0.01
-    _node(
-        ros,
-        ControllerNode,
-        use_sim_time=True,
-        output_lead=period,
-        state_timeout=TEST_STATE_TIMEOUT,
-    )
-    probe = ros.probe()
-    references = Recorder(probe, JointTrajectory, "joint_references", qos=100)
-    states = probe.create_publisher(JointState, "joint_states", 10)
-    odom = probe.create_publisher(Odometry, "base_odom", 10)
-    clock = probe.create_publisher(Clock, "/clock", 10)
-    angles = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0]).tolist()
-
-    def simulate(t, state=True):
-        stamp = stamp_from_seconds(t)
-        if state:
-            joints = JointState(name=JOINTS, position=angles, velocity=[0.0] * 7)
-            joints.header.stamp = stamp
-            states.publish(joints)
-            pose = Odometry()
-            pose.header.stamp, pose.pose.pose.orientation.w = stamp, 1.0
-            odom.publish(pose)
-            ros.spin_for(0.05)  # the state first, as rns_simulator publishes it
-        count = len(references.messages)
-        clock.publish(Clock(clock=stamp))
-        ros.spin_until(lambda: len(references.messages) > count, timeout=0.3)
-
+    plant = _LockstepPlant(ros)
     for t, state in [(1.0, True), (1.01, True), (1.01, False), (1.03, True), (1.035, False)]:
-        simulate(t, state)
-    simulate(1.04)
-    ros.spin_for(0.1)
-    stamps = [round(_seconds(m.header.stamp), 9) for m in references.messages]
-    assert stamps == [1.01, 1.02, 1.03, 1.04, 1.05]
+        if state:
+            plant.state(t)
+        plant.clock(t)
+    plant.state(1.04)
+    plant.clock(1.04)
+    assert plant.output_stamps() == [1.01, 1.02, 1.03, 1.04, 1.05]
 
 
 def test_with_output_lead_a_simulation_ahead_of_the_ticks_is_caught_up(ros):
@@ -622,44 +636,15 @@ def test_with_output_lead_a_simulation_ahead_of_the_ticks_is_caught_up(ros):
     tick's output, and every later one, start late: the tick is served at the state's instant
     instead, and the ticks /clock still brings up to it give no output. Without the catch-up
     the outputs stay stamped 1.02, 1.03, ... behind the simulation at 1.04."""
-    period = 0.01
-    _node(
-        ros,
-        ControllerNode,
-        use_sim_time=True,
-        output_lead=period,
-        state_timeout=TEST_STATE_TIMEOUT,
-    )
-    probe = ros.probe()
-    references = Recorder(probe, JointTrajectory, "joint_references", qos=100)
-    states = probe.create_publisher(JointState, "joint_states", 10)
-    odom = probe.create_publisher(Odometry, "base_odom", 10)
-    clock = probe.create_publisher(Clock, "/clock", 10)
-    angles = np.deg2rad([-90.0, -30.0, 0.0, -70.0, 180.0, -30.0, 0.0]).tolist()
-
-    def publish_state(t):
-        joints = JointState(name=JOINTS, position=angles, velocity=[0.0] * 7)
-        joints.header.stamp = stamp_from_seconds(t)
-        states.publish(joints)
-        pose = Odometry()
-        pose.header.stamp, pose.pose.pose.orientation.w = stamp_from_seconds(t), 1.0
-        odom.publish(pose)
-        ros.spin_for(0.05)
-
-    def tick(t):
-        clock.publish(Clock(clock=stamp_from_seconds(t)))
-        ros.spin_for(0.05)
-
-    publish_state(1.0)
-    tick(1.0)  # in step: output for 1.01
-    publish_state(1.04)  # the simulation ran ahead of the ticks
+    plant = _LockstepPlant(ros)
+    plant.state(1.0)
+    plant.clock(1.0)  # in step: output for 1.01
+    plant.state(1.04)  # the simulation ran ahead of the ticks
     for t in (1.01, 1.02, 1.03, 1.04):
-        tick(t)  # 1.01 is served at 1.04 (output for 1.05); 1.02-1.04 are skipped
-    publish_state(1.05)
-    tick(1.05)  # in step again: output for 1.06
-    ros.spin_for(0.1)
-    stamps = [round(_seconds(m.header.stamp), 9) for m in references.messages]
-    assert stamps == [1.01, 1.05, 1.06]
+        plant.clock(t)  # 1.01 is served at 1.04 (output for 1.05); 1.02-1.04 are skipped
+    plant.state(1.05)
+    plant.clock(1.05)  # in step again: output for 1.06
+    assert plant.output_stamps() == [1.01, 1.05, 1.06]
 
 
 def _seconds(stamp) -> float:

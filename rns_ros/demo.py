@@ -294,9 +294,9 @@ MIN_SIM_STEP, MAX_SIM_STEP = 1e-5, 0.1
 def simulation_step(args: argparse.Namespace, wheels: bool) -> float:
     """rns_simulator's step [s] for an inspection run: ``--sim-step`` when given; off real time
     in kinematic mode without wheels one control period, since the joint rate is held over the
-    period and the base rate stays small (RK4 at 10 ms gave the 1 ms figures to four digits,
-    dls and sc, ``test_demo``); else ``SIM_STEP``. Wheels keep 1 ms: their torque changes
-    within a period with the attitude loop's."""
+    period and only the base is integrated (one 10 ms RK4 step gives the 1 ms figures to nine
+    digits, dls and conventional: ``test_closed_loop``); else ``SIM_STEP``. Wheels keep 1 ms:
+    their torque changes within a period with the attitude loop's."""
     if args.sim_step is not None:
         return args.sim_step
     lockstep = args.real_time_factor != 1.0 and args.mode == "kinematic" and not wheels

@@ -90,6 +90,9 @@ SUMMARY = "Reactionless camera-pointing controller: twist in, joint references o
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
+#: output_lead: a state stamped up to this far [s] past a tick is caught up to (the simulation
+#: ran ahead of the ticks); farther is another clock, not a lag.
+MAX_LEAD_CATCH_UP = 1.0
 #: Defaults of the output timing [s]: a plant that acts on a JointTrajectory from its stamp
 #: (rns_simulator, a joint trajectory controller) has neither latency nor update grid for it.
 #: Measured for a plant acting on receipt (rns_simulator with the velocity interface):
@@ -333,6 +336,7 @@ class ControllerNode(Node):
         # state's instant (_lead_instant) and the instants it skipped are not served after it
         self._served_instant: float | None = None
         self._clock_tick: float | None = None  # the newest tick's instant as /clock gave it [s]
+        self._clock_back_at = -np.inf  # monotonic time [s] /clock last went back (a reset)
         self._last_tick_clock: float | None = None  # node-clock time of the last tick [s]
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._theta_rate: np.ndarray | None = None
@@ -564,16 +568,18 @@ class ControllerNode(Node):
         or the camera fell short when the lag passed 50 ms). Such a tick is served at the
         state's instant instead (its output acts a lead later, as usual), and the ticks up to
         that instant, still coming from /clock, are skipped. A clock that went back (a reset)
-        starts over."""
+        starts over, and a state received before it, or more than ``MAX_LEAD_CATCH_UP`` ahead,
+        is not caught up to."""
         seconds = tick.nanoseconds * 1e-9
         previous, self._clock_tick = self._clock_tick, seconds
         if previous is not None and seconds < previous - 0.5 * self._period:
-            self._served_instant = None  # the clock went back
+            # the clock went back: states received before are from before the reset
+            self._served_instant, self._clock_back_at = None, time.monotonic()
         if self._served_instant is not None and seconds <= self._served_instant + 1e-9:
             return None
-        if self._theta_stamp is not None:
+        if self._theta_stamp is not None and self._state_received > self._clock_back_at:
             stamp = self._theta_stamp.nanoseconds * 1e-9
-            if stamp - seconds >= self._lead + 0.5 * self._period:
+            if self._lead + 0.5 * self._period <= stamp - seconds <= MAX_LEAD_CATCH_UP:
                 # expected once at the start: the first command reaches a simulation that
                 # still runs in real time
                 self.get_logger().info(

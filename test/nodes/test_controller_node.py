@@ -647,6 +647,18 @@ def test_with_output_lead_a_simulation_ahead_of_the_ticks_is_caught_up(ros):
     assert plant.output_stamps() == [1.01, 1.05, 1.06]
 
 
+def test_with_output_lead_a_reset_clock_is_not_caught_up_to_the_old_state(ros):
+    """After a reset the clock goes back while the newest state is still the one from before
+    it: that state is no lag to catch up to (serving there would skip every tick up to it)."""
+    plant = _LockstepPlant(ros)
+    plant.state(0.5)
+    plant.clock(0.5)  # output for 0.51
+    plant.clock(0.0)  # the simulation was reset; its first state has not come yet
+    plant.state(0.01)
+    plant.clock(0.01)
+    assert plant.output_stamps() == [0.51, 0.01, 0.02]
+
+
 def _seconds(stamp) -> float:
     return stamp.sec + 1e-9 * stamp.nanosec
 

@@ -58,7 +58,7 @@ from rns_ros.demo_ptp import (
     non_finite_ptp_figures,
     run_ptp_method,
 )
-from rns_ros.harness import Harness, ProcessStack, TopicLog
+from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
 from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
 from rns_ros.resources import default_model_config, scenario_path
 
@@ -249,7 +249,7 @@ def run_method(
             raise RnsError(f"{method}: no cmd_twist from rns_operator within {budget:.0f} s")
         # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
         # so a wall-time settle would let figures depend on this machine's speed
-        task = _stamp(commands.messages[0])
+        task = header_seconds(commands.messages[0])
         task_started = time.perf_counter()
         end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
         states = [streams[name] for name in ("joints", "odom", "momentum")]
@@ -340,11 +340,6 @@ def _wait_for_start(
         )
 
 
-def _stamp(msg) -> float:
-    """A message's header stamp [s]."""
-    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
-
-
 def energy_figures(
     energy: TopicLog, attitude: TopicLog | None, until: float = np.inf
 ) -> EnergyFigures | None:
@@ -430,7 +425,7 @@ def _within(log: TopicLog, since: float, until: float) -> TopicLog:
         return log
     kept = TopicLog(log.topic)
     for msg, received in zip(log.messages, log.received, strict=True):
-        if since <= _stamp(msg) <= until:
+        if since <= header_seconds(msg) <= until:
             kept.messages.append(msg)
             kept.received.append(received)
     return kept

@@ -139,9 +139,7 @@ class TopicLog:
             if stamp is not None:
                 return stamp
         latest = self.latest()
-        if latest is None:
-            return None
-        return latest.header.stamp.sec + 1e-9 * latest.header.stamp.nanosec
+        return None if latest is None else header_seconds(latest)
 
     def array(self, field: Callable[[Any], Any]) -> np.ndarray:
         """``field(msg)`` of every message stacked: shape (samples, ...) as float."""
@@ -149,7 +147,12 @@ class TopicLog:
 
     def stamps(self) -> np.ndarray:
         """Header stamps [s], shape (samples,) (messages with a header)."""
-        return self.array(lambda m: m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec)
+        return self.array(header_seconds)
+
+
+def header_seconds(msg) -> float:
+    """A stamped message's ``header.stamp`` [s]."""
+    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
 
 
 #: CDR encapsulation identifiers (the first two bytes of a serialized message) -> struct byte

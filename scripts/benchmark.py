@@ -37,8 +37,10 @@ lockstep   `rns_demo --real-time-factor 0` over DDS (satellite observation, dls,
            turn (--no-output-lead), with the base deviation, alternated --runs times (default 3)
            with the in-process core loop over the same 21.3 s (rns_ros.analysis.closed_loop, one
            RK4 step per period, as the demo's simulator). Goal of issue 18: >= 10x real time
-           side by side. The machine's speed varies here by 1.5x from hour to hour; the ratio
-           task / in-process loop, timed side by side in one run, does not. Opt-in (~20 s a run).
+           side by side. The machine's speed varies here from hour to hour, and the four-process
+           lockstep slows down more than the one-process loop (task / in-process loop was ~3 in
+           a quiet hour, 5-6 in a slower one): the loop's time says which hour it was. Opt-in
+           (~20 s a run).
 cratio     the chapter-5 C_ratio map of the 7-DoF positioning subchain (Fig. 5.3,
            rns_ros.analysis.energy_maps): points per second on a 1/10 sub-grid (5 of the 50
            theta_2 values, 625000 points) in one process and on --workers local processes

@@ -332,9 +332,8 @@ class ControllerNode(Node):
         # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
         self._immediate = params["immediate_reaction"] and not self._sim_time
         self._last_tick = -np.inf  # monotonic time of the last tick [s]
-        # output_lead: the newest instant served [s] (node clock); a late tick is served at the
-        # state's instant (_lead_instant) and the instants it skipped are not served after it
-        self._served_instant: float | None = None
+        # output_lead (_lead_instant): a late tick is served at the state's instant, and the
+        # ticks up to the last instant served (_last_tick_clock) are skipped
         self._clock_tick: float | None = None  # the newest tick's instant as /clock gave it [s]
         self._clock_back_at = -np.inf  # monotonic time [s] /clock last went back (a reset)
         self._last_tick_clock: float | None = None  # node-clock time of the last tick [s]
@@ -574,9 +573,9 @@ class ControllerNode(Node):
         previous, self._clock_tick = self._clock_tick, seconds
         if previous is not None and seconds < previous - 0.5 * self._period:
             # the clock went back: states received before are from before the reset
-            self._served_instant, self._clock_back_at = None, time.monotonic()
-        if self._served_instant is not None and seconds <= self._served_instant + 1e-9:
-            return None
+            self._clock_back_at = time.monotonic()
+        elif self._last_tick_clock is not None and seconds <= self._last_tick_clock + 1e-9:
+            return None  # this instant was served already (caught up past it)
         if self._theta_stamp is not None and self._state_received > self._clock_back_at:
             stamp = self._theta_stamp.nanoseconds * 1e-9
             if self._lead + 0.5 * self._period <= stamp - seconds <= MAX_LEAD_CATCH_UP:
@@ -587,8 +586,7 @@ class ControllerNode(Node):
                     "there (the ticks in between are skipped)",
                     throttle_duration_sec=1.0,
                 )
-                seconds, tick = stamp, self._theta_stamp
-        self._served_instant = seconds
+                tick = self._theta_stamp
         return tick
 
     def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:

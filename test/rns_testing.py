@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import struct
 
 import numpy as np
 from hypothesis import strategies as st
@@ -78,3 +79,31 @@ def quick_documents(identifiers, folder) -> dict:
         record = run_one(_REGISTRY[identifier], folder, quick=True)
         written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
     return written
+
+
+def big_endian_joint_state(names: list[str], position: list[float]) -> bytes:
+    """A JointState in big-endian CDR (rclpy writes little-endian only on this machine)."""
+    out = bytearray(b"\x00\x00\x00\x00")  # CDR_BE
+
+    def align(size):
+        out.extend(b"\x00" * (-(len(out) - 4) % size))
+
+    def string(text):
+        align(4)
+        raw = text.encode() + b"\x00"
+        out.extend(struct.pack(">I", len(raw)) + raw)
+
+    out.extend(struct.pack(">iI", 3, 4))
+    string("")
+    align(4)
+    out.extend(struct.pack(">I", len(names)))
+    for name in names:
+        string(name)
+    align(4)
+    out.extend(struct.pack(">I", len(position)))
+    align(8)
+    out.extend(struct.pack(f">{len(position)}d", *position))
+    for _ in range(2):
+        align(4)
+        out.extend(struct.pack(">I", 0))
+    return bytes(out)

@@ -8,6 +8,7 @@ wrong and what would be valid.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -37,10 +38,17 @@ class NamedJointCommand(NamedTuple):
 def joint_order(names: Sequence[str], model_joints: Sequence[str]) -> np.ndarray:
     """Index array p with command[p[i]] belonging to model joint i; names must be a permutation.
 
+    A stream repeats one name list at every message, so the order of the newest lists is
+    cached (the returned array is read-only).
+
     Raises:
         InputError: unknown, missing or duplicated joint names (all listed).
     """
-    names = list(names)
+    return _cached_order(tuple(names), tuple(model_joints))
+
+
+@functools.lru_cache(maxsize=16)
+def _cached_order(names: tuple[str, ...], model_joints: tuple[str, ...]) -> np.ndarray:
     unknown = sorted(set(names) - set(model_joints))
     missing = [joint for joint in model_joints if joint not in names]
     duplicated = sorted({joint for joint in names if names.count(joint) > 1})
@@ -53,7 +61,9 @@ def joint_order(names: Sequence[str], model_joints: Sequence[str]) -> np.ndarray
         problems.append(f"duplicated joints {duplicated}")
     if problems:
         raise InputError("; ".join(problems) + f" (model joints: {list(model_joints)})")
-    return np.array([names.index(joint) for joint in model_joints])
+    order = np.array([names.index(joint) for joint in model_joints])
+    order.flags.writeable = False
+    return order
 
 
 def _field(values: Sequence[float], order: np.ndarray, label: str) -> np.ndarray | None:
@@ -62,7 +72,7 @@ def _field(values: Sequence[float], order: np.ndarray, label: str) -> np.ndarray
     if len(values) != order.size:
         raise InputError(f"{label} has {len(values)} values for {order.size} joints")
     array = np.asarray(values, dtype=float)
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise InputError(f"{label} must be finite, got {array.tolist()}")
     return array[order]
 

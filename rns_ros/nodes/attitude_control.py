@@ -46,6 +46,7 @@ from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError
 from rns_ros.core.validation import Choice
+from rns_ros.nodes.cdr import odometry_fields
 from rns_ros.nodes.parameters import MODEL_CONFIG, ParameterSpec, declare_parameters
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import run_node
@@ -172,7 +173,7 @@ class AttitudeControlNode(Node):
         self._received["joints"] = time.monotonic()
 
     def _on_odom(self, msg: Odometry) -> None:
-        pose = base_pose(msg)
+        pose = base_pose(odometry_fields(msg).pose)
         w = msg.twist.twist.angular
         omega = np.array([w.x, w.y, w.z])
         if pose is None or not np.isfinite(omega).all():

@@ -53,6 +53,7 @@ from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.validation import Choice
+from rns_ros.nodes.cdr import odometry_fields
 from rns_ros.nodes.parameters import (
     JOINTS,
     MODEL_CONFIG,
@@ -245,7 +246,7 @@ class PtpNode(Node):
         self._state_received = time.monotonic()
 
     def _on_odom(self, msg: Odometry) -> None:
-        pose = base_pose(msg)
+        pose = base_pose(odometry_fields(msg).pose)
         if pose is not None:
             self._base_position, self._base_orientation = pose
             self._odom_received = time.monotonic()

@@ -4,24 +4,23 @@ the check of the measured state (stale or from two sources)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time as TimeMsg
-from nav_msgs.msg import Odometry
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 
-def base_pose(msg: Odometry) -> tuple[np.ndarray, np.ndarray] | None:
-    """(position [m] (3,), unit quaternion x y z w (4,)) of the base in world, or None when the
-    message is not finite or its quaternion is far from unit (norm <= 0.5)."""
-    pose = msg.pose.pose
-    position = np.array([pose.position.x, pose.position.y, pose.position.z])
-    o = pose.orientation
-    orientation = np.array([o.x, o.y, o.z, o.w])
-    norm = np.linalg.norm(orientation)
-    if np.all(np.isfinite(position)) and np.isfinite(norm) and norm > 0.5:
+def base_pose(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(position [m] (3,), unit quaternion x y z w (4,)) of the base in world from an Odometry's
+    pose ``pose`` (7,): position x y z, orientation x y z w (``OdometryFields.pose`` of
+    :mod:`rns_ros.nodes.cdr`); None when it is not finite or its quaternion is far from unit
+    (norm <= 0.5)."""
+    position, orientation = np.array(pose[:3], dtype=float), np.array(pose[3:7], dtype=float)
+    norm = math.sqrt(float(orientation @ orientation))
+    if np.isfinite(position).all() and math.isfinite(norm) and norm > 0.5:
         return position, orientation / norm
     return None
 

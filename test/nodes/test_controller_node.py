@@ -20,7 +20,7 @@ from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import Recorder
+from rns_testing import Recorder, big_endian_joint_state
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -850,3 +850,18 @@ def test_reset_in_dynamic_mode_leaves_the_arm_within_its_limits_and_the_base_sti
     assert math.degrees(deviation) < 1e-3
     # and the arm moves again under the streaming operator
     assert np.abs(np.array(after[-1].position) - np.array(after[start].position)).max() > 0.01
+
+
+def test_a_joint_state_in_big_endian_cdr_is_read_through_rclpy(ros):
+    """joint_states are taken serialized and read from the bytes (rns_ros.nodes.cdr); data the
+    reader declines (big-endian CDR from another machine) still reaches the law, in the
+    model's joint order whatever the message's."""
+    controller = _node(ros, ControllerNode)
+    names = list(controller.robot.joint_names)
+    angles = np.linspace(-0.5, 0.7, len(names))
+    shuffled = [names.index(name) for name in reversed(names)]
+    controller._on_joint_state(
+        big_endian_joint_state(list(reversed(names)), angles[shuffled].tolist())
+    )
+    assert np.array_equal(controller._theta, angles)
+    assert controller._theta_stamp.nanoseconds == 3 * 10**9 + 4

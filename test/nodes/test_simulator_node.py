@@ -16,6 +16,7 @@ from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from rns_testing import Recorder
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -70,9 +71,18 @@ def test_streams_agree_with_the_core_while_the_arm_moves(ros):
     command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
     velocities = [0.2, -0.3, 0.25, 0.4, -0.5, 0.6, 0.7]
 
+    def moving_pairs() -> int:
+        """States recorded on both topics while the command acts (at RTF 0 the in-process
+        recorder takes only some of them)."""
+        odom_stamps = odom.by_stamp()
+        return sum(
+            stamp in odom_stamps and np.allclose(msg.velocity, velocities)
+            for stamp, msg in joints.by_stamp().items()
+        )
+
     def keep_commanding():
         command.publish(_trajectory(velocities))
-        return len(joints.messages) > 60
+        return len(joints.messages) > 60 and moving_pairs() > 10
 
     assert ros.spin_until(keep_commanding, timeout=20.0)
     first, last = joints.messages[0], joints.messages[-1]
@@ -115,6 +125,33 @@ def test_streams_agree_with_the_core_while_the_arm_moves(ros):
         checked += 1
     assert checked > 10
     assert odom.messages[-1].child_frame_id == "base_link"
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
+def test_serialized_state_messages_equal_the_messages_they_replace(ros, mode):
+    """The pre-serialized state topics (rns_ros.nodes.cdr) carry exactly what the message path
+    (kept for a layout the templates cannot capture) publishes, efforts included."""
+    node = _simulator(ros, mode=mode, publish_clock=True, energy_rate=0.0)
+    sent = []
+    for publisher in (node._joint_pub, node._odom_pub, node._momentum_pub, node._clock_pub):
+        publisher.publish = lambda msg, publisher=publisher: sent.append((publisher, msg))
+    with node._lock:
+        node.simulator.set_reference(velocities=np.linspace(-0.3, 0.4, 7))
+        node.simulator.step()
+        state = node.simulator.snapshot()
+        momentum = node.simulator.centroidal_momentum()
+    node._publish_state(state, momentum, clock=True)
+    serialized = list(sent)
+    assert all(isinstance(msg, bytes) for _, msg in serialized)
+    sent.clear()
+    node._templates = None
+    node._publish_state(state, momentum, clock=True)
+    assert [publisher for publisher, _ in sent] == [publisher for publisher, _ in serialized]
+    for (publisher, data), (_, msg) in zip(serialized, sent, strict=True):
+        assert deserialize_message(data, publisher.msg_type) == msg
+    joints = sent[0][1]
+    assert len(joints.effort) == (7 if mode == "dynamic" else 0)
+    assert np.allclose(joints.velocity, state.v[6:])
 
 
 def _rosout_errors(probe, level=Log.ERROR):

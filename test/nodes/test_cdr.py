@@ -1,0 +1,246 @@
+"""Pre-serialized publishing and raw reading (rns_ros.nodes.cdr) against rclpy's own CDR."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import WrenchStamped
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from nav_msgs.msg import Odometry
+from rclpy.serialization import deserialize_message, serialize_message
+from rns_testing import big_endian_joint_state
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from rns_ros.nodes.cdr import (
+    JointStateReader,
+    JointTrajectoryReader,
+    SerializedTemplate,
+    TemplateError,
+    clock_template,
+    joint_state_fields,
+    joint_state_template,
+    joint_trajectory_template,
+    odometry_fields,
+    odometry_template,
+    read_clock,
+    read_odometry,
+    split_stamp,
+    trajectory_fields,
+    wrench_template,
+)
+
+# names and frame ids of any length (the padding after them varies) and any character a ROS
+# string can hold (not NUL: rclpy cuts a string there)
+CHARACTERS = st.characters(blacklist_characters="\x00", blacklist_categories=("Cs",))
+NAMES = st.lists(st.text(CHARACTERS, min_size=1, max_size=12), min_size=1, max_size=9, unique=True)
+FRAMES = st.text(CHARACTERS, max_size=10)
+FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
+STAMPS = st.tuples(st.integers(-(2**31), 2**31 - 1), st.integers(0, 999_999_999))
+
+
+def _values(draw, size: int) -> np.ndarray:
+    return np.array(draw(st.lists(FINITE, min_size=size, max_size=size)), dtype=float)
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data(), names=NAMES, frame=FRAMES, effort=st.booleans(), stamp=STAMPS)
+def test_joint_state_template_reads_back_as_the_message(data, names, frame, effort, stamp):
+    template = joint_state_template(names, frame, effort=effort)
+    n = len(names)
+    values = {"position": _values(data.draw, n), "velocity": _values(data.draw, n)}
+    if effort:
+        values["effort"] = _values(data.draw, n)
+    msg = deserialize_message(template.serialize(values, stamp), JointState)
+    assert list(msg.name) == names
+    assert msg.header.frame_id == frame
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == stamp
+    for field in ("position", "velocity"):
+        assert np.array_equal(getattr(msg, field), values[field])
+    assert np.array_equal(msg.effort, values["effort"] if effort else [])
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), frame=FRAMES, child=FRAMES, stamp=STAMPS)
+def test_odometry_and_wrench_templates_read_back(data, frame, child, stamp):
+    pose, twist, wrench = _values(data.draw, 7), _values(data.draw, 6), _values(data.draw, 6)
+    msg = deserialize_message(
+        odometry_template(frame, child).serialize({"pose": pose, "twist": twist}, stamp),
+        Odometry,
+    )
+    assert (msg.header.frame_id, msg.child_frame_id) == (frame, child)
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == stamp
+    fields = odometry_fields(msg)
+    assert np.array_equal(fields.pose, pose)
+    assert np.array_equal(fields.twist, twist)
+    assert not np.any(msg.pose.covariance)
+    assert not np.any(msg.twist.covariance)
+    read = deserialize_message(
+        wrench_template(frame).serialize({"wrench": wrench}, stamp), WrenchStamped
+    )
+    w = read.wrench
+    got = [w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z]
+    assert np.array_equal(got, wrench)
+    assert read.header.frame_id == frame
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), names=NAMES, stamp=STAMPS)
+def test_trajectory_template_reads_back_as_one_point_acting_at_once(data, names, stamp):
+    n = len(names)
+    positions, velocities = _values(data.draw, n), _values(data.draw, n)
+    template = joint_trajectory_template(names)
+    msg = deserialize_message(
+        template.serialize({"positions": positions, "velocities": velocities}, stamp),
+        JointTrajectory,
+    )
+    assert list(msg.joint_names) == names
+    assert len(msg.points) == 1
+    point = msg.points[0]
+    assert np.array_equal(point.positions, positions)
+    assert np.array_equal(point.velocities, velocities)
+    assert len(point.accelerations) == 0
+    assert (point.time_from_start.sec, point.time_from_start.nanosec) == (0, 0)
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == stamp
+
+
+def test_clock_template_and_reader_round_trip():
+    for nanoseconds in (0, 1, 999_999_999, 1_000_000_000, 21_340_000_000, (2**31 - 1) * 10**9):
+        sec, nanosec = split_stamp(nanoseconds)
+        msg = deserialize_message(clock_template().serialize({}, (sec, nanosec)), Clock)
+        assert msg.clock.sec * 1_000_000_000 + msg.clock.nanosec == nanoseconds
+        assert read_clock(serialize_message(msg)) == (msg.clock.sec, msg.clock.nanosec)
+
+
+def test_slots_not_given_keep_their_values():
+    template = odometry_template("world", "base")
+    pose = np.arange(7.0)
+    template.serialize({"pose": pose, "twist": np.ones(6)}, (1, 2))
+    msg = deserialize_message(template.serialize({"twist": np.zeros(6)}), Odometry)
+    assert np.array_equal(odometry_fields(msg).pose, pose)
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (1, 2)
+
+
+def test_a_filler_that_changes_the_layout_or_skips_a_slot_is_refused():
+    def growing(msg, values):  # a name list that grows: the layout moves
+        msg.name = [*msg.name, "extra"]
+        msg.position = [float(x) for x in values["position"]]
+
+    with pytest.raises(TemplateError):
+        SerializedTemplate(JointState(name=["a"]), {"position": 1}, growing)
+
+    with pytest.raises(TemplateError, match="position"):
+        SerializedTemplate(JointState(name=["a"]), {"position": 1}, lambda msg, values: None)
+
+
+# --- readers --------------------------------------------------------------------------------
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    names=NAMES,
+    frame=FRAMES,
+    stamp=STAMPS,
+    lengths=st.tuples(*[st.integers(0, 9)] * 3),
+    data=st.data(),
+)
+def test_joint_state_reader_agrees_with_rclpy(names, frame, stamp, lengths, data):
+    msg = JointState(name=names)
+    msg.header.frame_id = frame
+    msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+    for field, size in zip(("position", "velocity", "effort"), lengths, strict=True):
+        setattr(msg, field, _values(data.draw, size).tolist())
+    fields = JointStateReader()(serialize_message(msg))
+    expected = joint_state_fields(msg)
+    assert fields.stamp == expected.stamp
+    assert fields.names == expected.names
+    for got, want in zip(fields[2:], expected[2:], strict=True):
+        assert np.array_equal(got, want)
+
+
+def test_joint_state_reader_reuses_a_repeated_name_list_and_sees_a_new_one():
+    reader = JointStateReader()
+    first = reader(serialize_message(JointState(name=["a", "b"], position=[1.0, 2.0])))
+    again = reader(serialize_message(JointState(name=["a", "b"], position=[3.0, 4.0])))
+    assert again.names is first.names
+    assert np.array_equal(again.position, [3.0, 4.0])
+    other = reader(serialize_message(JointState(name=["a", "c"], position=[5.0, 6.0])))
+    assert other.names == ("a", "c")
+    # a longer list that starts with the cached bytes is not mistaken for them
+    longer = reader(serialize_message(JointState(name=["a", "c", "d"])))
+    assert longer.names == ("a", "c", "d")
+
+
+@settings(max_examples=60, deadline=None)
+@given(names=NAMES, stamp=STAMPS, points=st.integers(0, 3), data=st.data())
+def test_trajectory_reader_agrees_with_rclpy(names, stamp, points, data):
+    msg = JointTrajectory(joint_names=names)
+    msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+    for _ in range(points):
+        sizes = data.draw(st.tuples(*[st.integers(0, 8)] * 4))
+        msg.points.append(
+            JointTrajectoryPoint(
+                **{
+                    field: _values(data.draw, size).tolist()
+                    for field, size in zip(
+                        ("positions", "velocities", "accelerations", "effort"), sizes, strict=True
+                    )
+                }
+            )
+        )
+    fields = JointTrajectoryReader()(serialize_message(msg))
+    expected = trajectory_fields(msg)
+    assert fields[:3] == expected[:3]
+    for got, want in zip(fields[3:], expected[3:], strict=True):
+        assert np.array_equal(got, want)
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), frame=FRAMES, child=FRAMES, stamp=STAMPS)
+def test_odometry_reader_agrees_with_rclpy(data, frame, child, stamp):
+    msg = Odometry(child_frame_id=child)
+    msg.header.frame_id = frame
+    msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
+    p.x, p.y, p.z, o.x, o.y, o.z, o.w = _values(data.draw, 7).tolist()
+    msg.pose.covariance = _values(data.draw, 36).tolist()
+    t = msg.twist.twist
+    t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z = _values(
+        data.draw, 6
+    ).tolist()
+    fields, expected = read_odometry(serialize_message(msg)), odometry_fields(msg)
+    assert fields.stamp == expected.stamp
+    assert np.array_equal(fields.pose, expected.pose)
+    assert np.array_equal(fields.twist, expected.twist)
+
+
+def test_readers_decline_big_endian_and_cut_messages_without_raising():
+    big = big_endian_joint_state(["a", "b"], [1.5, -2.0])
+    assert JointStateReader()(big) is None
+    # rclpy reads it: the nodes fall back to deserialize_message for such data
+    msg = deserialize_message(big, JointState)
+    assert list(msg.name) == ["a", "b"]
+    assert list(msg.position) == [1.5, -2.0]
+
+    whole = serialize_message(JointState(name=["a", "b"], position=[1.0, 2.0]))
+    odom = serialize_message(Odometry())
+    trajectory = serialize_message(
+        JointTrajectory(joint_names=["a"], points=[JointTrajectoryPoint(positions=[1.0])])
+    )
+    # rclpy's buffers may end in spare bytes: a cut there still reads, and must read right
+    full = JointStateReader()(whole)
+    for cut in range(len(whole)):
+        fields = JointStateReader()(whole[:cut])  # never an exception, never wrong values
+        assert fields is None or (
+            fields.names == full.names and np.array_equal(fields.position, full.position)
+        )
+    for cut in range(len(odom)):
+        fields = read_odometry(odom[:cut])
+        assert fields is None or np.array_equal(fields.pose, read_odometry(odom).pose)
+    full_trajectory = JointTrajectoryReader()(trajectory)
+    for cut in range(len(trajectory)):
+        fields = JointTrajectoryReader()(trajectory[:cut])
+        assert fields is None or np.array_equal(fields.positions, full_trajectory.positions)
+    assert read_clock(b"\x00\x01\x00\x00\x01") is None

@@ -262,13 +262,15 @@ def run_method(
                 f"{processes.exit_report()}"
             )
         task_wall = time.perf_counter() - task_started
+        # stopped before the recorded messages are read: off real time the stack would go on
+        # stepping as fast as it can meanwhile, competing with this process for the cores
+        processes.stop()  # the logger writes its summary line as it closes the recording
         # from just before the task: the robot is at rest until the first command, and a
         # recorder (the logger) matched a moment after the first state then has all of it
         data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
-        processes.stop()  # the logger writes its summary line as it closes the recording
         for line in processes.problems():  # a watchdog that stopped the arm, a rejection
             print(f"  {line}", flush=True)
         if logger is not None:

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
+from collections.abc import Callable
 
 import numpy as np
 from builtin_interfaces.msg import Time as TimeMsg
@@ -363,7 +364,7 @@ class ControllerNode(Node):
         self._last_state = ControllerState.WAITING_FOR_STATE
         # (level, message, key values) of the newest status; the message is built only for a
         # subscriber of ~/status and for /diagnostics (a status per tick costs ~0.2 ms)
-        self._last_status: tuple[int, str, dict] | None = None
+        self._last_status: tuple | None = None  # (level, message, state, values)
 
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._command_type = TwistStamped if params["twist_stamped"] else Twist
@@ -576,7 +577,7 @@ class ControllerNode(Node):
         step = self.controller.step(state, omega, hold)
         self._stopped = gate.stopped
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
-        if not (np.all(np.isfinite(velocities)) and np.all(np.isfinite(step.reference_positions))):
+        if not (np.isfinite(velocities).all() and np.isfinite(step.reference_positions).all()):
             self._hold_still(
                 ControllerState.INVALID_COMMAND,
                 "the law produced a non-finite joint velocity",
@@ -585,7 +586,7 @@ class ControllerNode(Node):
             return
         self._publish_output(step.reference_positions, velocities, planned, self._lead)
         state_now = self._state(step, gate, state)
-        self._publish_status(state_now, gate.detail, self._step_values(step, gate))
+        self._publish_status(state_now, gate.detail, lambda: self._step_values(step, gate))
 
     def _lead_instant(self, tick: Time) -> Time | None:
         """With ``output_lead``: the instant to serve for the /clock tick ``tick``, or None to
@@ -766,20 +767,25 @@ class ControllerNode(Node):
             "coupling_momentum": out.coupling_momentum if not gate.stopped else np.zeros(3),
         }
 
-    def _publish_status(self, state: ControllerState, detail: str, values: dict) -> None:
+    def _publish_status(
+        self, state: ControllerState, detail: str, values: dict | Callable[[], dict]
+    ) -> None:
+        """Keep the newest status (``values``: its key values, or what makes them, called only
+        when a message is built) and publish it to a ~/status subscriber."""
         level = STATE_LEVELS.get(state, DiagnosticStatus.WARN)
         message = f"{state.value}: {detail}" if detail else state.value
         if self._advisories:
             level = max(level, DiagnosticStatus.WARN, key=level_rank)
             message = "; ".join([message, *self._advisories])
         self._last_state = state
-        self._last_status = (level, message, {"state": state.value, **values})
+        self._last_status = (level, message, state, values)
         if self._status.get_subscription_count():
             self._status.publish(self._status_message())
 
     def _status_message(self) -> DiagnosticArray:
         """The newest status as a DiagnosticArray stamped now."""
-        level, message, values = self._last_status
+        level, message, state, values = self._last_status
+        values = {"state": state.value, **(values() if callable(values) else values)}
         status = DiagnosticStatus(
             level=level,
             name=f"{self.get_name()}: reactionless control",

@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 from builtin_interfaces.msg import Time as TimeMsg
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
@@ -317,6 +317,42 @@ def read_odometry(data: bytes) -> OdometryFields | None:
         return None
 
 
+class TwistFields(NamedTuple):
+    """The fields of a geometry_msgs/TwistStamped: ``stamp`` (sec, nanosec), ``frame_id``,
+    ``linear`` (3,) [m/s] and ``angular`` (3,) [rad/s] (read-only float64)."""
+
+    stamp: tuple[int, int]
+    frame_id: str
+    linear: np.ndarray
+    angular: np.ndarray
+
+
+def read_twist_stamped(data: bytes) -> TwistFields | None:
+    """A serialized geometry_msgs/TwistStamped's fields, or None (not little-endian CDR, or
+    cut)."""
+    cursor = _cursor(data)
+    if cursor is None:
+        return None
+    try:
+        stamp = cursor.stamp()
+        frame_id = cursor.string().decode("utf-8", "replace")
+        twist = cursor.doubles(6)
+    except (ValueError, IndexError, struct.error):
+        return None
+    return TwistFields(stamp, frame_id, twist[:3], twist[3:])
+
+
+def twist_stamped_fields(message: TwistStamped) -> TwistFields:
+    """The :class:`TwistFields` of a deserialized message."""
+    stamp, twist = message.header.stamp, message.twist
+    return TwistFields(
+        (stamp.sec, stamp.nanosec),
+        message.header.frame_id,
+        np.array(_xyz(twist.linear)),
+        np.array(_xyz(twist.angular)),
+    )
+
+
 def joint_state_fields(message: JointState) -> JointStateFields:
     """The :class:`JointStateFields` of a deserialized message."""
     stamp = message.header.stamp
@@ -427,6 +463,18 @@ def wrench_template(frame_id: str) -> SerializedTemplate:
     return SerializedTemplate(message, {"wrench": 6}, fill, _header_stamp)
 
 
+def twist_stamped_template(frame_id: str) -> SerializedTemplate:
+    """geometry_msgs/TwistStamped: slot ``twist`` (linear x y z, angular x y z)."""
+    message = TwistStamped()
+    message.header.frame_id = frame_id
+
+    def fill(msg, values) -> None:
+        _set_xyz(msg.twist.linear, values["twist"][:3])
+        _set_xyz(msg.twist.angular, values["twist"][3:])
+
+    return SerializedTemplate(message, {"twist": 6}, fill, _header_stamp)
+
+
 def clock_template() -> SerializedTemplate:
     """rosgraph_msgs/Clock: the stamp only."""
 
@@ -459,6 +507,7 @@ __all__ = [
     "SerializedTemplate",
     "TemplateError",
     "TrajectoryFields",
+    "TwistFields",
     "clock_template",
     "joint_state_fields",
     "joint_state_template",
@@ -467,7 +516,10 @@ __all__ = [
     "odometry_template",
     "read_clock",
     "read_odometry",
+    "read_twist_stamped",
     "split_stamp",
     "trajectory_fields",
+    "twist_stamped_fields",
+    "twist_stamped_template",
     "wrench_template",
 ]

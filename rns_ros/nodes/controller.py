@@ -80,7 +80,9 @@ from rns_ros.nodes.cdr import (
     joint_trajectory_template,
     odometry_fields,
     read_odometry,
+    read_twist_stamped,
     split_stamp,
+    twist_stamped_fields,
 )
 from rns_ros.nodes.clock_ticks import ClockTicks
 from rns_ros.nodes.parameters import (
@@ -369,7 +371,9 @@ class ControllerNode(Node):
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._command_type = TwistStamped if params["twist_stamped"] else Twist
         if params["twist_stamped"]:
-            self.create_subscription(TwistStamped, "cmd_twist", self._on_stamped, command_qos)
+            self.create_subscription(
+                TwistStamped, "cmd_twist", self._on_stamped, command_qos, raw=True
+            )
         else:
             self.create_subscription(Twist, "cmd_twist", self._on_twist, command_qos)
         # Only the newest state matters; best effort also matches reliable publishers. Taken
@@ -426,18 +430,22 @@ class ControllerNode(Node):
         )
 
     # --- inputs ---------------------------------------------------------------------------------
-    def _on_stamped(self, msg: TwistStamped) -> None:
-        self._take_twist(msg.twist, msg.header.frame_id)
+    def _on_stamped(self, data: bytes) -> None:
+        fields = read_twist_stamped(data)
+        if fields is None:  # not plain little-endian CDR: rclpy reads it
+            fields = twist_stamped_fields(deserialize_message(data, TwistStamped))
+        self._take_twist(fields.angular, fields.linear, fields.frame_id)
 
     def _on_twist(self, msg: Twist) -> None:
-        self._take_twist(msg, "")
+        a, v = msg.angular, msg.linear
+        self._take_twist([a.x, a.y, a.z], [v.x, v.y, v.z], "")
 
-    def _take_twist(self, twist: Twist, frame_id: str) -> None:
-        angular, linear = twist.angular, twist.linear
+    def _take_twist(self, angular, linear, frame_id: str) -> None:
+        """An operator twist: ``angular`` [rad/s] and ``linear`` [m/s] (3,) in ``frame_id``."""
         try:
             command = validate_twist(
-                [angular.x, angular.y, angular.z],
-                [linear.x, linear.y, linear.z],
+                angular,
+                linear,
                 frame_id,
                 self._frames,
                 self._params["max_angular_speed"],

@@ -50,6 +50,12 @@ from rns_ros.analysis.part2_scenarios import (
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
+from rns_ros.nodes.cdr import (
+    SerializedTemplate,
+    TemplateError,
+    split_stamp,
+    twist_stamped_template,
+)
 from rns_ros.nodes.clock_ticks import ClockTicks
 from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
 from rns_ros.nodes.runner import run_node
@@ -155,6 +161,11 @@ class OperatorNode(Node):
         # controller's subscription).
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._publisher = self.create_publisher(TwistStamped, "cmd_twist", qos)
+        try:  # pre-serialized (rns_ros.nodes.cdr): in lockstep a twist goes out every 20 ms
+            self._twist_template: SerializedTemplate | None = twist_stamped_template(self._frame_id)
+        except TemplateError as exc:
+            self.get_logger().warn(f"{exc}: publishing TwistStamped messages")
+            self._twist_template = None
         self._force_publisher = (
             self.create_publisher(WrenchStamped, "force_setpoint", qos)
             if self.motion_force
@@ -228,6 +239,12 @@ class OperatorNode(Node):
 
     def _publish(self, omega, stamp: Time) -> None:
         """One TwistStamped with angular velocity ``omega`` [rad/s], shape (3,)."""
+        if self._twist_template is not None:
+            values = {"twist": np.concatenate((np.zeros(3), omega))}
+            self._publisher.publish(
+                self._twist_template.serialize(values, split_stamp(stamp.nanoseconds))
+            )
+            return
         msg = TwistStamped()
         msg.header.stamp = stamp.to_msg()
         msg.header.frame_id = self._frame_id

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from nav_msgs.msg import Odometry
@@ -27,8 +27,11 @@ from rns_ros.nodes.cdr import (
     odometry_template,
     read_clock,
     read_odometry,
+    read_twist_stamped,
     split_stamp,
     trajectory_fields,
+    twist_stamped_fields,
+    twist_stamped_template,
     wrench_template,
 )
 
@@ -236,6 +239,10 @@ def test_readers_decline_big_endian_and_cut_messages_without_raising():
         assert fields is None or (
             fields.names == full.names and np.array_equal(fields.position, full.position)
         )
+    twist = serialize_message(TwistStamped())
+    for cut in range(len(twist)):
+        fields = read_twist_stamped(twist[:cut])
+        assert fields is None or not fields.angular.any()
     for cut in range(len(odom)):
         fields = read_odometry(odom[:cut])
         assert fields is None or np.array_equal(fields.pose, read_odometry(odom).pose)
@@ -244,3 +251,20 @@ def test_readers_decline_big_endian_and_cut_messages_without_raising():
         fields = JointTrajectoryReader()(trajectory[:cut])
         assert fields is None or np.array_equal(fields.positions, full_trajectory.positions)
     assert read_clock(b"\x00\x01\x00\x00\x01") is None
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), frame=FRAMES, stamp=STAMPS)
+def test_twist_template_and_reader_agree_with_rclpy(data, frame, stamp):
+    twist = _values(data.draw, 6)
+    serialized = twist_stamped_template(frame).serialize({"twist": twist}, stamp)
+    msg = deserialize_message(serialized, TwistStamped)
+    expected = twist_stamped_fields(msg)
+    assert expected.frame_id == frame
+    assert expected.stamp == stamp
+    assert np.array_equal(np.concatenate((expected.linear, expected.angular)), twist)
+    fields = read_twist_stamped(serialize_message(msg))
+    assert fields.stamp == expected.stamp
+    assert fields.frame_id == expected.frame_id
+    assert np.array_equal(fields.linear, expected.linear)
+    assert np.array_equal(fields.angular, expected.angular)

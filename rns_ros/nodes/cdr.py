@@ -1,4 +1,4 @@
-"""Publishing fixed-layout messages as pre-serialized CDR bytes.
+"""Fixed-layout messages as CDR bytes: pre-serialized publishing and raw reading.
 
 A state stream repeats one layout at every message: the simulator's ``joint_states`` always
 names the same joints, ``base_odom`` always carries the same frame ids, the controller's
@@ -63,8 +63,9 @@ class SerializedTemplate:
         stamp: ``stamp(message, sec, nanosec)`` sets the message's stamp, or None for none.
 
     Raises:
-        TemplateError: a slot or the stamp not found exactly once, or not contiguous, or the
-            bytes written through the template differ from a serialization of the same values.
+        TemplateError: a slot or the stamp not found exactly once, or not contiguous, or values
+            written through the template do not read back (through rclpy) as the message
+            filled with them.
     """
 
     def __init__(
@@ -143,7 +144,7 @@ def _find_once(data: bytes, pattern: bytes, label: str) -> int:
 # unexpected size): the caller then deserializes the message with rclpy.
 
 _U32, _STAMP = struct.Struct("<I"), struct.Struct("<iI")
-_LITTLE_ENDIAN_CDR = (b"\x00\x01", b"\x00\x03")  # CDR_LE, PL_CDR_LE
+_LITTLE_ENDIAN_CDR = b"\x00\x01"  # CDR_LE (plain CDR; parameter lists, XCDR2: rclpy reads them)
 
 
 class _Cursor:
@@ -211,7 +212,7 @@ class _Cursor:
 
 
 def _cursor(data: bytes) -> _Cursor | None:
-    return _Cursor(data) if len(data) >= 4 and data[:2] in _LITTLE_ENDIAN_CDR else None
+    return _Cursor(data) if len(data) >= 4 and data[:2] == _LITTLE_ENDIAN_CDR else None
 
 
 class JointStateFields(NamedTuple):

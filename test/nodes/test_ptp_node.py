@@ -302,11 +302,17 @@ def test_deploy_goal_runs_the_reactionless_deployment(ros):
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
     assert _values(stack.status.messages[-1])["phase"] == "deploy"
     assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
-    ros.spin_for(0.3)
     plan = stack.ptp.plan
     assert str(plan.method) == "deploy"
+
+    def error_deg() -> float:
+        return np.degrees(np.abs(np.array(stack.joints.messages[-1].position) - plan.goal)).max()
+
+    # the last references may still be on their way on a loaded machine (0.146 deg short
+    # 0.3 s after DONE once in CI): wait for the arm to settle on the goal, not a fixed time
+    ros.spin_until(lambda: error_deg() < 0.1, timeout=3.0)
+    assert error_deg() < 0.1
     final = np.array(stack.joints.messages[-1].position)
-    assert np.degrees(np.abs(final - plan.goal)).max() < 0.1
     assert np.degrees(abs(final[3] - START[3])) > 5.0  # theta_4 moved
     odom = stack.odom.messages
     dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)

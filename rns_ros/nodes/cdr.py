@@ -140,8 +140,8 @@ def _find_once(data: bytes, pattern: bytes, label: str) -> int:
 # A raw subscription hands over the serialized message; deserializing it into Python objects
 # cost 20 us (JointState) to 70 us (Odometry) per message, more than the callbacks using it.
 # The readers below take what the nodes use with numpy views. They read little-endian plain CDR
-# (what Fast DDS sends on this hardware) and return None for anything else (big-endian, an
-# unexpected size): the caller then deserializes the message with rclpy.
+# (what Fast DDS sends on this hardware); anything else (big-endian, parameter lists, an
+# unexpected size) their ``parse`` declines and rclpy deserializes.
 
 _U32, _STAMP = struct.Struct("<I"), struct.Struct("<iI")
 _LITTLE_ENDIAN_CDR = b"\x00\x01"  # CDR_LE (plain CDR; parameter lists, XCDR2: rclpy reads them)
@@ -233,13 +233,20 @@ class JointStateFields(NamedTuple):
 
 class JointStateReader:
     """Reads serialized sensor_msgs/JointState messages of one stream: ``reader(data)`` is
-    their :class:`JointStateFields`, or None (not little-endian CDR, or cut). It keeps the last
-    name list, which a stream repeats, to skip parsing it."""
+    their :class:`JointStateFields` (rclpy deserializes what :meth:`parse` declines). It keeps
+    the last name list, which a stream repeats, to skip parsing it."""
 
     def __init__(self) -> None:
         self._names: tuple[bytes, tuple[str, ...]] | None = None
 
-    def __call__(self, data: bytes) -> JointStateFields | None:
+    def __call__(self, data: bytes) -> JointStateFields:
+        fields = self.parse(data)
+        if fields is None:
+            return joint_state_fields(deserialize_message(data, JointState))
+        return fields
+
+    def parse(self, data: bytes) -> JointStateFields | None:
+        """The fields read from the bytes, or None (not plain little-endian CDR, or cut)."""
         cursor = _cursor(data)
         if cursor is None:
             return None
@@ -269,13 +276,20 @@ class TrajectoryFields(NamedTuple):
 
 class JointTrajectoryReader:
     """Reads serialized trajectory_msgs/JointTrajectory messages of one stream:
-    ``reader(data)`` is their :class:`TrajectoryFields`, or None (not little-endian CDR, or
-    cut). Like :class:`JointStateReader` it skips a repeated name list."""
+    ``reader(data)`` is their :class:`TrajectoryFields` (rclpy deserializes what :meth:`parse`
+    declines). Like :class:`JointStateReader` it skips a repeated name list."""
 
     def __init__(self) -> None:
         self._names: tuple[bytes, tuple[str, ...]] | None = None
 
-    def __call__(self, data: bytes) -> TrajectoryFields | None:
+    def __call__(self, data: bytes) -> TrajectoryFields:
+        fields = self.parse(data)
+        if fields is None:
+            return trajectory_fields(deserialize_message(data, JointTrajectory))
+        return fields
+
+    def parse(self, data: bytes) -> TrajectoryFields | None:
+        """The fields read from the bytes, or None (not plain little-endian CDR, or cut)."""
         cursor = _cursor(data)
         if cursor is None:
             return None
@@ -301,8 +315,16 @@ class OdometryFields(NamedTuple):
     twist: np.ndarray
 
 
-def read_odometry(data: bytes) -> OdometryFields | None:
-    """A serialized nav_msgs/Odometry's fields, or None (not little-endian CDR, or cut)."""
+def read_odometry(data: bytes) -> OdometryFields:
+    """A serialized nav_msgs/Odometry's fields (rclpy deserializes what
+    :func:`parse_odometry` declines)."""
+    fields = parse_odometry(data)
+    return odometry_fields(deserialize_message(data, Odometry)) if fields is None else fields
+
+
+def parse_odometry(data: bytes) -> OdometryFields | None:
+    """A serialized nav_msgs/Odometry's fields read from the bytes, or None (not plain
+    little-endian CDR, or cut)."""
     cursor = _cursor(data)
     if cursor is None:
         return None
@@ -328,9 +350,18 @@ class TwistFields(NamedTuple):
     angular: np.ndarray
 
 
-def read_twist_stamped(data: bytes) -> TwistFields | None:
-    """A serialized geometry_msgs/TwistStamped's fields, or None (not little-endian CDR, or
-    cut)."""
+def read_twist_stamped(data: bytes) -> TwistFields:
+    """A serialized geometry_msgs/TwistStamped's fields (rclpy deserializes what
+    :func:`parse_twist_stamped` declines)."""
+    fields = parse_twist_stamped(data)
+    if fields is None:
+        return twist_stamped_fields(deserialize_message(data, TwistStamped))
+    return fields
+
+
+def parse_twist_stamped(data: bytes) -> TwistFields | None:
+    """A serialized geometry_msgs/TwistStamped's fields read from the bytes, or None (not plain
+    little-endian CDR, or cut)."""
     cursor = _cursor(data)
     if cursor is None:
         return None
@@ -394,14 +425,6 @@ def odometry_fields(message: Odometry) -> OdometryFields:
 
 def _xyz(vector) -> tuple[float, float, float]:
     return vector.x, vector.y, vector.z
-
-
-def read_clock(data: bytes) -> tuple[int, int] | None:
-    """A serialized rosgraph_msgs/Clock's time (sec, nanosec), or None."""
-    cursor = _cursor(data)
-    if cursor is None or len(data) < 12:
-        return None
-    return cursor.stamp()
 
 
 def split_stamp(nanoseconds: int) -> tuple[int, int]:
@@ -515,7 +538,8 @@ __all__ = [
     "joint_trajectory_template",
     "odometry_fields",
     "odometry_template",
-    "read_clock",
+    "parse_odometry",
+    "parse_twist_stamped",
     "read_odometry",
     "read_twist_stamped",
     "split_stamp",

@@ -45,7 +45,6 @@ from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -76,13 +75,10 @@ from rns_ros.nodes.cdr import (
     JointStateReader,
     SerializedTemplate,
     TemplateError,
-    joint_state_fields,
     joint_trajectory_template,
-    odometry_fields,
     read_odometry,
     read_twist_stamped,
     split_stamp,
-    twist_stamped_fields,
 )
 from rns_ros.nodes.clock_ticks import ClockTicks
 from rns_ros.nodes.parameters import (
@@ -364,8 +360,8 @@ class ControllerNode(Node):
         self._advisories: list[str] = []
         self._warned_types: set[str] = set()
         self._last_state = ControllerState.WAITING_FOR_STATE
-        # (level, message, key values) of the newest status; the message is built only for a
-        # subscriber of ~/status and for /diagnostics (a status per tick costs ~0.2 ms)
+        # the newest status; the message (and its key values) is built only for a subscriber
+        # of ~/status and for /diagnostics (a status per tick costs ~0.2 ms)
         self._last_status: tuple | None = None  # (level, message, state, values)
 
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -432,8 +428,6 @@ class ControllerNode(Node):
     # --- inputs ---------------------------------------------------------------------------------
     def _on_stamped(self, data: bytes) -> None:
         fields = read_twist_stamped(data)
-        if fields is None:  # not plain little-endian CDR: rclpy reads it
-            fields = twist_stamped_fields(deserialize_message(data, TwistStamped))
         self._take_twist(fields.angular, fields.linear, fields.frame_id)
 
     def _on_twist(self, msg: Twist) -> None:
@@ -478,8 +472,6 @@ class ControllerNode(Node):
 
     def _on_joint_state(self, data: bytes) -> None:
         fields = self._joint_state_reader(data)
-        if fields is None:  # not plain little-endian CDR: rclpy reads it
-            fields = joint_state_fields(deserialize_message(data, JointState))
         try:
             command = match_named_command(
                 fields.names,
@@ -524,8 +516,6 @@ class ControllerNode(Node):
 
     def _on_odom(self, data: bytes) -> None:
         fields = read_odometry(data)
-        if fields is None:  # not plain little-endian CDR: rclpy reads it
-            fields = odometry_fields(deserialize_message(data, Odometry))
         pose = base_pose(fields.pose)
         if pose is not None:
             self._base_position, self._base_orientation = pose

@@ -84,7 +84,6 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
 from rclpy.time import Time
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
@@ -109,7 +108,6 @@ from rns_ros.nodes.cdr import (
     clock_template,
     joint_state_template,
     odometry_template,
-    trajectory_fields,
     wrench_template,
 )
 from rns_ros.nodes.parameters import (
@@ -533,8 +531,6 @@ class SimulatorNode(Node):
     # --- commands (executor thread) -----------------------------------------------------------
     def _on_trajectory(self, data: bytes) -> None:
         msg = self._trajectory_reader(data)
-        if msg is None:  # not plain little-endian CDR: rclpy reads it
-            msg = trajectory_fields(deserialize_message(data, JointTrajectory))
         if not msg.points:
             self._reject("JointTrajectory has no points")
             return

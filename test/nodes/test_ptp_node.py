@@ -49,8 +49,8 @@ def _values(msg: DiagnosticArray) -> dict[str, str]:
     return {kv.key: kv.value for kv in msg.status[0].values}
 
 
-def _stack(ros, **ptp_overrides):
-    _node(ros, SimulatorNode)
+def _stack(ros, simulator=None, **ptp_overrides):
+    _node(ros, SimulatorNode, **(simulator or {}))
     ptp = _node(ros, PtpNode, **ptp_overrides)
     probe = ros.probe()
     return SimpleNamespace(
@@ -296,23 +296,24 @@ def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
 def test_deploy_goal_runs_the_reactionless_deployment(ros):
     """name: ["deploy"] (positions ignored): the full deployment from the measured configuration;
     a reactionless fold, so the base stays (nearly) still over DDS."""
-    stack = _stack(ros, deploy_duration=2.0)
+    # lockstep on simulated time, as the 3-phase test below: in real time a loaded CI machine
+    # (one process, one GIL) turned delivery jitter into open-loop drift, 0.15 and 1.1 deg short
+    stack = _stack(
+        ros,
+        simulator={"publish_clock": True, "real_time_factor": 3.0, "lockstep_period": 0.01},
+        deploy_duration=2.0,
+        use_sim_time=True,
+    )
     _ready(ros, stack)
     stack.goal.publish(JointState(name=["deploy"]))
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
     assert _values(stack.status.messages[-1])["phase"] == "deploy"
-    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=30.0)
+    ros.spin_for(0.3)
     plan = stack.ptp.plan
     assert str(plan.method) == "deploy"
-
-    def error_deg() -> float:
-        return np.degrees(np.abs(np.array(stack.joints.messages[-1].position) - plan.goal)).max()
-
-    # the last references may still be on their way on a loaded machine (0.146 deg short
-    # 0.3 s after DONE once in CI): wait for the arm to settle on the goal, not a fixed time
-    ros.spin_until(lambda: error_deg() < 0.1, timeout=3.0)
-    assert error_deg() < 0.1
     final = np.array(stack.joints.messages[-1].position)
+    assert np.degrees(np.abs(final - plan.goal)).max() < 0.1
     assert np.degrees(abs(final[3] - START[3])) > 5.0  # theta_4 moved
     odom = stack.odom.messages
     dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)

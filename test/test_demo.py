@@ -89,9 +89,13 @@ def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
     once, a busy timer fires late), and under /clock the hold lasts simulated time. Advancing
     the reference by the nominal period left the camera 0.6-0.9 deg short of a 30 deg roll;
     with the actual hold times it is within 0.01 deg."""
+    # state_timeout 0.5 s: this test is about tracking, not the watchdog; the whole VM stalls
+    # for 0.1-0.33 s now and then (seen with the code of the previous stop too), and the 0.1 s
+    # default then stopped the arm mid-roll (camera 6.1 deg short in a fresh-clone CI run)
     _, rows = _short_demo(
         tmp_path, "--no-record", "--mode", "dynamic", "--methods", "dls",
         "--real-time-factor", str(real_time_factor),
+        "--ros-args", "-p", "state_timeout:=0.5",
     )  # fmt: skip
     row = rows["dls"]
     assert row["final_camera_error_deg"] < 0.1

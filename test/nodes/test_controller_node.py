@@ -487,10 +487,6 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
     with a fresh state, ramping up from rest."""
     stack = _stack(ros, state_timeout=0.1)  # the shipped default (checked below)
     probe, streams = stack.probe, stack.streams
-    received = []  # monotonic receipt times of joint_states at the probe [s]
-    probe.create_subscription(
-        JointState, "joint_states", lambda _msg: received.append(time.monotonic()), 50
-    )
     operator = Operator(probe)
     operator.angular, operator.active = (0.2, 0.0, 0.0), True
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
@@ -507,8 +503,9 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
 
     assert ros.spin_until(stopped, timeout=2.0)
     zero_at = time.monotonic()
-    # one state may still have been in flight when the node went; the loss starts after it
-    delay = zero_at - received[-1]
+    # the loss starts at the controller's own receipt of the last state (its watchdog's clock);
+    # the probe takes that state later on a loaded executor (11 ms later once in CI)
+    delay = zero_at - stack.controller._state_received
     print(f"last joint_states -> zero command: {delay:.3f} s (state_timeout 0.1 s)")
     assert next(spec.default for spec in PARAMETERS if spec.name == "state_timeout") == 0.1
     assert 0.09 <= delay < 0.1 + 0.01 + 0.1  # timeout + one period + executor slack

@@ -231,21 +231,19 @@ class JointStateFields(NamedTuple):
     effort: np.ndarray
 
 
-class JointStateReader:
-    """Reads serialized sensor_msgs/JointState messages of one stream: ``reader(data)`` is
-    their :class:`JointStateFields` (rclpy deserializes what :meth:`parse` declines). It keeps
+class _NamedStreamReader:
+    """Reads one stream of serialized messages that start with a header and a name list:
+    ``reader(data)`` is their fields (rclpy deserializes what :meth:`parse` declines). It keeps
     the last name list, which a stream repeats, to skip parsing it."""
 
     def __init__(self) -> None:
         self._names: tuple[bytes, tuple[str, ...]] | None = None
 
-    def __call__(self, data: bytes) -> JointStateFields:
+    def __call__(self, data: bytes):
         fields = self.parse(data)
-        if fields is None:
-            return joint_state_fields(deserialize_message(data, JointState))
-        return fields
+        return self._from_message(data) if fields is None else fields
 
-    def parse(self, data: bytes) -> JointStateFields | None:
+    def parse(self, data: bytes):
         """The fields read from the bytes, or None (not plain little-endian CDR, or cut)."""
         cursor = _cursor(data)
         if cursor is None:
@@ -254,10 +252,26 @@ class JointStateReader:
             stamp = cursor.stamp()
             cursor.string()  # frame_id
             self._names = cursor.strings(self._names)
-            position, velocity, effort = cursor.doubles(), cursor.doubles(), cursor.doubles()
+            return self._rest(cursor, stamp, self._names[1])
         except (ValueError, IndexError, struct.error):
             return None
-        return JointStateFields(stamp, self._names[1], position, velocity, effort)
+
+    def _rest(self, cursor: _Cursor, stamp: tuple[int, int], names: tuple[str, ...]):
+        raise NotImplementedError
+
+    def _from_message(self, data: bytes):
+        raise NotImplementedError
+
+
+class JointStateReader(_NamedStreamReader):
+    """:class:`JointStateFields` of serialized sensor_msgs/JointState messages of one stream."""
+
+    def _rest(self, cursor, stamp, names) -> JointStateFields:
+        position, velocity, effort = cursor.doubles(), cursor.doubles(), cursor.doubles()
+        return JointStateFields(stamp, names, position, velocity, effort)
+
+    def _from_message(self, data: bytes) -> JointStateFields:
+        return joint_state_fields(deserialize_message(data, JointState))
 
 
 class TrajectoryFields(NamedTuple):
@@ -274,35 +288,18 @@ class TrajectoryFields(NamedTuple):
     accelerations: np.ndarray
 
 
-class JointTrajectoryReader:
-    """Reads serialized trajectory_msgs/JointTrajectory messages of one stream:
-    ``reader(data)`` is their :class:`TrajectoryFields` (rclpy deserializes what :meth:`parse`
-    declines). Like :class:`JointStateReader` it skips a repeated name list."""
+class JointTrajectoryReader(_NamedStreamReader):
+    """:class:`TrajectoryFields` of serialized trajectory_msgs/JointTrajectory messages of one
+    stream."""
 
-    def __init__(self) -> None:
-        self._names: tuple[bytes, tuple[str, ...]] | None = None
-
-    def __call__(self, data: bytes) -> TrajectoryFields:
-        fields = self.parse(data)
-        if fields is None:
-            return trajectory_fields(deserialize_message(data, JointTrajectory))
-        return fields
-
-    def parse(self, data: bytes) -> TrajectoryFields | None:
-        """The fields read from the bytes, or None (not plain little-endian CDR, or cut)."""
-        cursor = _cursor(data)
-        if cursor is None:
-            return None
-        try:
-            stamp = cursor.stamp()
-            cursor.string()  # frame_id
-            self._names = cursor.strings(self._names)
-            points = cursor.u32()
-            first = (cursor.doubles(), cursor.doubles(), cursor.doubles()) if points else ()
-        except (ValueError, IndexError, struct.error):
-            return None
+    def _rest(self, cursor, stamp, names) -> TrajectoryFields:
+        points = cursor.u32()
+        first = (cursor.doubles(), cursor.doubles(), cursor.doubles()) if points else ()
         empty = np.empty(0)
-        return TrajectoryFields(stamp, self._names[1], points, *(first or (empty,) * 3))
+        return TrajectoryFields(stamp, names, points, *(first or (empty,) * 3))
+
+    def _from_message(self, data: bytes) -> TrajectoryFields:
+        return trajectory_fields(deserialize_message(data, JointTrajectory))
 
 
 class OdometryFields(NamedTuple):

@@ -10,6 +10,7 @@ import argparse
 import numpy as np
 import pytest
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -78,6 +79,7 @@ def test_a_killed_controller_makes_the_simulator_release_the_push():
     with ProcessStack(DOMAIN + 1) as processes, Harness(DOMAIN + 1) as stack:
         contact = stack.record(Float64MultiArray, "contact")
         joints = stack.record(JointState, "joint_states")
+        status = stack.record(DiagnosticArray, "rns_force_controller/status")
         controller = processes.start("rns_force_controller", {"use_sim_time": True})
         processes.start("rns_simulator", {"mode": "contact"})
         push = stack.probe().create_publisher(WrenchStamped, "force_setpoint", 10)
@@ -89,7 +91,13 @@ def test_a_killed_controller_makes_the_simulator_release_the_push():
             push.publish(msg)
             return len(contact) > 0 and abs(_contact(contact.latest())["normal_force"] - 10.0) < 0.5
 
-        assert stack.spin_until(pushing, timeout=30.0), "the controller never pushed 10 N"
+        assert stack.spin_until(pushing, timeout=30.0), (
+            "the controller never pushed 10 N",
+            [_contact(contact.latest()) if len(contact) else None],
+            [{v.key: v.value for v in s.values} for s in status.latest().status]
+            if len(status)
+            else None,
+        )
         controller.kill()
         stack.spin_for(LOCKSTEP_PATIENCE + 1.5)
         latest = _contact(contact.latest())

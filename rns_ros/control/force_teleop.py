@@ -145,6 +145,7 @@ class ForceControlState(Choice):
     HOLDING = "HOLDING"  # [OK] no fresh twist: decelerating to rest / holding the pose
     SPEED_LIMITED = "SPEED_LIMITED"  # [WARN] twist scaled to max_linear/angular_speed
     FORCE_SETPOINT_STALE = "FORCE_SETPOINT_STALE"  # [WARN] setpoint older than force_timeout
+    WRENCH_STALE = "WRENCH_STALE"  # [WARN] force task on, no fresh wrist wrench: push paused
     TORQUE_LIMITED = "TORQUE_LIMITED"  # [WARN] torque clipped to the URDF effort limits
     INVALID_COMMAND = "INVALID_COMMAND"  # [ERROR] the newest twist/setpoint was rejected
     WRENCH_LIMIT = "WRENCH_LIMIT"  # [ERROR, latched] measured wrench over the limit
@@ -215,6 +216,8 @@ class ForceControlSettings:
         max_force_setpoint [N]: f_des is clipped to [0, it].
         max_contact_force [N], max_contact_torque [N m]: measured wrench limits.
         contact_threshold [N]: in contact when the measured f >= it; contact_loss_time [s].
+        wrench_timeout [s]: the wrist wrench is fresh while its newest stamp is at most this
+            older than the state's; without a fresh one the force task pauses (WRENCH_STALE).
         nominal_period [s]: the first step's length.
 
     Raises:
@@ -245,6 +248,7 @@ class ForceControlSettings:
     max_contact_torque: float = 10.0
     contact_threshold: float = 1.0
     contact_loss_time: float = 0.02
+    wrench_timeout: float = 0.05
     nominal_period: float = 1e-3
     rows: tuple[int, ...] = field(init=False)
 
@@ -308,6 +312,7 @@ class ForceControlSettings:
             ("max_contact_torque", "[N m]", 1e-6, 1e5),
             ("contact_threshold", "[N]", 1e-6, 1e4),
             ("contact_loss_time", "[s]", 0.0, 10.0),
+            ("wrench_timeout", "[s]", 1e-4, 10.0),
             ("nominal_period", "[s]", 1e-6, MAX_STEP),
         ):
             setter(self, name, _number(getattr(self, name), name, unit, low, high))
@@ -964,6 +969,20 @@ class ForceTeleopController:
         n = self._normal
         f_meas = 0.0 if force_world is None else float(n @ force_world)
         f_des = self._force_desired(state, now, notes, flags)
+        if self._force_active and not self._wrench_fresh(latest, stamp):
+            # no force sensing: neither push blind (into free space, maybe) nor count the missing
+            # force as "no contact" (a sensor stream that starts late is not a lost contact)
+            flags.add(ForceControlState.WRENCH_STALE)
+            age = (
+                "none yet"
+                if latest is None
+                else f"newest {(stamp - latest.stamp) * 1e-9:.3f} s old"
+            )
+            notes.append(
+                f"no fresh wrist_wrench ({age}, wrench_timeout {settings.wrench_timeout:g} s): "
+                f"force task paused at f_des 0 N (setpoint {f_des:.3g} N)"
+            )
+            f_meas, f_des = 0.0, 0.0
         fault = self.monitor.update(stamp, self._force_active, f_des, f_meas, latest)
         if fault is not None and not self._holding:
             self._force_active = False  # the force task stops; pure motion control holds
@@ -1086,6 +1105,12 @@ class ForceTeleopController:
         self._task = (task, n.copy(), None if t is None else t.copy())
         return task
 
+    def _wrench_fresh(self, latest: WrenchSample | None, stamp: int) -> bool:
+        """The wrist wrench watchdog, by stamps: a sample at most wrench_timeout [s] older than
+        the state (stamp [ns])."""
+        timeout_ns = self.settings.wrench_timeout * 1e9
+        return latest is not None and stamp - latest.stamp <= timeout_ns
+
     def _force_loop(self, state, n, f_des, f_meas, exact, measurement, command) -> float:
         """f_ref of (6.34) (predicted or sampled); sets self._push = J_v^T n."""
         model = RigidContactModel.at(state, n)
@@ -1110,6 +1135,7 @@ class ForceTeleopController:
 _PRIORITY = (
     ForceControlState.INVALID_COMMAND,
     ForceControlState.TORQUE_LIMITED,
+    ForceControlState.WRENCH_STALE,
     ForceControlState.FORCE_SETPOINT_STALE,
     ForceControlState.SPEED_LIMITED,
     ForceControlState.HOLDING,

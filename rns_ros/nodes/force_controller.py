@@ -251,6 +251,15 @@ PARAMETERS = (
         0.0,
         10.0,
     ),
+    ParameterSpec(
+        "wrench_timeout",
+        0.05,
+        "No wrist_wrench stamped within this of the state while the force task is on: the push "
+        "pauses (f_des 0) and contact supervision waits, WRENCH_STALE",
+        "[s]",
+        1e-4,
+        10.0,
+    ),
     ParameterSpec("status_rate", 50.0, "Rate of ~/status", "[Hz]", 0.1, 1000.0),
 )
 
@@ -301,6 +310,7 @@ class ForceControllerNode(Node):
             max_contact_torque=params["max_contact_torque"],
             contact_threshold=params["contact_threshold"],
             contact_loss_time=params["contact_loss_time"],
+            wrench_timeout=params["wrench_timeout"],
         )
         self.controller = ForceTeleopController(self.robot, self.settings)
         # ros2_control convention: data[p[i]] is model joint i

@@ -321,6 +321,58 @@ def test_no_contact_stops_the_force_task_and_holds_the_pose(method):
     assert controller.fault is None
 
 
+def _wall_push(controller, sim, steps, *, wrench_from: int, wrench_until: int, dt=1e-3):
+    """10 N asked from the first step on, against ``sim`` (a wall); the wrist wrench reaches the
+    controller only for steps in [wrench_from, wrench_until). Returns the step results and the
+    simulator's contact force [N] after each step."""
+    outs, forces = [], []
+    for i in range(steps):
+        t = i * dt
+        controller.set_force(
+            ForceSetpoint(10.0 * sim.contact_normal(), ZERO, CommandFrame.WORLD, t)
+        )
+        if wrench_from <= i < wrench_until:
+            wrench = sim.wrist_wrench()
+            controller.add_wrench(WrenchSample(_ns(t), wrench[:3], wrench[3:]))
+        out = controller.step(JointMeasurement(_ns(t), sim.q, sim.v, sim.torque.copy()), t)
+        assert out.torque is not None
+        assert np.isfinite(out.torque).all()
+        outs.append(out)
+        sim.set_torque(out.torque)
+        sim.step()
+        forces.append(sim.contact_force)
+    return outs, np.array(forces)
+
+
+def test_a_late_wrench_stream_pauses_the_push_instead_of_stopping_on_no_contact():
+    """The wrist wrench stream starts 100 ms after the setpoint (over DDS its subscription can
+    match after joint_states'): the force task pauses (WRENCH_STALE, f_des 0: the arm does not
+    push blind) rather than latching NO_CONTACT after contact_loss_time (20 ms) on a force that
+    was never measured; once wrenches arrive the push builds to 10 N. The stream then stops: after
+    wrench_timeout (50 ms) the push pauses again, with no latched stop."""
+    setup = WallScenario(strokes=1).setup()
+    controller = ForceTeleopController(setup.robot, ForceControlSettings())
+    sim = ContactSimulator(setup.robot, setup.constraint, initial_q=setup.initial_q, dt=1e-3)
+    outs, force = _wall_push(controller, sim, 400, wrench_from=100, wrench_until=250)
+    states = [out.state for out in outs]
+    assert controller.fault is None
+    assert set(states[:100]) == {ForceControlState.WRENCH_STALE}
+    assert all(out.force_desired == 0.0 and out.force_reference <= 0.0 for out in outs[:100])
+    assert np.abs(force[:100]).max() < 1.0  # held at 0 N on the wall
+    assert "no fresh wrist_wrench (none yet" in outs[0].detail
+    assert ForceControlState.WRENCH_STALE not in states[100:250]
+    assert force[130:250] == pytest.approx(10.0, abs=0.1)
+    # the stream stops at step 250: the last sample stays fresh for wrench_timeout
+    assert ForceControlState.WRENCH_STALE not in states[250:299]
+    assert set(states[301:]) == {ForceControlState.WRENCH_STALE}
+    assert np.abs(force[330:]).max() < 1.0
+
+
+def test_wrench_timeout_is_validated():
+    with pytest.raises(ConfigError, match=r"wrench_timeout must be in \[0.0001, 10.0\] \[s\]"):
+        ForceControlSettings(wrench_timeout=0.0)
+
+
 def test_wrench_over_the_limit_stops_and_reset_clears_it():
     controller = ForceTeleopController(LWR, ForceControlSettings())
     _, outs = _free_arm(controller, START, 3, wrench=[0.0, 0.0, 41.0])

@@ -5,18 +5,18 @@ spins) can run a sim-time timer two or three times for one /clock message, advan
 schedule as many periods, and then skip the periods it ran ahead: in a fast lockstep run the
 operator's 50 Hz twists came 0, 30, 40 or 50 ms apart about 40 times in 20 s, and a controller
 stamping its outputs a period ahead missed ticks (a stalled lockstep period) or repeated them.
-:class:`ClockTicks` subscribes to /clock and calls back once for every period instant the clock
-passes, on a grid that starts at the first /clock it receives.
+:class:`ClockTicks` calls back once for every period instant the node's clock passes as /clock
+sets it, on a grid that starts at the first reading.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
+from rclpy.clock import JumpThreshold, TimeJump
+from rclpy.duration import Duration
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
-from rosgraph_msgs.msg import Clock
 
 from rns_ros.core.errors import ConfigError
 
@@ -45,32 +45,58 @@ def due_ticks(last: int | None, now: int, period: int, max_ticks: int = MAX_TICK
 
 
 class ClockTicks:
-    """Calls ``callback(instant)`` for each period instant /clock passes (see
-    :func:`due_ticks`); ``instant`` is a :class:`rclpy.time.Time` of the node's clock type.
+    """Calls ``callback(instant)`` for each period instant the node's sim-time clock passes (see
+    :func:`due_ticks`, at most ``max_ticks`` per reading); ``instant`` is a
+    :class:`rclpy.time.Time` of the node's clock type. For nodes with ``use_sim_time``.
 
-    The subscription is best effort with depth 10: it matches reliable and best-effort /clock
-    publishers, and a burst of messages is taken in order.
+    The ticks ride on the /clock subscription rclpy's TimeSource already has: a jump callback on
+    the node's clock runs after each /clock reading sets the time (any jump, forward or back).
+    A second /clock subscription of its own cost each node a delivery and a callback per period
+    and the simulator one more reader to publish to, which in a lockstep run as fast as possible
+    was several percent of its CPU. TimeSource keeps only the newest /clock (depth 1), so a node
+    that fell k periods behind reads one time k periods on: ``max_ticks`` says how many missed
+    instants it still serves in order (beyond that the grid restarts at the reading).
+
+    Keep the object: the jump callback lives as long as it does (:meth:`destroy` ends it).
     """
 
-    def __init__(self, node: Node, period: float, callback: Callable[[Time], None]) -> None:
+    def __init__(
+        self,
+        node: Node,
+        period: float,
+        callback: Callable[[Time], None],
+        max_ticks: int = MAX_TICKS,
+    ) -> None:
         if not period > 0.0:
             raise ConfigError(f"tick period must be > 0 s, got {period!r}")
+        if max_ticks < 1:
+            raise ConfigError(f"max_ticks must be >= 1, got {max_ticks!r}")
         self._period = round(period * 1e9)
+        self._max_ticks = max_ticks
         self._callback = callback
-        self._clock_type = node.get_clock().clock_type
+        self._clock = node.get_clock()
+        self._clock_type = self._clock.clock_type
         self.last: int | None = None  # newest instant served [ns]
-        node.create_subscription(
-            Clock,
-            "/clock",
-            self._on_clock,
-            QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT),
+        self._handle = self._clock.create_jump_callback(
+            JumpThreshold(
+                min_forward=Duration(nanoseconds=1),
+                min_backward=Duration(nanoseconds=-1),
+                on_clock_change=False,
+            ),
+            post_callback=self._on_time_set,
         )
 
-    def _on_clock(self, msg: Clock) -> None:
-        now = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
-        for instant in due_ticks(self.last, now, self._period):
+    def _on_time_set(self, _jump: TimeJump) -> None:
+        now = self._clock.now().nanoseconds
+        for instant in due_ticks(self.last, now, self._period, self._max_ticks):
             self.last = instant
             self._callback(Time(nanoseconds=instant, clock_type=self._clock_type))
+
+    def destroy(self) -> None:
+        """Stop ticking (unregisters the jump callback)."""
+        if self._handle is not None:
+            self._handle.unregister()
+            self._handle = None
 
 
 __all__ = ["MAX_TICKS", "ClockTicks", "due_ticks"]

@@ -411,7 +411,7 @@ class ControllerNode(Node):
             # output here acts the period after its tick, so a lockstep simulator needs every
             # one (a missed tick stalls it; a repeated one sends a period twice)
             self._timer = None
-            ClockTicks(self, self._period, self._serve)
+            self._ticks = ClockTicks(self, self._period, self._serve)
         else:
             self._timer = self.create_timer(self._period, self._on_tick)
         # wall clock: diagnostics and the graph check go on while sim time is paused

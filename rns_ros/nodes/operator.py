@@ -65,6 +65,9 @@ NODE_NAME = "rns_operator"
 #: Zero twists published when the node is stopped mid-profile, this far apart [s].
 FINAL_ZEROS = 3
 FINAL_ZERO_GAP = 0.02
+#: Under use_sim_time: missed sample instants played at once after the process waited for a core
+#: (the ten of a depth-10 /clock queue before; farther behind, the profile skips ahead).
+OPERATOR_CATCH_UP = 10
 SUMMARY = (
     "Scripted operator: plays a scenario file (config/scenarios/*.yaml) as TwistStamped on "
     "cmd_twist (and, kind: motion_force, WrenchStamped on force_setpoint)."
@@ -174,7 +177,11 @@ class OperatorNode(Node):
         if self.get_parameter("use_sim_time").value:
             # one sample per period instant of /clock: the events executor's sim-time timer
             # skipped and repeated samples in a fast lockstep run (rns_ros.nodes.clock_ticks)
-            ClockTicks(self, 1.0 / params["rate"], self._play)
+            # a process that waited for a core up to OPERATOR_CATCH_UP periods plays every sample
+            # it missed, in order (rclpy's /clock keeps only the newest reading)
+            self._ticks = ClockTicks(
+                self, 1.0 / params["rate"], self._play, max_ticks=OPERATOR_CATCH_UP
+            )
         else:
             self.create_timer(1.0 / params["rate"], self._on_tick)
         self.get_logger().info(

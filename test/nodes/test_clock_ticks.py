@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import pytest
+import rclpy
 from hypothesis import given
 from hypothesis import strategies as st
+from rclpy.parameter import Parameter
+from rosgraph_msgs.msg import Clock
 
 from rns_ros.core.errors import ConfigError
 from rns_ros.nodes.clock_ticks import MAX_TICKS, ClockTicks, due_ticks
+from rns_ros.nodes.simulator import stamp_from_seconds
 
 PERIOD = 10_000_000  # 10 ms [ns]
 
@@ -52,3 +56,48 @@ def test_a_clock_advancing_at_most_two_periods_per_reading_ticks_every_instant_o
 def test_the_period_must_be_positive():
     with pytest.raises(ConfigError, match="period"):
         ClockTicks(None, 0.0, print)
+
+
+def test_max_ticks_must_be_positive():
+    with pytest.raises(ConfigError, match="max_ticks"):
+        ClockTicks(None, 0.01, print, max_ticks=0)
+
+
+def test_a_sim_time_node_ticks_on_the_clock_its_time_source_sets(ros):
+    """In a node with use_sim_time, /clock (read by rclpy's TimeSource, no subscription of
+    ClockTicks' own) ticks the grid: one instant per period passed, none for a repeated reading,
+    missed ones up to max_ticks caught up in order, a clock set back restarts the grid; destroy
+    stops the ticks."""
+    node = ros.add(
+        rclpy.create_node(
+            "ticking",
+            context=ros.context,
+            parameter_overrides=[Parameter("use_sim_time", value=True)],
+        )
+    )
+    served: list[int] = []
+    ticks = ClockTicks(node, 0.01, lambda t: served.append(t.nanoseconds), max_ticks=3)
+    readers = node.get_subscriptions_info_by_topic("/clock")
+    assert [info.node_name for info in readers].count("ticking") == 1  # the TimeSource's only
+    clock = ros.probe().create_publisher(Clock, "/clock", 10)
+    seconds = [1.0, 1.01, 1.01, 1.015, 1.04, 1.1, 0.5]
+    expected = [
+        [1_000_000_000],
+        [1_010_000_000],
+        [],
+        [],
+        [1_020_000_000, 1_030_000_000, 1_040_000_000],
+        [1_100_000_000],  # six periods on: more than max_ticks, the grid restarts
+        [500_000_000],  # set back (a reset)
+    ]
+    ros.spin_until(lambda: node.count_publishers("/clock") > 0, timeout=5.0)
+    for t, due in zip(seconds, expected, strict=True):
+        before = len(served)
+        clock.publish(Clock(clock=stamp_from_seconds(t)))
+        now = round(t * 1e9)
+        assert ros.spin_until(lambda now=now: node.get_clock().now().nanoseconds == now, 5.0)
+        assert served[before:] == due, t
+    ticks.destroy()
+    clock.publish(Clock(clock=stamp_from_seconds(0.6)))
+    assert ros.spin_until(lambda: node.get_clock().now().nanoseconds == 600_000_000, 5.0)
+    assert served[-1] == 500_000_000

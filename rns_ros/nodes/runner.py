@@ -14,6 +14,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 from rclpy.utilities import remove_ros_args
 
 from rns_ros.cli import (
@@ -125,9 +126,12 @@ def run_node(
         # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.
         executor = EventsExecutor()
         executor.add_node(node)
+        # the executor dispatches in C++ for up to 0.1 s per call instead of returning to this
+        # loop after each event: ~10 % less CPU per received message here (53 vs 56-60 us)
+        never = Future()
         while rclpy.ok() and not stop.is_set():
             # bounded waits: the stop flag is read at least every 0.1 s
-            executor.spin_once(timeout_sec=0.1)
+            executor.spin_until_future_complete(never, timeout_sec=0.1)
     except RnsError as exc:
         print(f"{executable}: {one_line(exc)}", file=sys.stderr)
         return 2

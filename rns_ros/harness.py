@@ -50,6 +50,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
+from rclpy.task import Future
 
 from rns_ros.cli import DOMAIN_ID_RANGE, one_line
 from rns_ros.core.errors import ConfigError
@@ -219,6 +220,7 @@ class Harness:
             self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
         self._probe: Node | None = None
+        self._never = Future()  # spin_until_future_complete on it: spin for a time in one call
 
     # --- composition ----------------------------------------------------------------------------
     def add(
@@ -279,20 +281,37 @@ class Harness:
         return log
 
     # --- running --------------------------------------------------------------------------------
-    def spin_until(self, condition: Callable[[], bool], timeout: float = 10.0) -> bool:
-        """Spin until ``condition()`` holds or ``timeout`` [s] of wall time passes; returns it."""
+    def spin_until(
+        self,
+        condition: Callable[[], bool],
+        timeout: float = 10.0,
+        *,
+        check_every: float | None = None,
+    ) -> bool:
+        """Spin until ``condition()`` holds or ``timeout`` [s] of wall time passes; returns it.
+
+        ``check_every`` [s]: test the condition at most this often (callbacks run in between)
+        instead of after every callback, for a costly condition while messages stream in fast.
+        """
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if condition():
                 return True
-            self.executor.spin_once(timeout_sec=0.01)
+            if check_every is None:
+                self.executor.spin_once(timeout_sec=0.01)
+            else:
+                self._spin(min(check_every, max(deadline - time.monotonic(), 0.0)))
         return bool(condition())
 
     def spin_for(self, duration: float) -> None:
         """Spin for ``duration`` [s] of wall time."""
         deadline = time.monotonic() + duration
-        while time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.01)
+        while (left := deadline - time.monotonic()) > 0.0:
+            self._spin(left)
+
+    def _spin(self, duration: float) -> None:
+        """Run callbacks for ``duration`` [s] in one executor call (not one per callback)."""
+        self.executor.spin_until_future_complete(self._never, timeout_sec=duration)
 
     def close(self) -> None:
         """Destroy every node (newest first), stop the executor and the Context."""

@@ -219,3 +219,26 @@ def test_a_raw_recording_over_dds_matches_the_deserializing_one():
     ]
     assert len(matched) >= 15
     assert all(m == common[m.header.stamp.sec * 10**9 + m.header.stamp.nanosec] for m in matched)
+
+
+@pytest.mark.parametrize("executor", ["events", "single_threaded"])
+def test_spin_until_checks_a_costly_condition_at_most_every_check_every(executor):
+    """With check_every the callbacks run in between the checks (a 2 ms timer fires many times
+    per check); without it the condition is tested after each callback; spin_for runs them for
+    its duration."""
+    with Harness(DOMAIN, executor=executor) as stack:
+        fired = []
+        stack.probe().create_timer(0.002, lambda: fired.append(time.monotonic()))
+        checks = []
+        assert not stack.spin_until(lambda: checks.append(1) and False, 0.3, check_every=0.1)
+        assert len(checks) <= 5  # 0.3 s / 0.1 s, plus the first and the last
+        assert len(fired) > 3 * len(checks)
+        fired.clear()
+        checks.clear()
+        assert not stack.spin_until(lambda: checks.append(1) and False, 0.1)
+        assert len(checks) >= len(fired) > 10
+        fired.clear()
+        start = time.monotonic()
+        stack.spin_for(0.2)
+        assert time.monotonic() - start == pytest.approx(0.2, abs=0.05)
+        assert len(fired) > 20

@@ -107,3 +107,8 @@ def big_endian_joint_state(names: list[str], position: list[float]) -> bytes:
         align(4)
         out.extend(struct.pack(">I", 0))
     return bytes(out)
+
+
+def status_values(msg) -> dict[str, str]:
+    """The key values of a diagnostic_msgs/DiagnosticArray's first status."""
+    return {kv.key: kv.value for kv in msg.status[0].values}

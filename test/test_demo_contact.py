@@ -12,6 +12,7 @@ import pytest
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
+from rns_testing import status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -93,10 +94,8 @@ def test_a_killed_controller_makes_the_simulator_release_the_push():
 
         assert stack.spin_until(pushing, timeout=30.0), (
             "the controller never pushed 10 N",
-            [_contact(contact.latest()) if len(contact) else None],
-            [{v.key: v.value for v in s.values} for s in status.latest().status]
-            if len(status)
-            else None,
+            _contact(contact.latest()) if len(contact) else None,
+            status_values(status.latest()) if len(status) else None,
         )
         controller.kill()
         stack.spin_for(LOCKSTEP_PATIENCE + 1.5)

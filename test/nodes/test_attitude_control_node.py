@@ -14,7 +14,7 @@ from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import Recorder
+from rns_testing import Recorder, status_values
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.core.integration import attitude_deviation
@@ -30,10 +30,6 @@ PERIOD = 4.0  # s, of the wrist motion
 def _node(ros, cls, **overrides):
     parameters = [Parameter(name, value=value) for name, value in overrides.items()]
     return ros.add(cls(context=ros.context, parameter_overrides=parameters))
-
-
-def _values(msg: DiagnosticArray) -> dict[str, str]:
-    return {kv.key: kv.value for kv in msg.status[0].values}
 
 
 def _rotation(msg: Odometry) -> np.ndarray:
@@ -63,7 +59,7 @@ def _drive(ros, speed: float, attitude: bool) -> tuple[float, list[dict]]:
     def ready():
         if not attitude:
             return bool(odom.messages)
-        return bool(status.messages) and _values(status.messages[-1])["state"] == "OK"
+        return bool(status.messages) and status_values(status.messages[-1])["state"] == "OK"
 
     assert ros.spin_until(ready, timeout=10.0)
     clock = probe.get_clock()
@@ -77,7 +73,7 @@ def _drive(ros, speed: float, attitude: bool) -> tuple[float, list[dict]]:
     ros.spin_for(0.3)
     first = _rotation(odom.messages[0])
     deviation = max(attitude_deviation(first, _rotation(m)) for m in odom.messages)
-    return math.degrees(deviation), [_values(m) for m in status.messages]
+    return math.degrees(deviation), [status_values(m) for m in status.messages]
 
 
 def test_wheels_hold_the_base_during_a_slow_wrist_motion(ros):
@@ -118,7 +114,7 @@ def test_stale_state_turns_the_wheels_off(ros):
     ros.nodes.remove(simulator)
     simulator.destroy_node()
     assert ros.spin_until(
-        lambda: _values(status.messages[-1])["state"] == "STALE_STATE", timeout=5.0
+        lambda: status_values(status.messages[-1])["state"] == "STALE_STATE", timeout=5.0
     )
     last = torque.messages[-1].vector
     assert (last.x, last.y, last.z) == (0.0, 0.0, 0.0)

@@ -20,7 +20,7 @@ from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import Recorder, big_endian_joint_state
+from rns_testing import Recorder, big_endian_joint_state, status_values
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -39,10 +39,6 @@ COMMAND_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 def _node(ros, cls, **overrides):
     parameters = [Parameter(name, value=value) for name, value in overrides.items()]
     return ros.add(cls(context=ros.context, parameter_overrides=parameters))
-
-
-def _state(msg: DiagnosticArray) -> dict[str, str]:
-    return {kv.key: kv.value for kv in msg.status[0].values}
 
 
 class Operator:
@@ -94,7 +90,7 @@ def stack(ros):
 
 def _latest_state(streams):
     messages = streams["status"].messages
-    return _state(messages[-1])["state"] if messages else None
+    return status_values(messages[-1])["state"] if messages else None
 
 
 def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
@@ -112,9 +108,9 @@ def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
     print(f"joint_references at {rate:.1f} Hz")
     assert rate == pytest.approx(100.0, rel=0.15)
     assert np.abs(references[-1].points[0].velocities).max() > 0.01
-    states = {_state(m)["state"] for m in streams["status"].messages[-100:]}
+    states = {status_values(m)["state"] for m in streams["status"].messages[-100:]}
     assert states == {"OK"}
-    status = _state(streams["status"].messages[-1])
+    status = status_values(streams["status"].messages[-1])
     assert float(status["sigma_min"]) > 0.2
     assert np.abs([float(x) for x in status["coupling_momentum"].split()]).max() < 1e-9
     # the camera turned about world x at ~0.1 rad/s; the base did not turn
@@ -132,7 +128,7 @@ def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
     assert ros.spin_until(lambda: _latest_state(streams) == "IDLE", timeout=3.0)
     stopped_after = time.monotonic() - released
     assert stopped_after < 0.5 + 0.1 + 0.3  # timeout 0.5 s, ramp 0.1 rad/s / 1 rad/s^2
-    seen = [_state(m)["state"] for m in streams["status"].messages]
+    seen = [status_values(m)["state"] for m in streams["status"].messages]
     assert "DECELERATING" in seen
     ros.spin_for(0.1)
     assert np.all(np.array(streams["references"].messages[-1].points[0].velocities) == 0.0)
@@ -174,7 +170,7 @@ def test_unknown_frame_is_rejected_and_excessive_speed_is_scaled_to_the_limit(ro
     # achieved: omega_ref - unachieved is the limited command, about camera y
     operator.angular = (0.0, 0.05, 0.0)
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=3.0)
-    assert _state(streams["status"].messages[-1])["frame"] == "camera"
+    assert status_values(streams["status"].messages[-1])["frame"] == "camera"
 
 
 def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros):
@@ -189,7 +185,7 @@ def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros
     assert references.messages == []
     assert status.messages
     waiting = status.messages[-1].status[0]
-    assert _state(status.messages[-1])["state"] == "WAITING_FOR_STATE"
+    assert status_values(status.messages[-1])["state"] == "WAITING_FOR_STATE"
     assert waiting.level == waiting.WARN
     assert "waiting for /joint_states" in waiting.message
     entry = diagnostics.messages[-1].status[0]
@@ -205,11 +201,11 @@ def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros
     )
     operator = Operator(probe, stamped=False)
     operator.angular, operator.active = (0.0, 0.0, 0.05), True
-    assert ros.spin_until(lambda: _state(status.messages[-1])["state"] == "OK")
-    assert _state(status.messages[-1])["frame"] == "world"
+    assert ros.spin_until(lambda: status_values(status.messages[-1])["state"] == "OK")
+    assert status_values(status.messages[-1])["frame"] == "world"
     point = references.messages[-1].points[0]
     assert np.allclose(point.positions, start, atol=0.05)
-    assert float(_state(status.messages[-1])["sigma_min"]) > 0.0
+    assert float(status_values(status.messages[-1])["sigma_min"]) > 0.0
 
 
 def test_teleop_twist_keyboard_style_input_turns_the_camera_about_its_own_z(ros):
@@ -229,12 +225,14 @@ def test_teleop_twist_keyboard_style_input_turns_the_camera_about_its_own_z(ros)
     yaw = Twist()
     yaw.angular.z = 0.1
     probe.create_timer(0.05, lambda: keyboard.publish(yaw))  # key auto-repeat, ~20 Hz
-    assert ros.spin_until(lambda: status.messages and _state(status.messages[-1])["state"] == "OK")
+    assert ros.spin_until(
+        lambda: status.messages and status_values(status.messages[-1])["state"] == "OK"
+    )
     camera_0 = _camera_rotation(controller)
     t0 = time.monotonic()
     ros.spin_for(1.0)
     elapsed = time.monotonic() - t0
-    assert _state(status.messages[-1])["frame"] == "camera"
+    assert status_values(status.messages[-1])["frame"] == "camera"
     # the rotation between the two camera attitudes, in the first camera's axes
     turned = pin.log3(camera_0.T @ _camera_rotation(controller))
     assert turned[2] == pytest.approx(0.1 * elapsed, rel=0.3)
@@ -322,7 +320,7 @@ def test_linear_part_is_reported_as_unachieved(ros, stack):
         return _latest_state(streams) == "OK"
 
     assert ros.spin_until(fresh_ok, timeout=10.0)
-    values = _state(streams["status"].messages[-1])
+    values = status_values(streams["status"].messages[-1])
     assert [float(x) for x in values["unachieved_linear"].split()] == [0.25, 0.0, 0.0]
 
 
@@ -512,7 +510,7 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
     ros.spin_for(0.5)
     assert np.all(_speeds(streams["references"].messages[-40:]) == 0.0)
     status = streams["status"].messages[-1].status[0]
-    assert _state(streams["status"].messages[-1])["state"] == "STALE_STATE"
+    assert status_values(streams["status"].messages[-1])["state"] == "STALE_STATE"
     assert status.level == status.ERROR
     assert "joint_states" in status.message
 
@@ -520,7 +518,7 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
     _node(ros, SimulatorNode)
     resumed = len(streams["references"].messages)
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
-    seen = [_state(m)["state"] for m in streams["status"].messages[-200:]]
+    seen = [status_values(m)["state"] for m in streams["status"].messages[-200:]]
     assert "RAMPING" in seen
     speeds = _speeds(streams["references"].messages[resumed:])
     first = speeds[np.flatnonzero(speeds > 0.0)[0]]
@@ -548,7 +546,8 @@ def test_a_jump_in_the_measured_state_restarts_the_reference_and_ramps(ros):
     operator = Operator(probe)
     operator.angular, operator.active = (0.1, 0.0, 0.0), True
     assert ros.spin_until(
-        lambda: status.messages and _state(status.messages[-1])["state"] == "OK", timeout=10.0
+        lambda: status.messages and status_values(status.messages[-1])["state"] == "OK",
+        timeout=10.0,
     )
     ros.spin_for(0.3)
     # a static measurement while the reference integrates: it stands ahead of the angles
@@ -567,7 +566,7 @@ def test_a_jump_in_the_measured_state_restarts_the_reference_and_ramps(ros):
     )
     assert restart <= 5  # a few ticks: the probe publishes the jumped state on its own timer
     assert _speeds(after[restart : restart + 1])[0] < 0.5 * _speeds(references.messages[:count])[-1]
-    states = [_state(m)["state"] for m in status.messages[-20:]]
+    states = [status_values(m)["state"] for m in status.messages[-20:]]
     assert "RAMPING" in states
 
 
@@ -670,9 +669,10 @@ def test_base_is_a_frame_id_and_the_base_link_a_default_frame(ros):
     operator = Operator(probe)
     operator.angular, operator.frame, operator.active = (0.0, 0.0, 0.05), "base", True
     assert ros.spin_until(
-        lambda: status.messages and _state(status.messages[-1])["state"] == "OK", timeout=10.0
+        lambda: status.messages and status_values(status.messages[-1])["state"] == "OK",
+        timeout=10.0,
     )
-    assert _state(status.messages[-1])["frame"] == "base"
+    assert status_values(status.messages[-1])["frame"] == "base"
 
 
 PLAIN_TWIST_PUBLISHER = """
@@ -782,7 +782,7 @@ def test_a_joint_limit_stop_is_logged_once_naming_the_joint(ros):
     operator.active = True
 
     def limited():
-        return status.messages and _state(status.messages[-1])["state"] == "JOINT_LIMIT"
+        return status.messages and status_values(status.messages[-1])["state"] == "JOINT_LIMIT"
 
     for sign in (1.0, -1.0):  # one direction about world z drives joint_7 into its limit
         operator.angular = (0.0, 0.0, 0.1 * sign)
@@ -790,7 +790,7 @@ def test_a_joint_limit_stop_is_logged_once_naming_the_joint(ros):
             break
     assert limited()
     ros.spin_for(0.5)  # fifty more ticks at the limit
-    assert _state(status.messages[-1])["state"] == "JOINT_LIMIT"
+    assert status_values(status.messages[-1])["state"] == "JOINT_LIMIT"
     warnings = [
         m.msg for m in logs.messages if m.name == "rns_controller" and "JOINT_LIMIT" in m.msg
     ]
@@ -813,7 +813,8 @@ def test_reset_in_dynamic_mode_leaves_the_arm_within_its_limits_and_the_base_sti
     operator = Operator(probe)
     operator.angular, operator.active = (0.2, 0.0, 0.0), True
     assert ros.spin_until(
-        lambda: status.messages and _state(status.messages[-1])["state"] == "OK", timeout=10.0
+        lambda: status.messages and status_values(status.messages[-1])["state"] == "OK",
+        timeout=10.0,
     )
     ros.spin_for(1.5)  # the arm has moved ~0.3 rad of camera roll away from the initial state
     reset = probe.create_client(Trigger, "rns_simulator/reset")

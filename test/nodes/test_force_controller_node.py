@@ -15,6 +15,7 @@ import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rns_testing import status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -35,10 +36,6 @@ START = np.radians([20.0, -20.0, 0.0, 100.0, 0.0, 10.0, 0.0])
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 ZERO7 = np.zeros(7)
 PUSH = np.array([0.0, 0.0, 3.0])  # the wrench the EE exerts, EE axes [N]
-
-
-def _values(msg: DiagnosticArray) -> dict[str, str]:
-    return {kv.key: kv.value for kv in msg.status[0].values}
 
 
 class _Arm:
@@ -108,7 +105,7 @@ def test_one_finite_torque_per_state_in_joints_order(ros):
     assert row["force_measured"] == pytest.approx(3.0)
     assert row["force_active"] == 0.0  # no force setpoint yet
     assert ros.spin_until(lambda: len(status) > 0, 2.0)
-    values = _values(status.latest())
+    values = status_values(status.latest())
     assert values["state"] == "HOLDING"
     assert values["contact"] == "in_contact"
     assert float(values["step_time_us"]) > 0.0
@@ -122,7 +119,9 @@ def test_stale_state_publishes_one_zero_torque(ros):
         ros.spin_for(0.01)
     assert ros.spin_until(lambda: len(torques) >= 5, 5.0)
     assert ros.spin_until(
-        lambda: status.latest() is not None and _values(status.latest())["state"] == "STALE_STATE",
+        lambda: (
+            status.latest() is not None and status_values(status.latest())["state"] == "STALE_STATE"
+        ),
         5.0,
     )
     ros.spin_for(0.3)

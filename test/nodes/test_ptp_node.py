@@ -13,7 +13,7 @@ import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
-from rns_testing import Recorder
+from rns_testing import Recorder, status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
@@ -45,10 +45,6 @@ def _node(ros, cls, **overrides):
     return ros.add(cls(context=ros.context, parameter_overrides=parameters))
 
 
-def _values(msg: DiagnosticArray) -> dict[str, str]:
-    return {kv.key: kv.value for kv in msg.status[0].values}
-
-
 def _stack(ros, simulator=None, **ptp_overrides):
     _node(ros, SimulatorNode, **(simulator or {}))
     ptp = _node(ros, PtpNode, **ptp_overrides)
@@ -65,7 +61,7 @@ def _stack(ros, simulator=None, **ptp_overrides):
 
 
 def _state(stack) -> str | None:
-    return _values(stack.status.messages[-1])["state"] if stack.status.messages else None
+    return status_values(stack.status.messages[-1])["state"] if stack.status.messages else None
 
 
 def _ready(ros, stack):
@@ -87,7 +83,7 @@ def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
     goal = START + SMALL_STEP
     _send(stack, reversed(JOINTS), goal[::-1])  # matched by name, not by order
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
-    moving = _values(stack.status.messages[-1])
+    moving = status_values(stack.status.messages[-1])
     assert moving["method"] == "joint_space"
     assert moving["phase"] == "JS-C"
     assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
@@ -98,7 +94,7 @@ def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
     assert error < 0.1
     # stopped: one zero-velocity message at the end, nothing after it
     assert np.all(np.array(stack.references.messages[-1].points[0].velocities) == 0.0)
-    seen = [_values(m)["state"] for m in stack.status.messages]
+    seen = [status_values(m)["state"] for m in stack.status.messages]
     assert seen[-1] == "DONE"
     odom = stack.odom.messages
     dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
@@ -157,14 +153,14 @@ def test_three_phase_goal_is_reached_under_sim_time(ros):
 
     def done():
         if stack.status.messages:
-            phases.add(_values(stack.status.messages[-1]).get("phase"))
+            phases.add(status_values(stack.status.messages[-1]).get("phase"))
         return _state(stack) == "DONE"
 
     # lockstep keeps 3x only while the machine can: allow real time plus a margin
     assert ros.spin_until(done, timeout=plan.duration + 30.0), _state(stack)
     assert {"I", "II", "III"} <= phases
     ros.spin_for(0.3)
-    values = _values(stack.status.messages[-1])
+    values = status_values(stack.status.messages[-1])
     assert "I: -180 deg" in values["fold_reached"]
     final = np.array(stack.joints.messages[-1].position)
     error = np.degrees(np.abs(final - goal)).max()
@@ -215,7 +211,7 @@ def test_cancel_decelerates_to_rest_without_a_velocity_jump(ros):
     assert future.result().success
     assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=3.0)
     ros.spin_for(0.2)
-    seen = [_values(m)["state"] for m in stack.status.messages]
+    seen = [status_values(m)["state"] for m in stack.status.messages]
     assert "CANCELLING" in seen
     velocities = np.array([m.points[0].velocities for m in stack.references.messages])
     assert np.all(velocities[-1] == 0.0)
@@ -263,7 +259,7 @@ def test_status_before_the_first_joint_state(ros):
     status = Recorder(probe, DiagnosticArray, "rns_ptp/status")
     diagnostics = Recorder(probe, DiagnosticArray, "/diagnostics")
     assert ros.spin_until(lambda: diagnostics.messages, timeout=3.0)
-    values = _values(status.messages[-1])
+    values = status_values(status.messages[-1])
     assert values["state"] == "WAITING_FOR_STATE"
     assert values["method"] == "three_phase"
     entry = diagnostics.messages[-1].status[0]
@@ -307,7 +303,7 @@ def test_deploy_goal_runs_the_reactionless_deployment(ros):
     _ready(ros, stack)
     stack.goal.publish(JointState(name=["deploy"]))
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
-    assert _values(stack.status.messages[-1])["phase"] == "deploy"
+    assert status_values(stack.status.messages[-1])["phase"] == "deploy"
     assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=30.0)
     ros.spin_for(0.3)
     plan = stack.ptp.plan
@@ -317,7 +313,7 @@ def test_deploy_goal_runs_the_reactionless_deployment(ros):
     assert np.degrees(abs(final[3] - START[3])) > 5.0  # theta_4 moved
     odom = stack.odom.messages
     dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
-    values = _values(stack.status.messages[-1])
+    values = status_values(stack.status.messages[-1])
     print(f"deploy: base deviation {math.degrees(dds):.2e} deg, fold {values['fold_reached']}")
     assert math.degrees(dds) < 0.01
     assert values["fold_reached"].startswith("deploy: ")
@@ -347,7 +343,7 @@ def test_velocity_interface_and_a_planned_closed_loop_method(ros):
     _send(stack, JOINTS, START + SMALL_STEP)
     assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=20.0)
     ros.spin_for(0.3)
-    seen = {_values(m)["state"] for m in stack.status.messages}
+    seen = {status_values(m)["state"] for m in stack.status.messages}
     assert {"PLANNING", "MOVING", "DONE"} <= seen
     assert np.all(np.array(stack.velocities.messages[-1].data) == 0.0)
     final = np.array(stack.joints.messages[-1].position)
@@ -381,7 +377,7 @@ def test_a_new_goal_replaces_the_current_plan(ros):
     assert np.degrees(np.abs(final - goal)).max() < 0.1
     assert np.degrees(abs(final[3] - START[3])) > 1.0
     # the first motion was cut short: no DONE before the second goal's
-    states = [_values(m)["state"] for m in stack.status.messages]
+    states = [status_values(m)["state"] for m in stack.status.messages]
     assert states.count("DONE") == len(states) - states.index("DONE")
 
 

@@ -61,6 +61,7 @@ from rns_ros.control.inspection import ControlGains
 from rns_ros.control.prediction import OutputTiming, PublishedOutput, predict_joint_angles
 from rns_ros.control.teleop import (
     CommandGate,
+    CommandSchedule,
     ControllerState,
     GateOutput,
     TwistCommand,
@@ -75,6 +76,7 @@ from rns_ros.nodes.cdr import (
     JointStateReader,
     SerializedTemplate,
     TemplateError,
+    TwistFields,
     joint_trajectory_template,
     read_odometry,
     read_twist_stamped,
@@ -101,6 +103,10 @@ SUMMARY = "Reactionless camera-pointing controller: twist in, joint references o
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
+#: cmd_twist under await_commands: best effort (matches the operators' best-effort publishers),
+#: deep enough for the samples an operator publishes ahead (each is one instant of its
+#: profile: none may be overwritten before it is read).
+SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: output_lead: a state stamped up to this far [s] past a tick is caught up to (the simulation
 #: ran ahead of the ticks); farther is another clock, not a lag.
 MAX_LEAD_CATCH_UP = 1.0
@@ -293,6 +299,16 @@ PARAMETERS = (
         0.1,
         read_only=False,
     ),
+    ParameterSpec(
+        "await_commands",
+        False,
+        "Under use_sim_time with output_lead (lockstep side by side): serve each tick with the "
+        "newest cmd_twist stamped at or before it, waiting (up to command_timeout, wall clock) "
+        "for one stamped at or after it unless the newest is a stop after motion; twists "
+        "stamped ahead (rns_operator's lead) wait for their stamps. The simulation then waits "
+        "for the operator too, so a run's figures do not depend on when its process got a "
+        "core (rns_demo off real time). Needs twist_stamped. false: a twist acts on receipt",
+    ),
     ParameterSpec("twist_stamped", True, "cmd_twist is TwistStamped (false: plain Twist)"),
     ParameterSpec(
         "default_twist_frame",
@@ -342,6 +358,23 @@ class ControllerNode(Node):
         # latency is a wall-clock matter; in simulated time, commands served between ticks
         # would land while a lockstep simulator runs on (base 4e-4 instead of 2e-6 deg)
         self._immediate = params["immediate_reaction"] and not self._sim_time
+        # await_commands: twists wait for their stamps, ticks for the twist in force
+        self._schedule: CommandSchedule[TwistFields] | None = None
+        self._deferred: deque[Time] = deque()  # ticks waiting for it, oldest first
+        self._await_timer = None
+        if params["await_commands"]:
+            if self._lead and params["twist_stamped"]:
+                self._schedule = CommandSchedule()
+                self._await_timer = self.create_timer(
+                    params["command_timeout"],
+                    self._on_await_timeout,
+                    clock=Clock(clock_type=ClockType.STEADY_TIME),
+                )
+                self._await_timer.cancel()
+            else:
+                self.get_logger().warn(
+                    "await_commands needs use_sim_time, output_lead > 0 and twist_stamped: not used"
+                )
         self._last_tick = -np.inf  # monotonic time of the last tick [s]
         # output_lead (_lead_instant): a late tick is served at the state's instant, and the
         # ticks up to the last instant served (_last_tick_clock) are skipped
@@ -367,8 +400,10 @@ class ControllerNode(Node):
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._command_type = TwistStamped if params["twist_stamped"] else Twist
         if params["twist_stamped"]:
+            # awaited twists are each one sample: none may be overwritten before it is read
+            twist_qos = command_qos if self._schedule is None else SCHEDULED_COMMAND_QOS
             self.create_subscription(
-                TwistStamped, "cmd_twist", self._on_stamped, command_qos, raw=True
+                TwistStamped, "cmd_twist", self._on_stamped, twist_qos, raw=True
             )
         else:
             self.create_subscription(Twist, "cmd_twist", self._on_twist, command_qos)
@@ -428,7 +463,45 @@ class ControllerNode(Node):
     # --- inputs ---------------------------------------------------------------------------------
     def _on_stamped(self, data: bytes) -> None:
         fields = read_twist_stamped(data)
-        self._take_twist(fields.angular, fields.linear, fields.frame_id)
+        if self._schedule is None:
+            self._take_twist(fields.angular, fields.linear, fields.frame_id)
+            return
+        sec, nanosec = fields.stamp
+        moving = any(value != 0.0 for value in (*fields.angular, *fields.linear))
+        self._schedule.push(sec * 1_000_000_000 + nanosec, fields, moving)
+        self._serve_deferred()
+
+    def _release_twists(self, tick: Time) -> None:
+        """await_commands: the twists stamped up to ``tick`` reach the gate, in order."""
+        for fields in self._schedule.due(tick.nanoseconds):
+            self._take_twist(fields.angular, fields.linear, fields.frame_id)
+
+    def _serve_deferred(self) -> None:
+        """await_commands: serve the waiting ticks whose twist in force is known now."""
+        while self._deferred and self._schedule.ready(self._deferred[0].nanoseconds):
+            tick = self._deferred.popleft()
+            self._release_twists(tick)
+            self._serve_tick(tick)
+        if self._deferred:
+            self._await_timer.reset()  # the operator is alive: command_timeout from now
+        else:
+            self._await_timer.cancel()
+
+    def _on_await_timeout(self) -> None:
+        """await_commands: no twist came for command_timeout (wall clock) while ticks waited:
+        the operator stalled or its stream ended on a motion; serve with the newest (the gate
+        then stops a stale command as usual)."""
+        self._await_timer.cancel()
+        if not self._deferred:
+            return
+        self.get_logger().warn(
+            f"no cmd_twist stamped at or after {self._deferred[0].nanoseconds * 1e-9:.3f} s "
+            f"within command_timeout ({self._params['command_timeout']} s wall clock): served "
+            "with the newest one",
+            throttle_duration_sec=1.0,
+        )
+        self._schedule.release_all()
+        self._serve_deferred()
 
     def _on_twist(self, msg: Twist) -> None:
         a, v = msg.angular, msg.linear
@@ -539,6 +612,17 @@ class ControllerNode(Node):
             tick = self._lead_instant(tick)
             if tick is None:
                 return
+        if self._schedule is not None:
+            if self._deferred or not self._schedule.ready(tick.nanoseconds):
+                if not self._deferred:
+                    self._await_timer.reset()
+                self._deferred.append(tick)  # served when its twist in force arrives
+                return
+            self._release_twists(tick)
+        self._serve_tick(tick)
+
+    def _serve_tick(self, tick: Time) -> None:
+        """The control period of ``tick`` once its inputs are there: state, law, output."""
         now = time.monotonic()
         # the previous output was held this long on the plant's clock (sim time under /clock)
         clock_now = tick.nanoseconds * 1e-9

@@ -574,15 +574,21 @@ class _LockstepPlant:
     """A controller with output_lead one period (use_sim_time) and, published by hand, what a
     lockstep rns_simulator gives it: a state (joints at rest, base pose) and /clock."""
 
-    def __init__(self, ros) -> None:
+    def __init__(self, ros, **parameters) -> None:
         _node(
             ros,
             ControllerNode,
             use_sim_time=True,
             output_lead=0.01,
             state_timeout=TEST_STATE_TIMEOUT,
+            **parameters,
         )
         probe = ros.probe()
+        self._twists = probe.create_publisher(
+            TwistStamped,
+            "cmd_twist",
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT),
+        )
         self.ros = ros
         self.references = Recorder(probe, JointTrajectory, "joint_references", qos=100)
         self._states = probe.create_publisher(JointState, "joint_states", 10)
@@ -606,9 +612,23 @@ class _LockstepPlant:
         self._clock.publish(Clock(clock=stamp_from_seconds(t)))
         self.ros.spin_until(lambda: len(self.references.messages) > count, timeout=0.3)
 
+    def twist(self, t: float, omega_x: float) -> None:
+        """An operator sample stamped ``t`` [s]: omega_x [rad/s] about world x; waits (briefly)
+        for the output it may release."""
+        count = len(self.references.messages)
+        msg = TwistStamped()
+        msg.header.stamp, msg.header.frame_id = stamp_from_seconds(t), "world"
+        msg.twist.angular.x = omega_x
+        self._twists.publish(msg)
+        self.ros.spin_until(lambda: len(self.references.messages) > count, timeout=0.3)
+
     def output_stamps(self) -> list[float]:
         self.ros.spin_for(0.1)
         return [round(_seconds(m.header.stamp), 9) for m in self.references.messages]
+
+    def output_speeds(self) -> list[float]:
+        """max |theta_dot| of each output so far [rad/s]."""
+        return [float(np.abs(m.points[0].velocities).max()) for m in self.references.messages]
 
 
 def test_with_output_lead_each_clock_period_gets_one_output_stamped_a_period_later(ros):
@@ -653,6 +673,56 @@ def test_with_output_lead_a_reset_clock_is_not_caught_up_to_the_old_state(ros):
     plant.state(0.01)
     plant.clock(0.01)
     assert plant.output_stamps() == [0.51, 0.01, 0.02]
+
+
+def test_with_await_commands_a_tick_waits_for_the_twist_in_force_and_twists_wait_for_stamps(ros):
+    """await_commands (lockstep: the operator publishes its samples ahead, stamped with their
+    instants): a tick is served once a twist stamped at or after it came, so the twist in force
+    there is known, and with the newest twist stamped at or before it. A moving twist, or a
+    rest before any motion (a profile's start), is waited on; without the wait the tick at 1.03
+    would run on with the twist of 1.02 whenever the operator's sample came late."""
+    plant = _LockstepPlant(ros, await_commands=True, command_timeout=5.0)
+    plant.state(1.0)
+    plant.clock(1.0)  # no operator yet: nothing to wait for (output for 1.01)
+    plant.twist(1.0, 0.0)  # the profile starts at rest
+    plant.state(1.01)
+    plant.clock(1.01)  # waits: what follows the rest is not known yet
+    assert plant.output_stamps() == [1.01]
+    plant.twist(1.02, 0.5)  # published ahead: the rest is still in force at 1.01
+    assert plant.output_stamps() == [1.01, 1.02]
+    assert plant.output_speeds()[-1] == 0.0
+    plant.state(1.02)
+    plant.clock(1.02)  # the twist of 1.02 is in force: the arm starts (ramping from rest)
+    assert plant.output_stamps() == [1.01, 1.02, 1.03]
+    assert plant.output_speeds()[-1] > 0.0
+    plant.state(1.03)
+    plant.clock(1.03)  # waits for the operator's next sample
+    assert plant.output_stamps() == [1.01, 1.02, 1.03]
+    plant.twist(1.04, 0.5)
+    assert plant.output_stamps() == [1.01, 1.02, 1.03, 1.04]
+
+
+def test_with_await_commands_a_stalled_operator_is_waited_for_command_timeout_at_most(ros):
+    """A moving twist whose successor never comes (the operator stalled or died mid-profile):
+    the tick waits command_timeout of wall time, then is served with the newest twist (the
+    gate then stops a stale command as usual). A stop after motion is not waited on."""
+    plant = _LockstepPlant(ros, await_commands=True, command_timeout=0.6)
+    plant.state(1.0)
+    plant.twist(1.0, 0.5)
+    plant.clock(1.0)
+    plant.state(1.01)
+    start = time.monotonic()
+    plant.clock(1.01)  # waits...
+    plant.ros.spin_until(lambda: len(plant.references.messages) == 2, timeout=3.0)
+    waited = time.monotonic() - start
+    assert plant.output_stamps() == [1.01, 1.02]
+    assert 0.5 <= waited <= 2.0
+    plant.twist(1.02, 0.0)  # a stop after motion: the stream may end here
+    plant.state(1.02)
+    plant.clock(1.02)
+    plant.state(1.03)
+    plant.clock(1.03)
+    assert plant.output_stamps() == [1.01, 1.02, 1.03, 1.04]
 
 
 def _seconds(stamp) -> float:

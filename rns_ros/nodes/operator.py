@@ -120,6 +120,18 @@ PARAMETERS = (
         0.0,
         3600.0,
     ),
+    ParameterSpec(
+        "lead",
+        0.0,
+        "Under use_sim_time, twist scenarios: publish each sample this long before its instant, "
+        "stamped with the instant, for a controller that serves twists at their stamps "
+        "(rns_controller's await_commands, lockstep: rns_demo off real time uses two samples). "
+        "From the start condition on, samples before the profile are zeros, and the profile "
+        "starts at least this long after it. 0, wall clock or motion_force: at the instant",
+        "[s]",
+        0.0,
+        1.0,
+    ),
     WORLD_FRAME,
     ParameterSpec("base_frame", "base_link", "frame_id used for base-frame scenarios"),
     ParameterSpec("camera_frame", "camera", "frame_id used for camera-frame scenarios"),
@@ -151,6 +163,11 @@ class OperatorNode(Node):
                 TwistFrame.CAMERA: params["camera_frame"],
             }[self.scenario.frame]
         self._start_delay = params["start_delay"]
+        sim_time = bool(self.get_parameter("use_sim_time").value)
+        # [ns] each sample goes out ahead of its instant (lockstep with an awaiting controller)
+        self._lead = round(params["lead"] * 1e9) if sim_time and not self.motion_force else 0
+        if params["lead"] and not self._lead:
+            self.get_logger().warn("lead is for twist scenarios under use_sim_time only: not used")
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
         self._min_subscribers = params["min_subscribers"]
@@ -174,7 +191,7 @@ class OperatorNode(Node):
             if self.motion_force
             else None
         )
-        if self.get_parameter("use_sim_time").value:
+        if sim_time:
             # one sample per period instant of /clock: the events executor's sim-time timer
             # skipped and repeated samples in a fast lockstep run (rns_ros.nodes.clock_ticks)
             # a process that waited for a core up to OPERATOR_CATCH_UP periods plays every sample
@@ -215,14 +232,20 @@ class OperatorNode(Node):
         self._play(self.get_clock().now())
 
     def _play(self, now: Time) -> None:
-        """The sample of the instant ``now`` (node clock), published stamped ``now``."""
+        """The sample of the instant ``now`` (node clock) plus ``lead``, published stamped with
+        that instant."""
         if self._start is None:
             if self._wait and not self._subscribed():
                 return
-            self._start = now + Duration(nanoseconds=round(self._start_delay * 1e9))
-            self.get_logger().info(f"starting in {self._start_delay} s")
+            delay = max(self._start_delay, self._lead * 1e-9)
+            self._start = now + Duration(nanoseconds=round(delay * 1e9))
+            self.get_logger().info(f"starting in {delay} s")
+        if self._lead:
+            now = now + Duration(nanoseconds=self._lead)
         t = (now - self._start).nanoseconds * 1e-9
         if t < 0.0:
+            if self._lead:  # a stream from the start condition on: a controller awaits it
+                self._publish((0.0, 0.0, 0.0), now)
             return
         end = self.scenario.duration + self._zero_duration
         if t > end:

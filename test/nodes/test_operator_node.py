@@ -8,11 +8,13 @@ import pytest
 import yaml
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
+from rosgraph_msgs.msg import Clock
 
 from rns_ros.analysis.part2_scenarios import load_motion_force_scenario, operator_sample
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
 from rns_ros.nodes.operator import FINAL_ZEROS, PARAMETERS, OperatorNode
+from rns_ros.nodes.simulator import stamp_from_seconds
 from rns_ros.resources import config_dir
 
 SCENARIO = {
@@ -49,6 +51,52 @@ def test_operator_publishes_the_profile_then_zeros(ros, tmp_path):
     count = len(twists)
     ros.spin_for(0.2)
     assert len(twists) == count  # then silence
+
+
+@pytest.mark.parametrize(("start_delay", "profile_start"), [(0.0, 10.04), (0.1, 10.1)])
+def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
+    ros, tmp_path, start_delay, profile_start
+):
+    """Under use_sim_time with ``lead`` (lockstep with an awaiting controller): at each /clock
+    instant c the operator publishes the sample of c + lead, stamped c + lead. The stream
+    starts at the start condition (/clock 10.0 here), with zeros until the profile starts
+    max(start_delay, lead) later, and the samples integrate to the scenario's angle."""
+    path = tmp_path / "short.yaml"
+    path.write_text(yaml.safe_dump(SCENARIO))
+    twists = ros.record(TwistStamped, "cmd_twist")
+    operator = ros.add(
+        OperatorNode,
+        {
+            "scenario": str(path),
+            "start_delay": start_delay,
+            "zero_duration": 0.2,
+            "lead": 0.04,
+            "use_sim_time": True,
+        },
+    )
+    clock = ros.probe().create_publisher(Clock, "/clock", 10)
+    ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
+    ahead = []
+    for k in range(100):  # 50 Hz for 2 s of simulated time
+        t = 10.0 + 0.02 * k
+        count = len(twists)
+        clock.publish(Clock(clock=stamp_from_seconds(t)))
+        if ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0):
+            ahead.append(twists.stamps()[-1] - t)
+        if operator.finished:
+            break
+    assert operator.finished
+    assert ahead == pytest.approx([0.04] * len(ahead), abs=1e-9)  # each sample a lead early
+    rates = twists.array(_angular)
+    stamps = twists.stamps()
+    assert stamps[0] == pytest.approx(10.04, abs=1e-9)  # from the start condition on
+    first = int(np.argmax(np.abs(stamps - profile_start) < 1e-9))
+    assert stamps[first] == pytest.approx(profile_start, abs=1e-9)
+    assert np.all(rates[:first] == 0.0)  # zeros before the profile
+    # then the profile from its start (piecewise: the first segment's rate)
+    assert rates[first, 1] == pytest.approx(np.deg2rad(15.0) / 0.4, rel=1e-9)
+    angle = np.sum(rates[:-1, 1] * np.diff(stamps))
+    assert angle == pytest.approx(np.deg2rad(30.0), rel=0.05)
 
 
 #: A slow roll that is still playing when the tests below stop the operator.

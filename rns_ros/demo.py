@@ -183,6 +183,12 @@ def run_method(
             # each output acts one period after its tick: the simulator computes that period
             # while the controller computes the next output (two cores side by side)
             controller_parameters["output_lead"] = 1.0 / args.rate
+            # and serves each tick with the operator's sample in force then, published ahead
+            # (OPERATOR_LEAD): a run's figures do not depend on when the operator got a core
+            controller_parameters["await_commands"] = True
+    operator_timing = dict(timing)
+    if sim_time and args.output_lead:
+        operator_timing.update(lead=OPERATOR_LEAD, start_delay=OPERATOR_LEAD)
     controller_parameters.update(
         {key: value for key, value in scenario.controller.items() if key != "method"}
     )
@@ -197,7 +203,6 @@ def run_method(
             "joints": stack.record(JointState, "joint_states", raw=True),
             "odom": stack.record(Odometry, "base_odom", raw=True),
             "momentum": stack.record(WrenchStamped, "momentum", raw=True),
-            "commands": stack.record(TwistStamped, "cmd_twist", raw=True),
             "energy": stack.record(Float64MultiArray, "energy", raw=True),
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status", raw=True),
         }
@@ -205,6 +210,26 @@ def run_method(
             processes, method, args, sim_time=sim_time, ros_args=ros_args
         )
         processes.start("rns_controller", controller_parameters, ros_args=ros_args)
+        # the operator imports while the others do (started after the robot ran, its start-up
+        # competed for the cores with a lockstep run stepping the idle robot as fast as it can:
+        # ~2 s of each run's wall time); its profile still waits for this process's cmd_twist
+        # subscription, made below once the robot state is recorded
+        listeners = [NODE_NAMES["controller"]]
+        if logger is not None:
+            listeners.append(NODE_NAMES["logger"])
+        processes.start(
+            "rns_operator",
+            {
+                "scenario": str(scenario_file),
+                "start_delay": 0.5,
+                "zero_duration": OPERATOR_ZERO_DURATION,
+                # the controller, this process and the logger: the first to be matched no
+                # longer starts the profile while the controller still misses it
+                "min_subscribers": len(listeners) + 1,
+                **operator_timing,
+            },
+            ros_args=ros_args,
+        )
         if wheels:
             processes.start(
                 "rns_attitude_control", {"rate": args.rate, **timing}, ros_args=ros_args
@@ -224,26 +249,11 @@ def run_method(
             },
             ros_args=ros_args,
         )
-        # the operator only once the robot runs and this process and the logger record it
-        # (a recorder matched late would miss the start of the task)
-        listeners = [NODE_NAMES["controller"]]
-        if logger is not None:
-            listeners.append(NODE_NAMES["logger"])
+        # the task only once the robot runs and this process and the logger record it (a
+        # recorder matched late would miss the start of the task): the operator counts this
+        # subscription among its min_subscribers
         _wait_for_start(stack, processes, streams, listeners, method)
-        processes.start(
-            "rns_operator",
-            {
-                "scenario": str(scenario_file),
-                "start_delay": 0.5,
-                "zero_duration": OPERATOR_ZERO_DURATION,
-                # the controller, this process and the logger: the first to be matched no
-                # longer starts the profile while the controller still misses it
-                "min_subscribers": len(listeners) + 1,
-                **timing,
-            },
-            ros_args=ros_args,
-        )
-        commands = streams["commands"]
+        commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
         budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
         if not stack.spin_until(lambda: len(commands) > 0, timeout=budget):
             raise RnsError(f"{method}: no cmd_twist from rns_operator within {budget:.0f} s")
@@ -269,6 +279,11 @@ def run_method(
         # from just before the task: the robot is at rest until the first command, and a
         # recorder (the logger) matched a moment after the first state then has all of it
         data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
+        if data["times"][0] > task:  # the deviations count from the first recorded state
+            raise RnsError(
+                f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
+                f"the first command at {task:.3f} s"
+            )
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
@@ -315,6 +330,9 @@ CLOSED = "recording closed"
 TASK_MARGIN = 0.2
 #: Zero twists the operator sends after the profile [s] (its default).
 OPERATOR_ZERO_DURATION = 1.0
+#: Lockstep side by side: the operator publishes each sample this far ahead [s] (two of its
+#: 50 Hz samples), the first at the start condition (its start_delay).
+OPERATOR_LEAD = 0.04
 #: Node names of the processes whose subscriptions the demo waits for.
 NODE_NAMES = {"controller": "rns_controller", "logger": "rns_rerun_logger"}
 

@@ -39,8 +39,9 @@ lockstep   `rns_demo --real-time-factor 0` over DDS (satellite observation, dls,
            RK4 step per period, as the demo's simulator). Goal of issue 18: >= 10x real time
            side by side. The machine's speed varies here from hour to hour, and the four-process
            lockstep slows down more than the one-process loop (task / in-process loop was ~3 in
-           a quiet hour, 5-6 in a slower one): the loop's time says which hour it was. Opt-in
-           (~20 s a run).
+           a quiet hour, 5-6 in a slower one): the loop's time says which hour it was. "run"
+           is the whole side-by-side demo run (node start-up, task, figures): what a batch of
+           runs costs per run. Opt-in (~20 s a run).
 cratio     the chapter-5 C_ratio map of the 7-DoF positioning subchain (Fig. 5.3,
            rns_ros.analysis.energy_maps): points per second on a 1/10 sub-grid (5 of the 50
            theta_2 values, 625000 points) in one process and on --workers local processes
@@ -608,9 +609,10 @@ def lockstep(runs: int, domain_id: int) -> None:
     print(
         f"{'run':>4}{'in-process [s]':>16}"
         + "".join(f"{name + ' [s]':>20}{'x real time':>13}{'/ in-process':>14}" for name in modes)
-        + f"{'base dev [deg]':>16}"
+        + f"{'base dev [deg]':>16}{'run [s]':>10}"
     )
     factors = {name: [] for name in modes}
+    runs_wall = []
     for k in range(runs):
         start = time.perf_counter()
         run_scenario(robot, scenario, method="dls", simulation_step=0.01, settle=settle)
@@ -621,16 +623,22 @@ def lockstep(runs: int, domain_id: int) -> None:
             row = demo.run_method("dls", args, scenario_file)
             factors[name].append(simulated / row.task_wall_s)
             deviations.append(row.figures.max_base_deviation_deg)
+            if name == "side by side":
+                runs_wall.append(row.wall_time_s)
             line += (
                 f"{row.task_wall_s:>20.2f}{simulated / row.task_wall_s:>13.1f}"
                 f"{row.task_wall_s / reference:>14.2f}"
             )
-        print(line + f"{max(deviations):>16.2e}", flush=True)
+        print(line + f"{max(deviations):>16.2e}{runs_wall[-1]:>10.1f}", flush=True)
     for name, values in factors.items():
         print(
             f"{name}: x real time min / median / max {min(values):.1f} / "
             f"{float(np.median(values)):.1f} / {max(values):.1f}"
         )
+    print(
+        "whole run side by side (start-up, task, figures) [s] min / median / max "
+        f"{min(runs_wall):.1f} / {float(np.median(runs_wall)):.1f} / {max(runs_wall):.1f}"
+    )
 
 
 def force_controller(samples: int) -> None:

@@ -115,11 +115,19 @@ def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path, turns):
     )
     row = rows["dls"]
     assert row["max_base_deviation_deg"] < 2e-5
-    # the operator's twist and the controller's tick fall on the same simulated instant; with
-    # the nodes in separate processes the twist may land before or after the tick, which moves
-    # when a command is served by a period (measured 0.057 and 0.078 deg of a 30 deg roll; the
-    # base is not affected: every output is reactionless whatever command it serves)
-    assert row["final_camera_error_deg"] < 0.15
+    if turns == "--output-lead":
+        # the controller serves each tick with the operator's sample in force then (published
+        # ahead, await_commands): the camera ends where the in-process loop puts it (4.6e-6
+        # against 4.4e-6 deg, the same in every run). Twists acting on receipt ended 0.057 and
+        # 0.078 deg off, and on the 180 deg roll 1-19 deg off in about one run in thirty,
+        # when the operator's process waited for a core at the start of its profile
+        assert row["final_camera_error_deg"] < 1e-4
+    else:
+        # in turn the twist and the tick fall on the same simulated instant, and the twist may
+        # land before or after the tick, which moves when a command is served by a period
+        # (measured 0.057 and 0.078 deg of a 30 deg roll; the base is not affected: every
+        # output is reactionless whatever command it serves)
+        assert row["final_camera_error_deg"] < 0.15
 
 
 def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():

@@ -4,13 +4,16 @@ The law is :class:`rns_ros.control.controller.ReactionlessController`; command s
 :class:`rns_ros.control.teleop.CommandGate`. This node only converts messages and runs them once per
 control period from an executor timer; with ``output_lead`` (use_sim_time, lockstep side by side)
 from each period instant /clock passes (:class:`rns_ros.nodes.clock_ticks.ClockTicks`), its output
-stamped that lead later.
+stamped that lead later; there ``await_commands`` also puts the operator in the lockstep: twists
+wait for their stamps and each tick for the twist in force
+(:class:`rns_ros.control.teleop.CommandSchedule`).
 
 Subscribes:
     cmd_twist     geometry_msgs/TwistStamped (``twist_stamped: true``) or geometry_msgs/Twist;
-                  best effort, depth 1. ``header.frame_id`` is ``world_frame``, the base link or
-                  the camera frame (empty or unstamped: ``default_twist_frame``). Only the
-                  angular part is achievable; the linear part is reported as unachieved.
+                  best effort, depth 1 (50 with ``await_commands``). ``header.frame_id`` is
+                  ``world_frame``, the base link or the camera frame (empty or unstamped:
+                  ``default_twist_frame``). Only the angular part is achievable; the linear
+                  part is reported as unachieved.
     joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
                   ``state_timeout`` (receipt time) or from more than one publisher stops the arm
     base_odom     nav_msgs/Odometry (base pose in world; identity until the first message, then

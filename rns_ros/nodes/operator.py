@@ -7,7 +7,10 @@ omega(t) = angle * s_dot(t) * axis in the scenario's frame (``header.frame_id`` 
 then stops on its own timeout). Time is the node clock (sim time with ``use_sim_time``); the
 profile starts once ``cmd_twist`` has a subscriber (``wait_for_subscriber``) plus ``start_delay``.
 With ``use_sim_time`` the samples come at the period instants /clock passes
-(:class:`~rns_ros.nodes.clock_ticks.ClockTicks`), one each, not from an rclpy timer.
+(:class:`~rns_ros.nodes.clock_ticks.ClockTicks`), one each, not from an rclpy timer; with ``lead``
+each goes out that long before its instant, stamped with the instant, for a controller that
+serves twists at their stamps (rns_controller's ``await_commands``; zeros from the start
+condition until the profile starts).
 
 Part II scenario files (``kind: motion_force``, :mod:`rns_ros.analysis.part2_scenarios`,
 docs/part2_ros.md): at ``rate`` (500 Hz suggested: the force controller runs at 1 kHz) BOTH

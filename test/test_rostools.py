@@ -190,7 +190,10 @@ def test_list_names_the_parameters(stack, capsys):
 
     code, out, _ = _run(capsys, param_main, "list")
     assert code == 0
-    assert "/rns_controller:\n  command_timeout" in out
+    # every node, then its parameters indented under it
+    block = out.split("/rns_controller:\n", 1)[1].split("\n/", 1)[0].split("\n")
+    assert "  command_timeout" in block
+    assert all(line.startswith("  ") for line in block if line)
 
 
 def test_missing_node_and_parameter_are_one_line_exit_1(stack, capsys):

@@ -298,11 +298,17 @@ class CommandSchedule(Generic[Item]):
     A command whose stamp goes back (a clock reset, an operator's final stop stamped now)
     replaces everything still waiting: it is the newest word of the operator.
 
-    Stamps are integer nanoseconds of the node clock.
+    Stamps are integer nanoseconds of the node clock. At most ``max_waiting`` commands wait: a
+    publisher stamping far ahead cannot grow the schedule without bound (the oldest waiting
+    command is dropped, and :attr:`dropped` counts it).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, max_waiting: int = 1000) -> None:
+        if max_waiting < 1:
+            raise ConfigError(f"max_waiting must be >= 1, got {max_waiting!r}")
         self._waiting: deque[tuple[int, Item]] = deque()
+        self._max_waiting = max_waiting
+        self.dropped = 0  # commands dropped unreleased (more than max_waiting waited)
         self._newest: int | None = None  # stamp of the newest command received [ns]
         self._moving = False  # the newest command asks for motion
         self._moved = False  # some command asked for motion
@@ -317,6 +323,9 @@ class CommandSchedule(Generic[Item]):
         """A command stamped ``stamp`` [ns]; ``moving``: it asks for motion (non-zero)."""
         if self._newest is not None and stamp < self._newest:
             self._waiting.clear()
+        if len(self._waiting) >= self._max_waiting:
+            self._waiting.popleft()
+            self.dropped += 1
         self._waiting.append((stamp, item))
         self._newest, self._moving, self._released = stamp, moving, False
         self._moved = self._moved or moving

@@ -471,7 +471,14 @@ class ControllerNode(Node):
             return
         sec, nanosec = fields.stamp
         moving = any(value != 0.0 for value in (*fields.angular, *fields.linear))
+        dropped = self._schedule.dropped
         self._schedule.push(sec * 1_000_000_000 + nanosec, fields, moving)
+        if self._schedule.dropped > dropped:
+            self.get_logger().warn(
+                "too many cmd_twist stamped ahead are waiting for their stamps: the oldest was "
+                "dropped (stamps far ahead of the clock?)",
+                throttle_duration_sec=1.0,
+            )
         self._serve_deferred()
 
     def _release_twists(self, tick: Time) -> None:

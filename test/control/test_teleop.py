@@ -209,6 +209,16 @@ def test_a_command_stamped_back_replaces_the_waiting_ones():
     assert schedule.due(200) == ["final stop"]
 
 
+def test_a_schedule_holds_at_most_max_waiting_commands():
+    schedule = CommandSchedule(max_waiting=3)
+    for stamp in range(5):  # e.g. a publisher stamping years ahead
+        schedule.push(10**18 + stamp, stamp, moving=True)
+    assert schedule.dropped == 2
+    assert schedule.due(10**19) == [2, 3, 4]
+    with pytest.raises(ConfigError, match="max_waiting"):
+        CommandSchedule(max_waiting=0)
+
+
 @given(
     gaps=st.lists(st.integers(1, 40), min_size=1, max_size=40),
     leads=st.lists(st.integers(0, 60), min_size=40, max_size=40),

@@ -171,6 +171,10 @@ class OperatorNode(Node):
         self._lead = round(params["lead"] * 1e9) if sim_time and not self.motion_force else 0
         if params["lead"] and not self._lead:
             self.get_logger().warn("lead is for twist scenarios under use_sim_time only: not used")
+        self._period_ns = round(1e9 / params["rate"])
+        # lead: the newest sample's instant [ns], and whether a sample asked for motion yet
+        self._last_instant: int | None = None
+        self._moved = False
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
         self._min_subscribers = params["min_subscribers"]
@@ -245,6 +249,7 @@ class OperatorNode(Node):
             self.get_logger().info(f"starting in {delay} s")
         if self._lead:
             now = now + Duration(nanoseconds=self._lead)
+            self._resume_after_a_stall(now)
         t = (now - self._start).nanoseconds * 1e-9
         if t < 0.0:
             if self._lead:  # a stream from the start condition on: a controller awaits it
@@ -270,8 +275,27 @@ class OperatorNode(Node):
         moving = t <= self.scenario.duration
         self._publish_motion_force(sample if moving else None, sample.force_vector, now)
 
+    def _resume_after_a_stall(self, instant: Time) -> None:
+        """lead: samples skipped before any motion (this process waited for a core while the
+        simulation ran on, before an awaiting controller had a sample to wait on) shift the
+        profile instead of cutting its start off: the robot is at rest until then, so the
+        shift is exact. Once a sample moves, the controller awaits each one and the clock
+        cannot run ahead of this node."""
+        if self._moved or self._last_instant is None:
+            return
+        skipped = instant.nanoseconds - self._last_instant - self._period_ns
+        if skipped > self._period_ns // 2:
+            self._start += Duration(nanoseconds=skipped)
+            self.get_logger().warn(
+                f"waited {skipped * 1e-9:.3f} s (simulated) for a core before the profile "
+                "moved: it starts that much later"
+            )
+
     def _publish(self, omega, stamp: Time) -> None:
         """One TwistStamped with angular velocity ``omega`` [rad/s], shape (3,)."""
+        if self._lead:
+            self._last_instant = stamp.nanoseconds
+            self._moved = self._moved or any(float(w) != 0.0 for w in omega)
         if self._twist_template is not None:
             values = {"twist": np.concatenate((np.zeros(3), omega))}
             self._publisher.publish(

@@ -11,6 +11,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
 from rns_ros.analysis.part2_scenarios import load_motion_force_scenario, operator_sample
+from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
 from rns_ros.nodes.operator import FINAL_ZEROS, PARAMETERS, OperatorNode
@@ -98,6 +99,40 @@ def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
     angle = np.sum(rates[:-1, 1] * np.diff(stamps))
     assert angle == pytest.approx(np.deg2rad(30.0), rel=0.05)
 
+
+def test_with_lead_a_stall_before_the_first_motion_shifts_the_profile(ros, tmp_path):
+    """lead: the operator's process waited for a core after its first sample (a rest) while the
+    simulation ran on (/clock 10.0 -> 11.0; no controller awaited it yet): the profile goes on
+    from its next sample, later, instead of from where the clock got to. Once it moved, a jump
+    is not shifted (an awaiting controller would have held the clock)."""
+    path = tmp_path / "rest.yaml"
+    path.write_text(yaml.safe_dump({**SCENARIO_FROM_REST}))
+    scenario = load_scenario(path)
+    twists = ros.record(TwistStamped, "cmd_twist")
+    operator = ros.add(
+        OperatorNode,
+        {"scenario": str(path), "start_delay": 0.0, "lead": 0.04, "use_sim_time": True},
+    )
+    clock = ros.probe().create_publisher(Clock, "/clock", 10)
+    ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
+    samples = {}
+    for t in (10.0, 11.0, 11.02, 12.0):
+        count = len(twists)
+        clock.publish(Clock(clock=stamp_from_seconds(t)))
+        assert ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0), t
+        msg = twists.messages[-1]
+        samples[round(twists.stamps()[-1], 6)] = msg.twist.angular.y
+    expected = {10.04: 0.0, 11.04: 0.02, 11.06: 0.04, 12.04: 1.02}  # stamp: profile time
+    assert list(samples) == list(expected)
+    for stamp, t in expected.items():
+        assert samples[stamp] == pytest.approx(scenario.angular_velocity(t)[1], abs=1e-12)
+    assert samples[11.04] > 0.0
+
+
+#: The roll of SCENARIO with a quintic profile: it starts (and ends) at rest.
+SCENARIO_FROM_REST = {
+    key: value for key, value in SCENARIO.items() if key not in ("time_scaling", "segments")
+}
 
 #: A slow roll that is still playing when the tests below stop the operator.
 LONG_SCENARIO = {**SCENARIO, "time_scaling": "constant", "duration": 30.0, "segments": None}

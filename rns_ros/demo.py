@@ -221,6 +221,7 @@ def run_method(
             "rns_operator",
             {
                 "scenario": str(scenario_file),
+                "rate": OPERATOR_RATE,
                 "start_delay": 0.5,
                 "zero_duration": OPERATOR_ZERO_DURATION,
                 # the controller, this process and the logger: the first to be matched no
@@ -255,11 +256,11 @@ def run_method(
         _wait_for_start(stack, processes, streams, listeners, method)
         commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
         budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
-        if not stack.spin_until(lambda: len(commands) > 0, timeout=budget):
-            raise RnsError(f"{method}: no cmd_twist from rns_operator within {budget:.0f} s")
+        if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
+            raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
         # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
         # so a wall-time settle would let figures depend on this machine's speed
-        task = header_seconds(commands.messages[0])
+        task = profile_start(commands, scenario, OPERATOR_RATE)
         task_started = time.perf_counter()
         end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
         states = [streams[name] for name in ("joints", "odom", "momentum")]
@@ -330,9 +331,38 @@ CLOSED = "recording closed"
 TASK_MARGIN = 0.2
 #: Zero twists the operator sends after the profile [s] (its default).
 OPERATOR_ZERO_DURATION = 1.0
-#: Lockstep side by side: the operator publishes each sample this far ahead [s] (two of its
-#: 50 Hz samples), the first at the start condition (its start_delay).
+#: The operator's rate [Hz] (its default) and, in lockstep side by side, how far ahead [s] it
+#: publishes each sample (two samples), the first at the start condition (its start_delay).
+OPERATOR_RATE = 50.0
 OPERATOR_LEAD = 0.04
+
+
+def _moving(twist: TwistStamped | None) -> bool:
+    if twist is None:
+        return False
+    w = twist.twist.angular
+    return (w.x, w.y, w.z) != (0.0, 0.0, 0.0)
+
+
+def profile_start(commands: TopicLog, scenario: Scenario, rate: float) -> float:
+    """When the operator's profile started [s], on the stamps' clock: the first moving twist's
+    stamp less its time in the profile, which rns_operator samples every 1/``rate`` s from its
+    start. The first twist recorded is not always the start: an operator that waited for a
+    core before its first motion (lockstep, ``lead``) starts its profile that much later.
+
+    Raises:
+        RnsError: no twist asked for motion, or the scenario never moves on that grid.
+    """
+    first = next((msg for msg in commands.messages if _moving(msg)), None)
+    if first is None:
+        raise RnsError("no recorded cmd_twist asks for motion")
+    steps = math.floor(scenario.duration * rate) + 1
+    for k in range(steps):
+        if np.any(scenario.angular_velocity(k / rate) != 0.0):
+            return header_seconds(first) - k / rate
+    raise RnsError(f"scenario {scenario.name!r} never moves at {rate:g} Hz")
+
+
 #: Node names of the processes whose subscriptions the demo waits for.
 NODE_NAMES = {"controller": "rns_controller", "logger": "rns_rerun_logger"}
 

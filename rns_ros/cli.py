@@ -69,6 +69,21 @@ def install_startup_handler() -> None:
         return
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _record_startup_signal)
+        sys.excepthook = _quiet_after_startup_signal(sys.excepthook)
+
+
+def _quiet_after_startup_signal(previous):
+    """An excepthook that ends the process quietly with code 0 when Ctrl-C came during the
+    imports: the SystemExit raised in a C extension's initialization (rclpy's) reaches the top
+    as an ImportError with a traceback, not as SystemExit. Anything else goes to ``previous``."""
+
+    def hook(kind, value, traceback) -> None:
+        if _startup_signals:
+            sys.stderr.flush()
+            os._exit(0)
+        previous(kind, value, traceback)
+
+    return hook
 
 
 def startup_interrupted() -> bool:

@@ -4,6 +4,8 @@ rns_observer."""
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
 
 import pytest
 
@@ -55,3 +57,23 @@ def test_bad_domain_id_is_a_usage_error_naming_the_range(monkeypatch, capsys, ar
     err = capsys.readouterr().err
     assert "--domain-id: must be an integer in [0, 101]" in err
     assert bad in err
+
+
+@pytest.mark.parametrize("interrupted", [True, False])
+def test_an_error_raised_out_of_an_interrupted_import_ends_quietly(interrupted):
+    """Ctrl-C while a C extension initializes (rclpy's): the SystemExit of the start-up handler
+    reaches the top as an ImportError with a traceback. After a start-up signal the excepthook
+    ends the process with code 0 and nothing on stderr; without one, errors print as ever."""
+    code = (
+        "import sys\n"
+        "from rns_ros import cli\n"
+        f"{'cli._startup_signals.append(2)' if interrupted else ''}\n"
+        "sys.excepthook = cli._quiet_after_startup_signal(sys.excepthook)\n"
+        "raise ImportError('initialization failed')\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    if interrupted:
+        assert (result.returncode, result.stderr) == (0, "")
+    else:
+        assert result.returncode == 1
+        assert "ImportError: initialization failed" in result.stderr

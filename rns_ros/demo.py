@@ -283,7 +283,7 @@ def run_method(
         if data["times"][0] > task:  # the deviations count from the first recorded state
             raise RnsError(
                 f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
-                f"the first command at {task:.3f} s"
+                f"the operator's profile started at {task:.3f} s"
             )
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end

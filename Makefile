@@ -2,7 +2,8 @@
 #
 #   make venv       create/refresh .venv (pinned deps + editable rns_ros); a no-op when up to date
 #   make demo       run the demo node       (ARGS='--help' etc. are passed through)
-#   make test       ruff check + ruff format --check + pytest
+#   make test       ruff check + ruff format --check + the whole pytest suite (what CI runs)
+#   make test-quick ruff + the ROS-free layers without the tests marked slow (under a minute)
 #   make lint       ruff check + ruff format --check
 #   make format     ruff format + ruff check --fix
 #   make clean      remove colcon/pytest artefacts (keeps .venv)
@@ -29,6 +30,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 ifeq ($(origin ROS_DOMAIN_ID),undefined)
 ROS_DOMAIN_ID := 42
 test: ROS_DOMAIN_ID := 43
+test-quick: ROS_DOMAIN_ID := 43
 endif
 export ROS_DOMAIN_ID
 RMW_IMPLEMENTATION ?= rmw_fastrtps_cpp
@@ -42,7 +44,7 @@ export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)$(if $(AMENT_PREFIX_PATH),:$(AMENT_
 # config/ needs no reinstall: .venv/share/rns_ros/config is a link to the source tree's.
 STAMP_DEPS := requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
 
-.PHONY: venv demo test lint format clean distclean
+.PHONY: venv demo test test-quick lint format clean distclean
 
 venv: $(STAMP)
 
@@ -66,6 +68,14 @@ test: venv
 	$(VENV_BIN)/ruff check .
 	$(VENV_BIN)/ruff format --check .
 	$(VENV_PY) -m pytest -q
+
+# The ROS-free rooms (core, control, sim, analysis, viz) and the layering rules.
+QUICK_TESTS := test/core test/control test/sim test/analysis test/viz test/test_layering.py
+
+test-quick: venv
+	$(VENV_BIN)/ruff check .
+	$(VENV_BIN)/ruff format --check .
+	$(VENV_PY) -m pytest -q -m "not slow" $(QUICK_TESTS)
 
 lint: venv
 	$(VENV_BIN)/ruff check .

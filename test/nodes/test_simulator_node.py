@@ -369,17 +369,6 @@ def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
     assert _seconds(clock.messages[-1].clock) == pytest.approx(pause + dt)
 
 
-def test_clock_stamps_round_to_the_nanosecond():
-    """Simulated time summed from 1 ms steps falls a hair short of whole seconds; the stamp is
-    the whole second a sim-time timer waits for (not 1.999999999 s)."""
-    t = 0.0
-    for _ in range(2000):
-        t += 0.001
-    assert t != 2.0
-    assert (stamp_from_seconds(t).sec, stamp_from_seconds(t).nanosec) == (2, 0)
-    assert (stamp_from_seconds(0.0305).sec, stamp_from_seconds(0.0305).nanosec) == (0, 30_500_000)
-
-
 def test_velocity_interface_takes_the_order_of_the_joints_parameter(ros):
     """The ros2_control forward_command_controller convention: data[i] is for joints[i]."""
     order = ["joint_3", "joint_1", "joint_2", "joint_7", "joint_6", "joint_5", "joint_4"]

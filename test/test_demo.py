@@ -18,7 +18,7 @@ from rns_ros.control.scenario import load_scenario
 from rns_ros.core import RnsError, load_model
 from rns_ros.demo import DemoRow, main, profile_start
 from rns_ros.harness import TopicLog
-from rns_ros.nodes.simulator import stamp_from_seconds
+from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.resources import default_model_config
 from rns_ros.viz import paths
 from rns_ros.viz.readback import recording_summary
@@ -174,7 +174,7 @@ def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():
     from sensor_msgs.msg import JointState
 
     from rns_ros.harness import TopicLog
-    from rns_ros.nodes.simulator import stamp_from_seconds
+    from rns_ros.nodes.sim_clock import stamp_from_seconds
 
     logs = {name: TopicLog(name) for name in ("joints", "odom", "momentum", "commands")}
     for k in range(100):

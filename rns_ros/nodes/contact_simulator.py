@@ -40,8 +40,6 @@ from __future__ import annotations
 import json
 import math
 import threading
-import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -57,14 +55,11 @@ from std_srvs.srv import Trigger
 from rns_ros.core.config import read_yaml_mapping
 from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
-from rns_ros.nodes.parameters import (
-    WORLD_FRAME,
-    ParameterSpec,
-    declare_parameters,
-    specs_by_name,
-    velocity_joint_order,
-)
-from rns_ros.nodes.simulator import LOCKSTEP_PATIENCE, NODE_NAME, stamp_from_seconds
+from rns_ros.nodes.contact_simulator_parameters import NODE_NAME, PARAMETERS, SPECS
+from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE, LockstepPacer
+from rns_ros.nodes.parameters import declare_parameters, velocity_joint_order
+from rns_ros.nodes.sim_clock import stamp_from_seconds
+from rns_ros.nodes.simulator_parameters import check_parameter_changes
 from rns_ros.resources import config_dir
 from rns_ros.sim.contact import (
     ArcConstraint,
@@ -92,189 +87,9 @@ CONTACT_LABELS = (
     "normal_z",
     "saturated_joints",
 )
-#: Wall-task start configuration of thesis section 6.2.2 [rad] (LWR [20, -20, 0, 100, 0, 10, 0]
-#: deg).
-WALL_TASK_RAD = [math.radians(a) for a in (20.0, -20.0, 0.0, 100.0, 0.0, 10.0, 0.0)]
 DEFAULT_MODEL = "lwr_7dof.yaml"
 
 
-@dataclass(frozen=True)
-class OptionalVectorSpec(ParameterSpec):
-    """A double-array parameter whose default is empty ("derive it"): declared with dynamic
-    typing, because rclpy types an empty default as a byte array (so [0.0, 0.0, 1.0] would be
-    refused) and a params file's ``[]`` arrives unset. The checked value is a list of floats,
-    [] when unset."""
-
-    def descriptor(self):
-        descriptor = super().descriptor()
-        descriptor.dynamic_typing = True
-        return descriptor
-
-    def check(self, value):
-        if value is None:
-            value = []
-        if isinstance(value, str | bool | int | float) or not all(
-            isinstance(x, int | float) and not isinstance(x, bool) for x in value
-        ):
-            raise ConfigError(
-                f"parameter '{self.name}' must be a list of numbers {self.unit} (or [] for the "
-                f"default), got {value!r}"
-            )
-        return super().check([float(x) for x in value])
-
-
-ENVIRONMENTS = ("wall", "arc", "none")
-
-PARAMETERS = (
-    ParameterSpec(
-        "model_config",
-        "",
-        "Part II fixed-base model YAML (URDF, ee_frame), a path or a file name of the package's "
-        "config/ folder; empty: lwr_7dof.yaml (the 7-DoF LWR4-class arm); planar_3dof.yaml: the "
-        "planar arm of section 6.2.1",
-    ),
-    ParameterSpec(
-        "mode",
-        "contact",
-        "contact: fixed-base arm driven by joint torques, EE on a rigid wall or cylinder (this "
-        "node); kinematic / dynamic: the free-floating satellite + arm (rns_simulator --help)",
-        choices=("contact",),
-    ),
-    ParameterSpec("step_size", 0.001, "Fixed RK4 integration step", "[s]", 1e-5, 0.01),
-    ParameterSpec(
-        "publish_rate", 1000.0, "State publishing rate in simulated time", "[Hz]", 1.0, 1000.0
-    ),
-    ParameterSpec(
-        "real_time_factor",
-        1.0,
-        "Simulated seconds per wall-clock second; 0 runs as fast as possible",
-        "[-]",
-        0.0,
-        1000.0,
-        read_only=False,
-    ),
-    ParameterSpec(
-        "publish_clock",
-        True,
-        "Publish /clock (sim time) and stamp messages with it (on by default: in lockstep the "
-        "simulation runs slower than the wall clock, so the other nodes use sim time)",
-    ),
-    ParameterSpec(
-        "lockstep_period",
-        0.001,
-        "Lockstep with a controller: never run more than this much simulated time past the "
-        "newest torque command (default the step: every torque acts on the state it was "
-        "computed from, as in-process, at any real_time_factor; a Python torque loop over DDS "
-        "does not keep 1 kHz in real time on a small machine, see docs/part2_ros.md; real time "
-        "before the first command, paused when they stop); command_timeout then counts "
-        "simulated time; 0: off (free-running at real_time_factor)",
-        "[s]",
-        0.0,
-        10.0,
-    ),
-    WORLD_FRAME,
-    ParameterSpec(
-        "initial_joint_positions",
-        WALL_TASK_RAD,
-        "Initial joint angles in model joint order (default: the thesis wall task "
-        "[20, -20, 0, 100, 0, 10, 0] deg)",
-        "[rad]",
-        -2 * math.pi,
-        2 * math.pi,
-    ),
-    ParameterSpec(
-        "joints",
-        [f"joint_{i}" for i in range(1, 8)],
-        "Joint order of the Float64MultiArray torques on joint_efforts (ros2_control "
-        "forward_command_controller 'joints'); a permutation of the model's joints",
-    ),
-    ParameterSpec(
-        "command_timeout",
-        0.05,
-        "No valid torque for this long (wall time; simulated time in lockstep): the joint "
-        "brakes take over (gravity held, joints damped)",
-        "[s]",
-        0.001,
-        60.0,
-        read_only=False,
-    ),
-    ParameterSpec(
-        "brake_damping",
-        20.0,
-        "Joint brake damping d of tau = g(q) - B q_dot, B = d M (M + dt d I)^-1 (implicit: "
-        "stable for any d; light modes stop within a step)",
-        "[N m s/rad]",
-        1e-3,
-        1e4,
-    ),
-    ParameterSpec(
-        "environment",
-        "wall",
-        "wall: a plane (wall_point, wall_normal); arc: a cylinder (arc_center, arc_radius, "
-        "arc_axis); none: the free arm",
-        choices=ENVIRONMENTS,
-    ),
-    OptionalVectorSpec(
-        "wall_point",
-        [],
-        "A point of the wall surface in world; empty: the start EE point",
-        "[m]",
-        -1e3,
-        1e3,
-        length=(0, 3),
-    ),
-    OptionalVectorSpec(
-        "wall_normal",
-        [],
-        "Wall normal into the wall (world, normalized, non-zero); empty: the start EE frame z axis",
-        "[-]",
-        -1e3,
-        1e3,
-        length=(0, 3),
-    ),
-    ParameterSpec(
-        "arc_center",
-        [1.91, 1.91, 0.0],
-        "A point of the cylinder axis in world (thesis section 6.2.1: (1.91, 1.91) m)",
-        "[m]",
-        -1e3,
-        1e3,
-        length=(3,),
-    ),
-    ParameterSpec(
-        "arc_radius", 0.707, "Cylinder radius (thesis: 0.707 m); must be > 0", "[m]", -1e3, 1e3
-    ),
-    ParameterSpec(
-        "arc_axis",
-        [0.0, 0.0, 1.0],
-        "Cylinder axis direction in world (normalized, non-zero)",
-        "[-]",
-        -1e3,
-        1e3,
-        length=(3,),
-    ),
-    ParameterSpec("gravity", False, "Gravity along -z of world (thesis Part II: off)"),
-    ParameterSpec(
-        "contact_threshold",
-        0.1,
-        "|normal force| above which the contact sample reports pushing (+1) or pulling (-1)",
-        "[N]",
-        0.0,
-        1e4,
-    ),
-    ParameterSpec(
-        "project_start",
-        True,
-        "Move the initial joints onto the surface (minimum-norm, logged); false: a start off "
-        "the surface is an error",
-    ),
-    ParameterSpec(
-        "saturate_torque",
-        True,
-        "Clip commanded torques to the URDF effort limits (saturated joints are reported)",
-    ),
-)
-SPECS = specs_by_name(PARAMETERS)
 #: Largest |phi| [m] of a start configuration with project_start false.
 START_TOLERANCE = 1e-6
 
@@ -324,6 +139,67 @@ class ContactSimulatorNode(Node):
         model_path = _model_path(params["model_config"])
         self.robot = load_fixed_base_model(model_path, gravity=params["gravity"])
         robot, n = self.robot, self.robot.n
+        description = self._build_simulator(params)
+        dt = params["step_size"]
+        self.brake = JointBrake(robot, params["brake_damping"], dt)
+        self._limits = self.simulator.effort_limits
+        self._saturate = params["saturate_torque"]
+        self._threshold = params["contact_threshold"]
+        self._publish_every = max(1, round(1.0 / (params["publish_rate"] * dt)))
+        self._command_timeout = params["command_timeout"]
+        self._publish_clock = params["publish_clock"]
+        self._world_frame = params["world_frame"]
+        self._ee_frame = robot.model.frames[robot.ee_frame_id].name
+
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._command_arrived = threading.Event()
+        # lockstep: the period counts from the simulated time of a torque command's receipt
+        self._pacer = LockstepPacer(
+            self.simulator,
+            lockstep_period=params["lockstep_period"],
+            real_time_factor=params["real_time_factor"],
+            publish_period=1.0 / params["publish_rate"],  # [s], wall time while faulted
+            lock=self._lock,
+            stop=self._stop,
+            wake=self._command_arrived,
+        )
+        self._steps = 0  # since the start or the last reset
+        self._reset_requested = False
+        self._command: np.ndarray | None = None  # newest valid torque, model order [N m]
+        self._braking_logged = True  # braked from the start: that is not a stale controller
+        self._fault = False
+        self._saturated = 0  # joints saturated in the torque held over the next step
+        self.braking = True  # the brake torque (F.2) is applied (read in tests)
+
+        self._create_topics()
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self._environment_pub = self.create_publisher(String, "environment", latched)
+        self.environment_description = dict(description, frame=self._world_frame)
+        self._environment_pub.publish(String(data=json.dumps(self.environment_description)))
+        self._description_pub = self.create_publisher(String, "robot_description", latched)
+        self._description_pub.publish(String(data=_urdf_text(model_path)))
+        self.create_service(Trigger, "~/reset", self._on_reset)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_post_set_parameters_callback(self._on_parameters_set)
+
+        with self._lock:
+            self._apply_brake()
+        self._thread = threading.Thread(
+            target=self._pacer.run, args=(self,), name="rns_contact_sim_loop", daemon=True
+        )
+        self._thread.start()
+        self.get_logger().info(
+            f"contact simulation of {robot.name} ({n} joints, EE frame '{self._ee_frame}'), "
+            f"environment {self.environment_description}, dt {dt} s, publishing at "
+            f"{params['publish_rate']} Hz, real-time factor {params['real_time_factor'] or 'max'}; "
+            "joint brakes hold the arm until the first joint_efforts command"
+        )
+
+    def _build_simulator(self, params) -> dict:
+        """The simulator, its start state and joint order from the parameters; returns the
+        environment's JSON description without the frame."""
+        robot, n = self.robot, self.robot.n
         q0 = np.array(params["initial_joint_positions"], dtype=float)
         if q0.shape != (n,):
             raise ConfigError(
@@ -354,33 +230,10 @@ class ContactSimulatorNode(Node):
                 clip_torque=params["saturate_torque"],
             )
         self.initial_q = q0
-        self.brake = JointBrake(robot, params["brake_damping"], dt)
-        self._limits = self.simulator.effort_limits
-        self._saturate = params["saturate_torque"]
-        self._threshold = params["contact_threshold"]
-        self._publish_every = max(1, round(1.0 / (params["publish_rate"] * dt)))
-        self._publish_period = 1.0 / params["publish_rate"]
-        self._real_time_factor = params["real_time_factor"]
-        self._command_timeout = params["command_timeout"]
-        self._publish_clock = params["publish_clock"]
-        self._lockstep = params["lockstep_period"]
-        self._world_frame = params["world_frame"]
-        self._ee_frame = robot.model.frames[robot.ee_frame_id].name
+        return description
 
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._reset_requested = False
-        self._command: np.ndarray | None = None  # newest valid torque, model order [N m]
-        self._last_command: float | None = None  # its monotonic receipt time [s]
-        self._command_sim_time = 0.0  # simulated time of its receipt [s]
-        self._command_arrived = threading.Event()
-        self._paused_since: float | None = None
-        self._braking_logged = True  # braked from the start: that is not a stale controller
-        self._reanchor = True
-        self._fault = False
-        self._saturated = 0  # joints saturated in the torque held over the next step
-        self.braking = True  # the brake torque (F.2) is applied (read in tests)
-
+    def _create_topics(self) -> None:
+        """The state publishers, their prebuilt messages and the torque subscription."""
         state_qos = QoSProfile(depth=10)
         self._wrench_pub = self.create_publisher(WrenchStamped, "wrist_wrench", state_qos)
         self._contact_pub = self.create_publisher(Float64MultiArray, "contact", state_qos)
@@ -392,7 +245,7 @@ class ContactSimulatorNode(Node):
         )
         # prebuilt messages: the 1 kHz publish path only fills numbers in
         self._joint_msg = JointState()
-        self._joint_msg.name = list(robot.joint_names)
+        self._joint_msg.name = list(self.robot.joint_names)
         self._wrench_msg = WrenchStamped()
         self._wrench_msg.header.frame_id = self._ee_frame
         self._contact_msg = Float64MultiArray()
@@ -405,25 +258,6 @@ class ContactSimulatorNode(Node):
 
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self.create_subscription(Float64MultiArray, "joint_efforts", self._on_efforts, command_qos)
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self._environment_pub = self.create_publisher(String, "environment", latched)
-        self.environment_description = dict(description, frame=self._world_frame)
-        self._environment_pub.publish(String(data=json.dumps(self.environment_description)))
-        self._description_pub = self.create_publisher(String, "robot_description", latched)
-        self._description_pub.publish(String(data=_urdf_text(model_path)))
-        self.create_service(Trigger, "~/reset", self._on_reset)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
-
-        with self._lock:
-            self._apply_brake()
-        self._thread = threading.Thread(target=self._run, name="rns_contact_sim_loop", daemon=True)
-        self._thread.start()
-        self.get_logger().info(
-            f"contact simulation of {robot.name} ({n} joints, EE frame '{self._ee_frame}'), "
-            f"environment {self.environment_description}, dt {dt} s, publishing at "
-            f"{params['publish_rate']} Hz, real-time factor {self._real_time_factor or 'max'}; "
-            "joint brakes hold the arm until the first joint_efforts command"
-        )
 
     # --- start-up -----------------------------------------------------------------------------
     def _environment(self, params, q0) -> tuple:
@@ -507,10 +341,7 @@ class ContactSimulatorNode(Node):
             self.simulator.set_torque(tau)
             self._saturated = int(over.sum())
             self._command = tau
-            if self._last_command is None and self._lockstep > 0.0:
-                self._reanchor = True  # lockstep starts: leave the real-time pace of the wait
-            self._last_command = time.monotonic()
-            self._command_sim_time = self.simulator.time
+            self._pacer.command_received(self.simulator.time)
             self.braking = False
             self._braking_logged = False
             self._command_arrived.set()
@@ -526,13 +357,15 @@ class ContactSimulatorNode(Node):
         return response
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
+        """Accept or reject run-time changes (applied in :meth:`_on_parameters_set`)."""
+        return check_parameter_changes(SPECS, parameters)
+
+    def _on_parameters_set(self, parameters) -> None:
         for parameter in parameters:
             if parameter.name == "real_time_factor":
-                self._real_time_factor = float(parameter.value)
-                self._reanchor = True
+                self._pacer.set_real_time_factor(float(parameter.value))
             elif parameter.name == "command_timeout":
                 self._command_timeout = float(parameter.value)
-        return SetParametersResult(successful=True)
 
     # --- simulation loop (own thread) ---------------------------------------------------------
     def _apply_brake(self) -> None:
@@ -542,69 +375,68 @@ class ContactSimulatorNode(Node):
         self._saturated = int((np.abs(tau) > self._limits).sum())
         sim.set_torque(tau)
 
-    def _run(self) -> None:
-        steps = 0
-        wall_anchor = sim_anchor = 0.0
-        while not self._stop.is_set():
-            if self._fault and not self._reset_requested:
-                self._publish_held_state()
-                self._stop.wait(self._publish_period)
-                self._reanchor = True
-                continue
-            if self._await_command():
-                self._reanchor = True
-                continue
-            if self._reanchor:
-                wall_anchor, sim_anchor = time.monotonic(), self.simulator.time
-                self._reanchor = False
-            with self._lock:
-                if self._reset_requested:
-                    self.simulator.reset()
-                    self._command = self._last_command = None
-                    self._command_sim_time = 0.0
-                    self._reset_requested, self._fault, self._reanchor = False, False, True
-                    self.braking, self._braking_logged = True, True
-                    steps = 0
-                self._watchdog()
-                if self.braking:
-                    self._apply_brake()
-                saturated = self._saturated
-                try:
-                    self.simulator.step()
-                except SimulationDivergedError as exc:
-                    self._fault = True
-                    self.get_logger().error(
-                        f"{exc}. Stopped: publishing that state at rest until ~/reset"
-                    )
-                    continue
-                steps += 1
-                publish = steps % self._publish_every == 0 or self._pauses_here()
-                sample = self._sample(saturated) if publish else None
-                sim_time = self.simulator.time
-            if sample is not None:
-                self._publish(*sample)
-            if self._clock_pub is not None:
-                self._clock_msg.clock = stamp_from_seconds(sim_time)
-                self._clock_pub.publish(self._clock_msg)
-            factor = self._real_time_factor
-            if self._lockstep > 0.0 and self._last_command is None:
-                factor = 1.0  # no controller yet: real time, so it joins early
-            if factor > 0.0:
-                delay = wall_anchor + (sim_time - sim_anchor) / factor - time.monotonic()
-                if delay > 0.0:
-                    self._stop.wait(delay)
-                elif delay < -0.5:
-                    self._reanchor = True  # far behind (overloaded machine): do not sprint
+    # --- SteppedSimulation (driven by the LockstepPacer) ---------------------------------------
+    def faulted(self) -> bool:
+        return self._fault and not self._reset_requested
+
+    def steps_in_callback(self) -> bool:
+        return False  # the simulation thread takes every step
+
+    def advance(self) -> float | None:
+        """One step (after a requested reset) and what it publishes, /clock with every step;
+        the simulated time after it [s], None when it diverged."""
+        with self._lock:
+            if self._reset_requested:
+                self.simulator.reset()
+                self._command = None
+                self._pacer.reset()
+                self._reset_requested, self._fault = False, False
+                self.braking, self._braking_logged = True, True
+                self._steps = 0
+            self._watchdog()
+            if self.braking:
+                self._apply_brake()
+            saturated = self._saturated
+            try:
+                self.simulator.step()
+            except SimulationDivergedError as exc:
+                self._fault = True
+                self.get_logger().error(
+                    f"{exc}. Stopped: publishing that state at rest until ~/reset"
+                )
+                return None
+            self._steps += 1
+            publish = self._steps % self._publish_every == 0 or self._pacer.pauses_here()
+            sample = self._sample(saturated) if publish else None
+            sim_time = self.simulator.time
+        if sample is not None:
+            self._publish(*sample)
+        if self._clock_pub is not None:
+            self._clock_msg.clock = stamp_from_seconds(sim_time)
+            self._clock_pub.publish(self._clock_msg)
+        return sim_time
+
+    def patience_over(self) -> bool:
+        """The controller is gone (killed, hung): a torque loop must not leave the arm pushing,
+        so brake and run on in real time, as before the first command, until torques come back
+        (logged). Lock held."""
+        self.get_logger().warn(
+            f"lockstep: no joint_efforts for {LOCKSTEP_PATIENCE} s (wall clock) at "
+            f"t = {self.simulator.time:.3f} s: joint brakes on, running in real time "
+            "until torque commands come back",
+            throttle_duration_sec=5.0,
+        )
+        self._pacer.last_command = None
+        self.braking = self._braking_logged = True
+        self._pacer.reanchor = True
+        return False
 
     def _watchdog(self) -> None:
         """No valid torque for ``command_timeout``: brakes on, logged once (lock held)."""
-        if self._last_command is None or self.braking:
+        pacer = self._pacer
+        if pacer.last_command is None or self.braking:
             return
-        if self._lockstep > 0.0:
-            age = self.simulator.time - self._command_sim_time
-        else:
-            age = time.monotonic() - self._last_command
-        if age > self._command_timeout:
+        if pacer.command_age(pacer.last_command, pacer.command_sim_time) > self._command_timeout:
             self.braking = True
             if not self._braking_logged:
                 self.get_logger().warn(
@@ -613,45 +445,6 @@ class ContactSimulatorNode(Node):
                     "environment ends"
                 )
                 self._braking_logged = True
-
-    def _pauses_here(self) -> bool:
-        if self._lockstep <= 0.0 or self._last_command is None:
-            return False
-        ahead = self.simulator.time + 0.5 * self.simulator.dt - self._command_sim_time
-        return ahead >= self._lockstep
-
-    def _await_command(self) -> bool:
-        """Lockstep: True (after a short wait) while the next step would run more than
-        ``lockstep_period`` past the newest command. After ``LOCKSTEP_PATIENCE`` of wall time
-        without a command the controller counts as gone: joint brakes on (the push ends) and
-        the simulation runs on in real time, as before the first command, until a torque
-        command comes back (logged)."""
-        if self._lockstep <= 0.0:
-            return False
-        with self._lock:
-            if not self._pauses_here():
-                self._paused_since = None
-                return False
-            now = time.monotonic()
-            if self._paused_since is None:
-                self._paused_since = now
-            elif now - self._paused_since > LOCKSTEP_PATIENCE:
-                # the controller is gone (killed, hung): a torque loop must not leave the arm
-                # pushing, so brake and run on in real time until torques come back
-                self.get_logger().warn(
-                    f"lockstep: no joint_efforts for {LOCKSTEP_PATIENCE} s (wall clock) at "
-                    f"t = {self.simulator.time:.3f} s: joint brakes on, running in real time "
-                    "until torque commands come back",
-                    throttle_duration_sec=5.0,
-                )
-                self._paused_since = None
-                self._last_command = None
-                self.braking = self._braking_logged = True
-                self._reanchor = True
-                return False
-            self._command_arrived.clear()
-        self._command_arrived.wait(0.005)
-        return True
 
     def _sample(self, saturated: int):
         """(time, q, v, effort, wrench (6,), contact sample) of the current state (lock held)."""
@@ -670,7 +463,7 @@ class ContactSimulatorNode(Node):
         contact.append(float(saturated))
         return sim.time, sim.q, sim.v, sim.torque, sim.wrist_wrench(), contact
 
-    def _publish_held_state(self) -> None:
+    def publish_held_state(self) -> None:
         """Faulted: the last finite state at rest (zero velocity, effort, wrench, force)."""
         with self._lock:
             sim = self.simulator

@@ -11,7 +11,7 @@ from rosgraph_msgs.msg import Clock
 
 from rns_ros.core.errors import ConfigError
 from rns_ros.nodes.clock_ticks import MAX_TICKS, ClockTicks, due_ticks
-from rns_ros.nodes.simulator import stamp_from_seconds
+from rns_ros.nodes.sim_clock import stamp_from_seconds
 
 PERIOD = 10_000_000  # 10 ms [ns]
 

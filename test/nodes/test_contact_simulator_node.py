@@ -23,12 +23,8 @@ from std_msgs.msg import Float64MultiArray, String
 from rns_ros.analysis.part2_runs import ArcScenario
 from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
-from rns_ros.nodes.contact_simulator import (
-    CONTACT_LABELS,
-    PARAMETERS,
-    WALL_TASK_RAD,
-    ContactSimulatorNode,
-)
+from rns_ros.nodes.contact_simulator import CONTACT_LABELS, ContactSimulatorNode
+from rns_ros.nodes.contact_simulator_parameters import PARAMETERS, WALL_TASK_RAD
 from rns_ros.nodes.simulator import SimulatorNode, create_simulator_node
 from rns_ros.sim.contact import ArcConstraint, ContactSimulator, PlaneConstraint
 
@@ -222,10 +218,10 @@ def test_lockstep_advances_one_step_per_command(ros):
     command = probe.create_publisher(Float64MultiArray, "joint_efforts", COMMAND_QOS)
     assert ros.spin_until(lambda: len(joints.messages) > 5)
     for _ in range(3):
-        before = node._command_sim_time
+        before = node._pacer.command_sim_time
         command.publish(Float64MultiArray(data=[0.0] * 7))
-        assert ros.spin_until(lambda b=before: node._command_sim_time != b, timeout=2.0)
-        received_at = node._command_sim_time
+        assert ros.spin_until(lambda b=before: node._pacer.command_sim_time != b, timeout=2.0)
+        received_at = node._pacer.command_sim_time
         ros.spin_for(0.2)  # no command: the simulation waits
         assert node.simulator.time == pytest.approx(received_at + step)
 

@@ -29,7 +29,8 @@ from trajectory_msgs.msg import JointTrajectory
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.controller import PARAMETERS, ControllerNode
-from rns_ros.nodes.simulator import SimulatorNode, stamp_from_seconds
+from rns_ros.nodes.sim_clock import stamp_from_seconds
+from rns_ros.nodes.simulator import SimulatorNode
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]

@@ -15,7 +15,7 @@ from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
 from rns_ros.nodes.operator import FINAL_ZEROS, PARAMETERS, OperatorNode
-from rns_ros.nodes.simulator import stamp_from_seconds
+from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.resources import config_dir
 
 SCENARIO = {

@@ -24,7 +24,8 @@ from rns_ros.control.ptp import plan_ptp
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.ptp import PARAMETERS, PtpNode
-from rns_ros.nodes.simulator import SATELLITE_OBSERVATION_RAD, SimulatorNode
+from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]

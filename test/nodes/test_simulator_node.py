@@ -28,14 +28,11 @@ from rns_ros.core import ConfigError, FreeFloatingModel, FreeFloatingState
 from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import base_twist_from_momentum
-from rns_ros.nodes.simulator import (
-    LOCKSTEP_PATIENCE,
-    MAX_GRID_AGE,
-    PARAMETERS,
-    SATELLITE_OBSERVATION_RAD,
-    SimulatorNode,
-    stamp_from_seconds,
-)
+from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE
+from rns_ros.nodes.sim_clock import stamp_from_seconds
+from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.nodes.simulator_commands import MAX_GRID_AGE
+from rns_ros.nodes.simulator_parameters import PARAMETERS, SATELLITE_OBSERVATION_RAD
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -133,19 +130,25 @@ def test_serialized_state_messages_equal_the_messages_they_replace(ros, mode):
     (kept for a layout the templates cannot capture) publishes, efforts included."""
     node = _simulator(ros, mode=mode, publish_clock=True, energy_rate=0.0)
     sent = []
-    for publisher in (node._joint_pub, node._odom_pub, node._momentum_pub, node._clock_pub):
+    publisher_of = node._publisher
+    for publisher in (
+        publisher_of.joint_pub,
+        publisher_of.odom_pub,
+        publisher_of.momentum_pub,
+        publisher_of.clock_pub,
+    ):
         publisher.publish = lambda msg, publisher=publisher: sent.append((publisher, msg))
     with node._lock:
         node.simulator.set_reference(velocities=np.linspace(-0.3, 0.4, 7))
         node.simulator.step()
         state = node.simulator.snapshot()
         momentum = node.simulator.centroidal_momentum()
-    node._publish_state(state, momentum, clock=True)
+    node._publisher.publish(state, momentum, clock=True)
     serialized = list(sent)
     assert all(isinstance(msg, bytes) for _, msg in serialized)
     sent.clear()
-    node._templates = None
-    node._publish_state(state, momentum, clock=True)
+    node._publisher.templates = None
+    node._publisher.publish(state, momentum, clock=True)
     assert [publisher for publisher, _ in sent] == [publisher for publisher, _ in serialized]
     for (publisher, data), (_, msg) in zip(serialized, sent, strict=True):
         assert deserialize_message(data, publisher.msg_type) == msg
@@ -222,10 +225,10 @@ def test_lockstep_pauses_one_period_past_each_command(ros):
     ros.spin_for(0.1)
     assert node.simulator.time > 10 * period  # no command yet: free-running
     for _ in range(3):
-        before = node._command_sim_time  # simulated time of the last receipt
+        before = node._pacer.command_sim_time  # simulated time of the last receipt
         command.publish(Float64MultiArray(data=[0.1] * 7))
-        assert ros.spin_until(lambda b=before: node._command_sim_time != b, timeout=2.0)
-        received_at = node._command_sim_time
+        assert ros.spin_until(lambda b=before: node._pacer.command_sim_time != b, timeout=2.0)
+        received_at = node._pacer.command_sim_time
         ros.spin_for(0.1)
         assert node.simulator.time == pytest.approx(received_at + period)
     # a controller that stops answering pauses the simulation, the arm does not run on
@@ -328,12 +331,12 @@ def test_lockstep_a_late_command_counts_its_period_on_its_stamp_grid(ros):
     node._thread.join(timeout=2.0)
     node.simulator.time = 0.091
     with node._lock:
-        assert node._command_anchor(0.08) == pytest.approx(0.09)  # late: on its grid
-        assert node._command_anchor(0.05) == pytest.approx(0.09)
-        assert node._command_anchor(0.085) == pytest.approx(0.085)  # within the period
-        assert node._command_anchor(0.095) == pytest.approx(0.095)  # waits ahead
-        assert node._command_anchor(0.091 - 2 * MAX_GRID_AGE) == pytest.approx(0.091)
-        assert node._command_anchor(None) == pytest.approx(0.091)  # unstamped: receipt
+        assert node._commands.command_anchor(0.08) == pytest.approx(0.09)  # late: on its grid
+        assert node._commands.command_anchor(0.05) == pytest.approx(0.09)
+        assert node._commands.command_anchor(0.085) == pytest.approx(0.085)  # within the period
+        assert node._commands.command_anchor(0.095) == pytest.approx(0.095)  # waits ahead
+        assert node._commands.command_anchor(0.091 - 2 * MAX_GRID_AGE) == pytest.approx(0.091)
+        assert node._commands.command_anchor(None) == pytest.approx(0.091)  # unstamped: receipt
 
 
 def _nanoseconds(stamp) -> int:
@@ -351,10 +354,10 @@ def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
     clock = Recorder(probe, Clock, "/clock", qos=1000)
     command = probe.create_publisher(Float64MultiArray, "joint_velocities", COMMAND_QOS)
     assert ros.spin_until(lambda: len(joints.messages) >= 3)
-    before = node._command_sim_time
+    before = node._pacer.command_sim_time
     command.publish(Float64MultiArray(data=[0.1] * 7))
-    assert ros.spin_until(lambda: node._command_sim_time != before, timeout=2.0)
-    pause = node._command_sim_time + period
+    assert ros.spin_until(lambda: node._pacer.command_sim_time != before, timeout=2.0)
+    pause = node._pacer.command_sim_time + period
     assert ros.spin_until(lambda: node.simulator.time == pytest.approx(pause), timeout=2.0)
     ros.spin_for(LOCKSTEP_PATIENCE - 0.5)
     assert node.simulator.time == pytest.approx(pause)  # still waiting
@@ -364,17 +367,6 @@ def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
     assert node.simulator.time == pytest.approx(pause + dt)  # one step, then paused again
     assert _seconds(joints.messages[-1].header.stamp) == pytest.approx(pause + dt)
     assert _seconds(clock.messages[-1].clock) == pytest.approx(pause + dt)
-
-
-def test_clock_stamps_round_to_the_nanosecond():
-    """Simulated time summed from 1 ms steps falls a hair short of whole seconds; the stamp is
-    the whole second a sim-time timer waits for (not 1.999999999 s)."""
-    t = 0.0
-    for _ in range(2000):
-        t += 0.001
-    assert t != 2.0
-    assert (stamp_from_seconds(t).sec, stamp_from_seconds(t).nanosec) == (2, 0)
-    assert (stamp_from_seconds(0.0305).sec, stamp_from_seconds(0.0305).nanosec) == (0, 30_500_000)
 
 
 def test_velocity_interface_takes_the_order_of_the_joints_parameter(ros):
@@ -616,7 +608,7 @@ def test_a_diverged_step_stops_the_simulation_until_reset(ros):
         return np.full(v.shape, np.nan)
 
     simulator._acceleration = nan_once
-    assert ros.spin_until(lambda: node._fault, timeout=5.0)
+    assert ros.spin_until(lambda: node._run_state.fault, timeout=5.0)
     simulator._acceleration = healthy
     fault_time = simulator.time  # the last finite state's
 
@@ -645,7 +637,7 @@ def test_a_diverged_step_stops_the_simulation_until_reset(ros):
         return after and _sim_seconds(after[-1]) > 0.2
 
     assert ros.spin_until(running_again, timeout=10.0)
-    assert not node._fault
+    assert not node._run_state.fault
     assert np.allclose(joints.messages[-1].position, SATELLITE_OBSERVATION_RAD, atol=1e-9)
 
 

@@ -1,6 +1,6 @@
 """Command-line pieces shared by the executables: ROS-argument checks, one-line errors, start-up.
 
-Start-up contract of every console script (README "Start-up errors"): a bad argument, parameter,
+Start-up contract of every console script (docs/ros2_integration.md, "Start-up errors"): a bad argument, parameter,
 params file or configuration is one line ``<executable>: <problem>`` on stderr and exit code 2;
 Ctrl-C at any time during start-up is exit code 0 without a traceback.
 

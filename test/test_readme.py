@@ -1,4 +1,5 @@
-"""The README's Python examples run as written, and its set-up commands are the Makefile's."""
+"""The README's and docs' Python examples run as written, the README's set-up commands are the
+Makefile's, and its links point to files that exist."""
 
 from __future__ import annotations
 
@@ -9,7 +10,14 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 README = (REPO / "README.md").read_text()
-PYTHON_BLOCKS = re.findall(r"```python\n(.*?)```", README, flags=re.S)
+#: pages whose Python examples run as written (the README's and the harness example)
+EXAMPLE_PAGES = ("README.md", "docs/ros2_integration.md")
+PYTHON_BLOCKS = [
+    block
+    for page in EXAMPLE_PAGES
+    for block in re.findall(r"```python\n(.*?)```", (REPO / page).read_text(), flags=re.S)
+]
+CONTROLLER_PAGE = (REPO / "docs" / "nodes" / "rns_controller.md").read_text()
 
 
 def test_readme_has_python_examples():
@@ -35,8 +43,8 @@ def test_readme_set_up_commands_exist_in_makefile():
 
 
 def test_the_quoted_hold_correction_figures_are_todays():
-    """The README quotes the core loop's base deviation for midpoint and naive holds; a change
-    of model, scenario or law that moves them must update the README too (2 digits)."""
+    """The controller's page quotes the core loop's base deviation for midpoint and naive holds;
+    a change of model, scenario or law that moves them must update the page too (2 digits)."""
     from rns_ros.analysis.closed_loop import run_scenario
     from rns_ros.control.scenario import load_scenario
     from rns_ros.core import load_model
@@ -45,11 +53,22 @@ def test_the_quoted_hold_correction_figures_are_todays():
     quoted = re.search(
         r"keeps the base still over each held period \(([0-9.e-]+) deg over\s+the 20 s "
         r"satellite-observation scenario at 100 Hz, against ([0-9.e-]+) deg for `naive`\)",
-        README,
+        CONTROLLER_PAGE,
     )
-    assert quoted, "the hold-correction sentence of the README changed; update this test"
+    assert quoted, "the hold-correction sentence of the controller page changed; update this test"
     robot = load_model(default_model_config())
     scenario = load_scenario(config_dir() / "scenarios" / "satellite_observation.yaml")
     for text, hold in zip(quoted.groups(), ("midpoint", "naive"), strict=True):
         measured = run_scenario(robot, scenario, hold_correction=hold).max_base_deviation_deg
-        assert float(text) == float(f"{measured:.1e}"), f"{hold}: README {text}, now {measured:.2e}"
+        assert float(text) == float(f"{measured:.1e}"), f"{hold}: page {text}, now {measured:.2e}"
+
+
+def test_readme_links_point_to_files_that_exist():
+    links = re.findall(r"\]\(((?:docs|config)/[^)#]*)", README)
+    assert links
+    missing = [link for link in links if not (REPO / link).exists()]
+    assert not missing, f"README links to missing files: {missing}"
+
+
+def test_readme_stays_a_few_hundred_lines():
+    assert len(README.splitlines()) <= 300, "move reference material to docs/"

@@ -126,7 +126,7 @@ def test_the_shipped_tap_angle_is_quoted_consistently():
     )
     text = f"{math.degrees(angle):.1f} deg"
     for path in (
-        "README.md",
+        "docs/ros2_integration.md",
         "config/teleop_twist_keyboard.yaml",
         "config/controller_key_teleop.yaml",
     ):

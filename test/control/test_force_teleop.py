@@ -16,23 +16,24 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rns_ros.analysis.part2_runs import QUICK_PERIOD, ArcScenario, WallScenario, run_closed_loop
-from rns_ros.control.force_teleop import (
-    ERROR_LABELS,
-    CommandFrame,
-    ForceControlSettings,
-    ForceControlState,
+from rns_ros.control.contact_topics import ERROR_LABELS
+from rns_ros.control.force.commands import (
     ForceSetpoint,
-    ForceTeleopController,
     JointMeasurement,
-    RigidContactModel,
     TwistCommand,
     WrenchSample,
     command_frames,
-    normal_acceleration,
-    predicted_contact_force,
     validate_force_setpoint,
     validate_twist,
 )
+from rns_ros.control.force.contact_model import (
+    RigidContactModel,
+    normal_acceleration,
+    predicted_contact_force,
+)
+from rns_ros.control.force.controller import ForceTeleopController
+from rns_ros.control.force.settings import CommandFrame, ForceControlSettings
+from rns_ros.control.force.status import ForceControlState
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.resources import config_dir

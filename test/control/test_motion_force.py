@@ -11,27 +11,23 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rns_ros.control.motion_force import (
-    FULL_ROWS,
-    PLANAR_ROWS,
-    ForceGains,
-    MotionGains,
-    OscVariant,
-    ReversedModel,
-    TaskSpace,
-    contact_frame,
+from rns_ros.control.motion_force.null_space import (
     damper_term,
-    force_loop,
-    kernel_projector,
-    motion_loop,
     null_space_velocity,
-    operational_space,
-    os_control,
     resolved_acceleration,
-    rns_control,
-    rns_literal_step,
     velocity_level_term,
 )
+from rns_ros.control.motion_force.osc import OscVariant, operational_space, os_control
+from rns_ros.control.motion_force.outer_loops import (
+    ForceGains,
+    MotionGains,
+    force_loop,
+    motion_loop,
+)
+from rns_ros.control.motion_force.projectors import kernel_projector
+from rns_ros.control.motion_force.reversed_model import ReversedModel
+from rns_ros.control.motion_force.rnsc import rns_control, rns_literal_step
+from rns_ros.control.motion_force.task_space import FULL_ROWS, PLANAR_ROWS, TaskSpace, contact_frame
 from rns_ros.core import ConfigError, InputError, ModelError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 

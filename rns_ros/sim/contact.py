@@ -1,63 +1,13 @@
 r"""Contact simulation of thesis Part II: a fixed-base arm whose end effector touches a rigid body.
 
-Thesis chapter 6 runs its force/motion controllers against a rigid environment it never models
-(thesis_rest A-4.8). This module is that environment: one *scalar holonomic* constraint on the
-end-effector point p_e (3,) [m],
+One scalar holonomic constraint phi(p_e) = 0 on the EE point, held by a Lagrange multiplier with
+Baumgarte stabilization, integrated with RK4 under a held torque:
 
-    phi(p_e) = 0,   phi > 0: p_e is inside the environment (penetration) [m],
+    M_l q_ddot + c_l + g_l = tau - J_c^T lambda,      J_c = n^T J_v                  (C.1)
+    J_c q_ddot = -J_c_dot q_dot - K_v phi_dot - K_p phi                              (C.2)
 
-enforced exactly by a Lagrange multiplier, with Baumgarte stabilization against numerical drift.
-
-Constraints (:class:`ArcConstraint`, :class:`PlaneConstraint`) give phi(p), its gradient
-n = d phi / d p (3,) - the unit contact normal pointing INTO the environment, i.e. the direction in
-which the end effector pushes - and the curvature term kappa = p_dot^T (d^2 phi / d p^2) p_dot
-[m/s^2], so that along any motion
-
-    phi_dot  = n^T p_dot = J_c q_dot,                   J_c = n^T J_v  (1, n)
-    phi_ddot = J_c q_ddot + n^T (J_v_dot q_dot) + kappa = J_c q_ddot + J_c_dot q_dot,
-
-with J_v the top (linear) rows of the end-effector Jacobian J_e of eq. (6.3) (world axes, at the EE
-origin) and J_v_dot q_dot its classical drift.
-
-Dynamics (eq. 6.2 with the contact force of the environment on the end effector written out):
-
-    M_l q_ddot + c_l + g_l = tau - J_c^T lambda                                     (C.1)
-    J_c q_ddot = -J_c_dot q_dot - K_v phi_dot - K_p phi                            (C.2)
-
-Sign convention: ``lambda`` [N] is the normal force the end effector exerts ON the environment,
-along n; it is >= 0 while the arm pushes. The environment pushes back on the end effector with
--lambda n, whence the minus sign in (C.1). This is the thesis' F_c (section 6.1.1 and
-thesis_rest A-4.1: "the force the EE exerts on the environment", tau contains +J_e^T n f): the
-static torque tau = J_c^T f, at rest and without gravity, gives lambda = f and q_ddot = 0. In the
-notation of eq. (6.2), the wrench on the end effector is F_kappa = -[lambda n; 0].
-
-(C.1)-(C.2) is the KKT system [[M, J_c^T], [J_c, 0]] [q_ddot; lambda] = [tau - c - g; rhs] (the
-form [[M, -J_c^T], ...] with the multiplier of opposite sign, the force on the end effector),
-solved through the scalar Schur complement J_c M^-1 J_c^T (the one-constraint form of eq. 6.22):
-
-    lambda = (J_c M^-1 (tau - c - g) + J_c_dot q_dot + K_v phi_dot + K_p phi) / (J_c M^-1 J_c^T).
-
-Pinocchio's constrained dynamics (RigidConstraintModel) holds whole 3-D or 6-D point/frame
-contacts, not one scalar normal, so the system is assembled here from CRBA, RNEA and the frame
-Jacobian (one Pinocchio pass per RK4 stage).
-
-The constraint is *bilateral*, like the thesis' rigid contact: a pulling force (lambda < 0) keeps
-the end effector on the surface instead of letting it lift off. Such steps are flagged
-(:attr:`ContactSimulator.pulling`) and counted (:attr:`ContactSimulator.pulling_steps`); a
-controller that is meant to keep contact should never produce one.
-
-Baumgarte stabilization (:class:`Baumgarte`): (C.2) makes the constraint error obey
-phi_ddot + K_v phi_dot + K_p phi = 0, so a residual (integration or round-off error, or an
-admitted start offset) decays instead of drifting. The defaults K_v = 100 1/s, K_p = 2500 1/s^2
-are critical damping at omega = 50 rad/s (time constant 20 ms, 50 RK4 steps at 1 ms). The
-constraint does no work as long as phi_dot = 0, so the energy balance dKE/dt + dPE/dt = tau .
-q_dot holds to the integration accuracy.
-
-Integration: classical RK4 at a fixed step (1 ms default, thesis_rest 4.7), the torque held over
-the step (zero-order hold, like a digital current loop). Fixed-base arms of one-DoF joints have
-nq = nv, so the configuration integrates as a plain vector. A step that leaves a non-finite state
-(or meets a singular constraint, J_c M^-1 J_c^T = 0) keeps the previous state and raises
-:class:`rns_ros.core.errors.SimulationDivergedError`.
+lambda [N] is the normal force the EE exerts ON the environment along n (>= 0 pushing, [A-4.1]);
+the constraint is bilateral. Model, signs and tolerances: docs/part2.md, "Contact simulation".
 """
 
 from __future__ import annotations

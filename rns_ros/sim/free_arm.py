@@ -4,26 +4,13 @@ r"""The free fixed-base arm of thesis Part II (no contact), and the joint brake 
 
     M_l(q) q_ddot + c_l(q, q_dot) + g_l(q) = tau,                                    (F.1)
 
-with classical RK4 at a fixed step and the torque held over the step (zero-order hold), exactly
-like :class:`rns_ros.sim.contact.ContactSimulator` does with its constraint; q_ddot comes from
-Pinocchio's ABA. It offers the subset of the ContactSimulator interface a torque-driven
-simulator node uses (``q``, ``v``, ``time``, ``dt``, ``torque``, ``set_torque``, ``step``,
-``reset``, ``contact_force`` = 0, ``ee_position()``, ``wrist_wrench()`` = 0, ``snapshot()``...),
-so the node runs the free arm (``environment: none``) and the arm in contact the same way.
-
-:class:`JointBrake` is the torque the simulated robot's own brakes apply when its controller has
-gone silent: gravity held, joint motion damped,
+with RK4 under a held torque, behind the interface of :class:`rns_ros.sim.contact.
+ContactSimulator` (contact force and wrenches 0). :class:`JointBrake` is the torque the robot's
+own brakes apply when its controller has gone silent, gravity held and joints damped:
 
     tau_brake = g_l(q) - B(q) q_dot,   B = d M_l (M_l + dt d I)^-1                 (F.2)
 
-(d [N m s/rad] the brake damping). B is the *implicit* (backward Euler) form of the joint damping
-d I: tau = g - d q_dot_{k+1} with q_dot_{k+1} = q_dot_k + dt M^-1 (tau - g) solved for tau. A
-plain explicit d q_dot_k held over a step is unstable as soon as dt d exceeds twice the smallest
-eigenvalue of M_l (the LWR's wrist: 4.9e-4 kg m^2, so d > 1 N m s/rad at 1 ms); with (F.2) every
-mode of M_l (eigenvalue m) loses the fraction dt d / (m + dt d) in (0, 1) of its speed per step:
-heavy modes brake with the damping d, light ones stop within a step. In contact the same holds
-for the constrained motion (the projection of the velocity onto the constraint's tangent space
-in the M_l^(1/2) metric does not increase the contraction factor).
+(d [N m s/rad] the brake damping; why implicit: docs/part2_ros.md, "Stale or invalid torque").
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The force controller step: operator motion/force teleoperation of a fixed-base arm in
-contact, one control step per measured joint state (docs/part2_ros.md, "The control step")."""
+contact, one control step per measured joint state (docs/part2_ros.md, "One step")."""
 
 from __future__ import annotations
 
@@ -273,7 +273,7 @@ class ForceTeleopController:
 
     # --- the step -------------------------------------------------------------------------------
     def step(self, measurement: JointMeasurement, now: float) -> ForceStep:
-        """One control step at a measured state (stages: docs/part2_ros.md, "The control step").
+        """One control step at a measured state (stages: docs/part2_ros.md, "One step").
 
         Args:
             measurement: the joint state (model order) with its stamp [ns] and held effort.

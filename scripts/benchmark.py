@@ -645,15 +645,14 @@ def force_controller(samples: int) -> None:
     """rns_force_controller's step (rns_ros.control.force_teleop) on the LWR wall task, one
     stroke closed around the in-process ContactSimulator, and the simulator's contact step."""
     from rns_ros.analysis.part2_runs import WallScenario
-    from rns_ros.control.force_teleop import (
-        CommandFrame,
-        ForceControlSettings,
+    from rns_ros.control.force.commands import (
         ForceSetpoint,
-        ForceTeleopController,
         JointMeasurement,
         TwistCommand,
         WrenchSample,
     )
+    from rns_ros.control.force.controller import ForceTeleopController
+    from rns_ros.control.force.settings import CommandFrame, ForceControlSettings
     from rns_ros.sim.contact import ContactSimulator
 
     setup = WallScenario(strokes=1).setup()

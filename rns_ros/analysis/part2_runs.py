@@ -36,21 +36,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rns_ros.control.motion_force import (
-    FULL_ROWS,
-    PLANAR_ROWS,
+from rns_ros.control.motion_force.osc import OscVariant, os_control
+from rns_ros.control.motion_force.outer_loops import (
     ForceGains,
     MotionGains,
-    OscVariant,
-    ReversedModel,
-    TaskSpace,
-    contact_frame,
     force_loop,
-    kernel_projector,
     motion_loop,
-    os_control,
-    rns_control,
 )
+from rns_ros.control.motion_force.projectors import kernel_projector
+from rns_ros.control.motion_force.reversed_model import ReversedModel
+from rns_ros.control.motion_force.rnsc import rns_control
+from rns_ros.control.motion_force.task_space import FULL_ROWS, PLANAR_ROWS, TaskSpace, contact_frame
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState, load_fixed_base_model
 from rns_ros.core.validation import Choice, positive

@@ -14,20 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rns_ros.control.contact_topics import ERROR_LABELS
 from rns_ros.core.errors import InputError
 
 #: Columns of the force controller's ``~/errors`` samples used here.
-REQUIRED_COLUMNS = (
-    "time",
-    "position_error_x",
-    "position_error_y",
-    "position_error_z",
-    "orientation_error",
-    "force_desired",
-    "force_error",
-    "normal_x",
-    "normal_y",
-    "normal_z",
+REQUIRED_COLUMNS = tuple(
+    label
+    for label in ERROR_LABELS
+    if label not in ("force_measured", "force_reference", "joint_speed", "force_active")
 )
 
 

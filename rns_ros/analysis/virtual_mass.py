@@ -38,20 +38,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rns_ros.control.motion_force import (
+from rns_ros.control.motion_force.null_space import (
     DEFAULT_DAMPER_GAIN,
-    PLANAR_ROWS,
-    MotionGains,
-    ReversedModel,
-    TaskSpace,
     VelocityTermForm,
     damper_term,
-    motion_loop,
     null_space_velocity,
     resolved_acceleration,
-    rns_control,
     velocity_level_term,
 )
+from rns_ros.control.motion_force.outer_loops import MotionGains, motion_loop
+from rns_ros.control.motion_force.reversed_model import ReversedModel
+from rns_ros.control.motion_force.rnsc import rns_control
+from rns_ros.control.motion_force.task_space import PLANAR_ROWS, TaskSpace
 from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState
 from rns_ros.core.validation import Choice, as_vector, positive

@@ -41,19 +41,17 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from std_srvs.srv import Trigger
 
-from rns_ros.control.force_teleop import (
-    ERROR_LABELS,
-    CommandFrame,
-    ForceControlSettings,
-    ForceControlState,
-    ForceStep,
-    ForceTeleopController,
+from rns_ros.control.contact_topics import ERROR_LABELS
+from rns_ros.control.force.commands import (
     JointMeasurement,
     WrenchSample,
     command_frames,
     validate_force_setpoint,
     validate_twist,
 )
+from rns_ros.control.force.controller import ForceTeleopController
+from rns_ros.control.force.settings import CommandFrame, ForceControlSettings
+from rns_ros.control.force.status import ForceControlState, ForceStep
 from rns_ros.core.commands import joint_order
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.fixed_base import load_fixed_base_model

@@ -63,6 +63,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 
+from rns_ros.control.contact_topics import CONTACT_LABELS, ERROR_LABELS
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import twist_frame_ids
 from rns_ros.core.commands import match_named_command, partial_joint_goal
@@ -79,8 +80,6 @@ from rns_ros.nodes.ptp import DEPLOY_GOAL
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 from rns_ros.viz.contact import (
-    CONTACT_LABELS,
-    ERROR_LABELS,
     ContactRecorder,
     ContactSettings,
     labelled_values,

@@ -1,63 +1,13 @@
 r"""Contact simulation of thesis Part II: a fixed-base arm whose end effector touches a rigid body.
 
-Thesis chapter 6 runs its force/motion controllers against a rigid environment it never models
-(thesis_rest A-4.8). This module is that environment: one *scalar holonomic* constraint on the
-end-effector point p_e (3,) [m],
+One scalar holonomic constraint phi(p_e) = 0 on the EE point, held by a Lagrange multiplier with
+Baumgarte stabilization, integrated with RK4 under a held torque:
 
-    phi(p_e) = 0,   phi > 0: p_e is inside the environment (penetration) [m],
+    M_l q_ddot + c_l + g_l = tau - J_c^T lambda,      J_c = n^T J_v                  (C.1)
+    J_c q_ddot = -J_c_dot q_dot - K_v phi_dot - K_p phi                              (C.2)
 
-enforced exactly by a Lagrange multiplier, with Baumgarte stabilization against numerical drift.
-
-Constraints (:class:`ArcConstraint`, :class:`PlaneConstraint`) give phi(p), its gradient
-n = d phi / d p (3,) - the unit contact normal pointing INTO the environment, i.e. the direction in
-which the end effector pushes - and the curvature term kappa = p_dot^T (d^2 phi / d p^2) p_dot
-[m/s^2], so that along any motion
-
-    phi_dot  = n^T p_dot = J_c q_dot,                   J_c = n^T J_v  (1, n)
-    phi_ddot = J_c q_ddot + n^T (J_v_dot q_dot) + kappa = J_c q_ddot + J_c_dot q_dot,
-
-with J_v the top (linear) rows of the end-effector Jacobian J_e of eq. (6.3) (world axes, at the EE
-origin) and J_v_dot q_dot its classical drift.
-
-Dynamics (eq. 6.2 with the contact force of the environment on the end effector written out):
-
-    M_l q_ddot + c_l + g_l = tau - J_c^T lambda                                     (C.1)
-    J_c q_ddot = -J_c_dot q_dot - K_v phi_dot - K_p phi                            (C.2)
-
-Sign convention: ``lambda`` [N] is the normal force the end effector exerts ON the environment,
-along n; it is >= 0 while the arm pushes. The environment pushes back on the end effector with
--lambda n, whence the minus sign in (C.1). This is the thesis' F_c (section 6.1.1 and
-thesis_rest A-4.1: "the force the EE exerts on the environment", tau contains +J_e^T n f): the
-static torque tau = J_c^T f, at rest and without gravity, gives lambda = f and q_ddot = 0. In the
-notation of eq. (6.2), the wrench on the end effector is F_kappa = -[lambda n; 0].
-
-(C.1)-(C.2) is the KKT system [[M, J_c^T], [J_c, 0]] [q_ddot; lambda] = [tau - c - g; rhs] (the
-form [[M, -J_c^T], ...] with the multiplier of opposite sign, the force on the end effector),
-solved through the scalar Schur complement J_c M^-1 J_c^T (the one-constraint form of eq. 6.22):
-
-    lambda = (J_c M^-1 (tau - c - g) + J_c_dot q_dot + K_v phi_dot + K_p phi) / (J_c M^-1 J_c^T).
-
-Pinocchio's constrained dynamics (RigidConstraintModel) holds whole 3-D or 6-D point/frame
-contacts, not one scalar normal, so the system is assembled here from CRBA, RNEA and the frame
-Jacobian (one Pinocchio pass per RK4 stage).
-
-The constraint is *bilateral*, like the thesis' rigid contact: a pulling force (lambda < 0) keeps
-the end effector on the surface instead of letting it lift off. Such steps are flagged
-(:attr:`ContactSimulator.pulling`) and counted (:attr:`ContactSimulator.pulling_steps`); a
-controller that is meant to keep contact should never produce one.
-
-Baumgarte stabilization (:class:`Baumgarte`): (C.2) makes the constraint error obey
-phi_ddot + K_v phi_dot + K_p phi = 0, so a residual (integration or round-off error, or an
-admitted start offset) decays instead of drifting. The defaults K_v = 100 1/s, K_p = 2500 1/s^2
-are critical damping at omega = 50 rad/s (time constant 20 ms, 50 RK4 steps at 1 ms). The
-constraint does no work as long as phi_dot = 0, so the energy balance dKE/dt + dPE/dt = tau .
-q_dot holds to the integration accuracy.
-
-Integration: classical RK4 at a fixed step (1 ms default, thesis_rest 4.7), the torque held over
-the step (zero-order hold, like a digital current loop). Fixed-base arms of one-DoF joints have
-nq = nv, so the configuration integrates as a plain vector. A step that leaves a non-finite state
-(or meets a singular constraint, J_c M^-1 J_c^T = 0) keeps the previous state and raises
-:class:`rns_ros.core.errors.SimulationDivergedError`.
+lambda [N] is the normal force the EE exerts ON the environment along n (>= 0 pushing, [A-4.1]);
+the constraint is bilateral. Model, signs and tolerances: docs/part2.md, "Contact simulation".
 """
 
 from __future__ import annotations
@@ -68,16 +18,15 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
+from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.core.validation import as_vector, positive
+from rns_ros.sim.torque_driven import TorqueDrivenArm
 
 #: Default largest |phi| [m] of a start configuration, and |phi_dot| [m/s] of a start velocity.
 START_TOLERANCE = 1e-6
 #: Norm below which a direction vector (axis, normal) cannot be normalized.
 _TINY_NORM = 1e-9
-#: What a step changes (restored when it diverges); each step assigns new objects.
-_STEP_STATE = ("time", "q", "v", "work", "pulling", "pulling_steps", "_cache")
 
 
 def _point(value, name: str) -> np.ndarray:
@@ -265,24 +214,6 @@ class Baumgarte:
 _MAX_BAUMGARTE_RATE_DT = 1.4
 
 
-@dataclass(frozen=True)
-class ContactState:
-    """Snapshot after a step (copies; safe to keep).
-
-    Attributes:
-        time [s]; q [rad], v [rad/s], torque [N m]: (n,); contact_force lambda [N] (>= 0
-        pushing); phi [m], phi_dot [m/s]: the constraint error.
-    """
-
-    time: float
-    q: np.ndarray
-    v: np.ndarray
-    torque: np.ndarray
-    contact_force: float
-    phi: float
-    phi_dot: float
-
-
 def project_onto_constraint(
     robot: FixedBaseModel,
     constraint: Constraint,
@@ -361,7 +292,7 @@ class _Terms:
         return free - self.mobility * force, force
 
 
-class ContactSimulator:
+class ContactSimulator(TorqueDrivenArm):
     """Torque-driven fixed-base arm with its end effector held on a rigid surface (RK4).
 
     See the module docstring for the model (C.1)-(C.2) and the sign of ``lambda``.
@@ -390,6 +321,9 @@ class ContactSimulator:
         ConfigError: bad dt, gains, or a start state off the constraint. InputError: bad q/v.
     """
 
+    _STEP_STATE = ("time", "q", "v", "work", "pulling", "pulling_steps", "_cache")
+    _KIND = "contact simulation"
+
     def __init__(
         self,
         robot: FixedBaseModel,
@@ -411,11 +345,8 @@ class ContactSimulator:
                 )
         if robot.model.nq != robot.model.nv:
             raise ConfigError(f"{robot.name}: nq != nv; the contact simulator needs 1-DoF joints")
-        self.robot = robot
+        self._init_arm(robot, dt, clip_torque)
         self.constraint = constraint
-        self.dt = positive(dt, "dt", "[s]")
-        if self.dt > 0.1:
-            raise ConfigError(f"dt must be in (0, 0.1] s, got {dt!r}")
         if stabilization is not None and not isinstance(stabilization, Baumgarte):
             raise ConfigError(f"stabilization must be a Baumgarte or None, got {stabilization!r}")
         self.stabilization = stabilization
@@ -428,22 +359,11 @@ class ContactSimulator:
                 f"{rate:.4g} 1/s gives rate * dt = {rate * self.dt:.3g}, must be <= "
                 f"{_MAX_BAUMGARTE_RATE_DT}"
             )
-        self.clip_torque = bool(clip_torque)
-        limits = np.array(robot.effort_limits, dtype=float)
-        limits[~(np.isfinite(limits) & (limits > 0.0))] = np.inf
-        self.effort_limits = limits
         tolerance = positive(tolerance, "tolerance", "[m]")
         velocity_tolerance = positive(velocity_tolerance, "velocity_tolerance", "[m/s]")
-        self._model = robot.model
-        self._data = robot.model.createData()  # own scratch: robot.data stays the caller's
         self._zero = np.zeros(robot.n)
         self._lower = np.tril_indices(robot.n, -1)
-        self._initial_q = as_vector(initial_q, robot.n, "initial_q").copy()
-        self._initial_v = (
-            np.zeros(robot.n)
-            if initial_v is None
-            else as_vector(initial_v, robot.n, "initial_v").copy()
-        )
+        self._init_start(initial_q, initial_v)
         self.q, self.v = self._initial_q, self._initial_v
         phi, phi_dot = self.constraint_error()
         if abs(phi) > tolerance:
@@ -462,32 +382,10 @@ class ContactSimulator:
     # --- state ---------------------------------------------------------------------------------
     def reset(self) -> None:
         """Back to the initial state, zero torque, zero work, no pulling count."""
-        self.time = 0.0
-        self.q = self._initial_q.copy()
-        self.v = self._initial_v.copy()
-        self.torque = np.zeros(self.robot.n)
-        self.work = 0.0
+        self._reset_arm()
         self._cache: _Terms | None = None
         self.pulling = False
         self.pulling_steps = 0
-
-    def set_torque(self, tau) -> None:
-        """Joint torques [N m] (n,), finite, held over the following steps (zero-order hold).
-
-        With ``clip_torque`` each component is clipped to its URDF effort limit.
-
-        Raises:
-            InputError: wrong shape or non-finite.
-        """
-        tau = as_vector(tau, self.robot.n, "tau").copy()
-        if self.clip_torque:
-            tau = np.clip(tau, -self.effort_limits, self.effort_limits)
-        self.torque = tau
-
-    @property
-    def torque_clipped(self) -> np.ndarray:
-        """Joints whose held torque sits at its effort limit (bool (n,))."""
-        return np.abs(self.torque) >= self.effort_limits
 
     def _current_terms(self) -> _Terms:
         if self._cache is None:
@@ -546,30 +444,6 @@ class ContactSimulator:
         p_dot = J_v @ self.v
         return self.constraint.phi(p), float(self.constraint.gradient(p) @ p_dot)
 
-    def kinetic_energy(self) -> float:
-        """1/2 q_dot^T M_l q_dot [J]."""
-        return float(pin.computeKineticEnergy(self._model, self._data, self.q, self.v))
-
-    def potential_energy(self) -> float:
-        """Gravitational potential energy [J] (0 with gravity off)."""
-        return float(pin.computePotentialEnergy(self._model, self._data, self.q))
-
-    def power(self) -> float:
-        """Joint power tau . q_dot [W] of the held torque at the current velocity."""
-        return float(self.torque @ self.v)
-
-    def snapshot(self) -> ContactState:
-        phi, phi_dot = self.constraint_error()
-        return ContactState(
-            time=self.time,
-            q=self.q.copy(),
-            v=self.v.copy(),
-            torque=self.torque.copy(),
-            contact_force=self.contact_force,
-            phi=phi,
-            phi_dot=phi_dot,
-        )
-
     # --- stepping ------------------------------------------------------------------------------
     def step(self) -> None:
         """Advance by dt with the held torque (RK4); then evaluate the contact force.
@@ -579,52 +453,30 @@ class ContactSimulator:
                 or met a singular constraint (J_c M^-1 J_c^T = 0); time, state, work and the
                 pulling count are left as they were before the step (the last finite state).
         """
-        before = {name: getattr(self, name) for name in _STEP_STATE}
-        failure = ""
-        force = math.nan
-        try:
-            with np.errstate(all="ignore"):  # reported below, as SimulationDivergedError
-                self._advance()
-                force = self.contact_force  # the state reached, under the held torque
-        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            failure = f"{type(exc).__name__}: {exc}"
-        if not failure:
-            if self._cache is not None and not self._cache.schur > 0.0:
-                failure = (
-                    "a singular constraint (J_c M^-1 J_c^T = 0: the end effector cannot move "
-                    "along the contact normal)"
-                )
-            else:
-                values = (("q", self.q), ("v", self.v), ("contact force", force))
-                bad = [name for name, value in values if not np.isfinite(value).all()]
-                if bad:
-                    failure = f"non-finite {' and '.join(bad)}"
-        if failure:
-            start = before["time"]
-            for name, value in before.items():
-                setattr(self, name, value)
-            raise SimulationDivergedError(
-                f"contact simulation diverged in the step from t = {start:.6g} s: {failure}; kept "
-                "the last finite state"
-            )
+        errors = (ValueError, ArithmeticError, np.linalg.LinAlgError)
+        force = self._guarded_step(self._advance_checked, errors)
         self.pulling = force < 0.0
         self.pulling_steps += int(self.pulling)
 
+    def _advance_checked(self) -> tuple[str, float]:
+        """One RK4 step and the contact force it reaches; the failure text ("" if none)."""
+        self._advance()
+        force = self.contact_force  # the state reached, under the held torque
+        if self._cache is not None and not self._cache.schur > 0.0:
+            failure = (
+                "a singular constraint (J_c M^-1 J_c^T = 0: the end effector cannot move "
+                "along the contact normal)"
+            )
+            return failure, force
+        values = (("q", self.q), ("v", self.v), ("contact force", force))
+        bad = [name for name, value in values if not np.isfinite(value).all()]
+        return (f"non-finite {' and '.join(bad)}" if bad else ""), force
+
     def _advance(self) -> None:
         """One RK4 step of (q, v) with the held torque."""
-        q, v, tau, dt = self.q, self.v, self.torque, self.dt
+        tau = self.torque
         k1v = self._current_terms().solve(tau)[0]
-        v2 = v + 0.5 * dt * k1v
-        k2v = self._terms(q + 0.5 * dt * v, v2).solve(tau)[0]
-        v3 = v + 0.5 * dt * k2v
-        k3v = self._terms(q + 0.5 * dt * v2, v3).solve(tau)[0]
-        v4 = v + dt * k3v
-        k4v = self._terms(q + dt * v3, v4).solve(tau)[0]
-        new_q = q + dt / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
-        self.v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
-        self.work = self.work + float(tau @ (new_q - q))
-        self.q = new_q
-        self.time = self.time + dt
+        self._rk4(k1v, lambda q, v: self._terms(q, v).solve(tau)[0])
         self._cache = None
 
     def _terms(self, q: np.ndarray, v: np.ndarray) -> _Terms:

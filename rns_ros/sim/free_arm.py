@@ -4,26 +4,13 @@ r"""The free fixed-base arm of thesis Part II (no contact), and the joint brake 
 
     M_l(q) q_ddot + c_l(q, q_dot) + g_l(q) = tau,                                    (F.1)
 
-with classical RK4 at a fixed step and the torque held over the step (zero-order hold), exactly
-like :class:`rns_ros.sim.contact.ContactSimulator` does with its constraint; q_ddot comes from
-Pinocchio's ABA. It offers the subset of the ContactSimulator interface a torque-driven
-simulator node uses (``q``, ``v``, ``time``, ``dt``, ``torque``, ``set_torque``, ``step``,
-``reset``, ``contact_force`` = 0, ``ee_position()``, ``wrist_wrench()`` = 0, ``snapshot()``...),
-so the node runs the free arm (``environment: none``) and the arm in contact the same way.
-
-:class:`JointBrake` is the torque the simulated robot's own brakes apply when its controller has
-gone silent: gravity held, joint motion damped,
+with RK4 under a held torque, behind the interface of :class:`rns_ros.sim.contact.
+ContactSimulator` (contact force and wrenches 0). :class:`JointBrake` is the torque the robot's
+own brakes apply when its controller has gone silent, gravity held and joints damped:
 
     tau_brake = g_l(q) - B(q) q_dot,   B = d M_l (M_l + dt d I)^-1                 (F.2)
 
-(d [N m s/rad] the brake damping). B is the *implicit* (backward Euler) form of the joint damping
-d I: tau = g - d q_dot_{k+1} with q_dot_{k+1} = q_dot_k + dt M^-1 (tau - g) solved for tau. A
-plain explicit d q_dot_k held over a step is unstable as soon as dt d exceeds twice the smallest
-eigenvalue of M_l (the LWR's wrist: 4.9e-4 kg m^2, so d > 1 N m s/rad at 1 ms); with (F.2) every
-mode of M_l (eigenvalue m) loses the fraction dt d / (m + dt d) in (0, 1) of its speed per step:
-heavy modes brake with the damping d, light ones stop within a step. In contact the same holds
-for the constrained motion (the projection of the velocity onto the constraint's tangent space
-in the M_l^(1/2) metric does not increase the contraction factor).
+(d [N m s/rad] the brake damping; why implicit: docs/part2_ros.md, "Stale or invalid torque").
 """
 
 from __future__ import annotations
@@ -31,16 +18,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from rns_ros.core.errors import ConfigError, SimulationDivergedError
+from rns_ros.core.errors import ConfigError
 from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.core.validation import as_vector, positive
-from rns_ros.sim.contact import ContactState
-
-#: What a step changes (restored when it diverges); each step assigns new objects.
-_STEP_STATE = ("time", "q", "v", "work")
+from rns_ros.sim.torque_driven import TorqueDrivenArm
 
 
-class FreeArmSimulator:
+class FreeArmSimulator(TorqueDrivenArm):
     """Torque-driven fixed-base arm without contact, eq. (F.1), RK4 at a fixed step.
 
     Args:
@@ -61,6 +45,7 @@ class FreeArmSimulator:
     """
 
     constraint = None
+    _KIND = "free-arm simulation"
 
     def __init__(
         self,
@@ -73,51 +58,16 @@ class FreeArmSimulator:
     ) -> None:
         if robot.model.nq != robot.model.nv:
             raise ConfigError(f"{robot.name}: nq != nv; the free-arm simulator needs 1-DoF joints")
-        self.robot = robot
-        self.dt = positive(dt, "dt", "[s]")
-        if self.dt > 0.1:
-            raise ConfigError(f"dt must be in (0, 0.1] s, got {dt!r}")
-        self.clip_torque = bool(clip_torque)
-        limits = np.array(robot.effort_limits, dtype=float)
-        limits[~(np.isfinite(limits) & (limits > 0.0))] = np.inf
-        self.effort_limits = limits
-        self._model = robot.model
-        self._data = robot.model.createData()  # own scratch: robot.data stays the caller's
-        self._initial_q = as_vector(initial_q, robot.n, "initial_q").copy()
-        self._initial_v = (
-            np.zeros(robot.n)
-            if initial_v is None
-            else as_vector(initial_v, robot.n, "initial_v").copy()
-        )
+        self._init_arm(robot, dt, clip_torque)
+        self._init_start(initial_q, initial_v)
         self.reset()
 
     # --- state ---------------------------------------------------------------------------------
     def reset(self) -> None:
         """Back to the initial state, zero torque, zero work."""
-        self.time = 0.0
-        self.q = self._initial_q.copy()
-        self.v = self._initial_v.copy()
-        self.torque = np.zeros(self.robot.n)
-        self.work = 0.0
+        self._reset_arm()
         self.pulling = False
         self.pulling_steps = 0
-
-    def set_torque(self, tau) -> None:
-        """Joint torques [N m] (n,), finite, held over the following steps (clipped to the
-        effort limits with ``clip_torque``).
-
-        Raises:
-            InputError: wrong shape or non-finite.
-        """
-        tau = as_vector(tau, self.robot.n, "tau").copy()
-        if self.clip_torque:
-            tau = np.clip(tau, -self.effort_limits, self.effort_limits)
-        self.torque = tau
-
-    @property
-    def torque_clipped(self) -> np.ndarray:
-        """Joints whose held torque sits at its effort limit (bool (n,))."""
-        return np.abs(self.torque) >= self.effort_limits
 
     @property
     def contact_force(self) -> float:
@@ -150,30 +100,6 @@ class FreeArmSimulator:
         """(0, 0): no constraint."""
         return 0.0, 0.0
 
-    def kinetic_energy(self) -> float:
-        """1/2 q_dot^T M_l q_dot [J]."""
-        return float(pin.computeKineticEnergy(self._model, self._data, self.q, self.v))
-
-    def potential_energy(self) -> float:
-        """Gravitational potential energy [J] (0 with gravity off)."""
-        return float(pin.computePotentialEnergy(self._model, self._data, self.q))
-
-    def power(self) -> float:
-        """Joint power tau . q_dot [W] of the held torque at the current velocity."""
-        return float(self.torque @ self.v)
-
-    def snapshot(self) -> ContactState:
-        """The state as a :class:`ContactState` (contact force, phi and phi_dot 0)."""
-        return ContactState(
-            time=self.time,
-            q=self.q.copy(),
-            v=self.v.copy(),
-            torque=self.torque.copy(),
-            contact_force=0.0,
-            phi=0.0,
-            phi_dot=0.0,
-        )
-
     # --- stepping ------------------------------------------------------------------------------
     def step(self) -> None:
         """Advance by dt with the held torque (RK4 of (F.1)).
@@ -182,43 +108,16 @@ class FreeArmSimulator:
             SimulationDivergedError: a non-finite q or v (or a failing ABA); time, state and work
                 are left as they were before the step (the last finite state).
         """
-        before = {name: getattr(self, name) for name in _STEP_STATE}
-        failure = ""
-        try:
-            with np.errstate(all="ignore"):
-                self._advance()
-        except (ValueError, ArithmeticError, RuntimeError) as exc:
-            failure = f"{type(exc).__name__}: {exc}"
-        if not failure:
-            bad = [name for name in ("q", "v") if not np.isfinite(getattr(self, name)).all()]
-            if bad:
-                failure = f"non-finite {' and '.join(bad)}"
-        if failure:
-            start = before["time"]
-            for name, value in before.items():
-                setattr(self, name, value)
-            raise SimulationDivergedError(
-                f"free-arm simulation diverged in the step from t = {start:.6g} s: {failure}; "
-                "kept the last finite state"
-            )
+        self._guarded_step(self._advance, (ValueError, ArithmeticError, RuntimeError))
 
     def _acceleration(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return pin.aba(self._model, self._data, q, v, self.torque).copy()
 
-    def _advance(self) -> None:
-        q, v, dt = self.q, self.v, self.dt
-        k1v = self._acceleration(q, v)
-        v2 = v + 0.5 * dt * k1v
-        k2v = self._acceleration(q + 0.5 * dt * v, v2)
-        v3 = v + 0.5 * dt * k2v
-        k3v = self._acceleration(q + 0.5 * dt * v2, v3)
-        v4 = v + dt * k3v
-        k4v = self._acceleration(q + dt * v3, v4)
-        new_q = q + dt / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
-        self.v = v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
-        self.work = self.work + float(self.torque @ (new_q - q))
-        self.q = new_q
-        self.time = self.time + dt
+    def _advance(self) -> tuple[str, None]:
+        """One RK4 step; the failure text of a non-finite result ("" if none)."""
+        self._rk4(self._acceleration(self.q, self.v), self._acceleration)
+        bad = [name for name in ("q", "v") if not np.isfinite(getattr(self, name)).all()]
+        return (f"non-finite {' and '.join(bad)}" if bad else ""), None
 
 
 class JointBrake:

@@ -47,6 +47,7 @@ import pinocchio as pin
 import rerun as rr
 import yaml
 
+from rns_ros.control.contact_topics import ERROR_LABELS
 from rns_ros.core.config import load_model_config
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, load_fixed_base_model
@@ -57,39 +58,6 @@ from rns_ros.viz import paths
 from rns_ros.viz.blueprint import contact_blueprint
 from rns_ros.viz.quantities import RateLimiter
 from rns_ros.viz.recorder import TelemetryRecorder, _Rows
-
-#: Layout of the ``contact`` topic (docs/part2_ros.md); used when a message carries no labels.
-CONTACT_LABELS = (
-    "time",
-    "contact_state",
-    "normal_force",
-    "gap",
-    "gap_rate",
-    "point_x",
-    "point_y",
-    "point_z",
-    "normal_x",
-    "normal_y",
-    "normal_z",
-    "saturated_joints",
-)
-#: Layout of the force controller's ``~/errors`` topic (docs/part2_ros.md).
-ERROR_LABELS = (
-    "time",
-    "position_error_x",
-    "position_error_y",
-    "position_error_z",
-    "orientation_error",
-    "force_desired",
-    "force_measured",
-    "force_error",
-    "force_reference",
-    "joint_speed",
-    "normal_x",
-    "normal_y",
-    "normal_z",
-    "force_active",
-)
 
 #: Wall plate drawn for ``{"type": "wall"}``: half extents in its plane and half thickness [m].
 WALL_HALF_SIZE = (0.3, 0.3, 0.001)

@@ -23,7 +23,7 @@ from rns_ros.analysis.virtual_mass import (
     rms_difference,
     simulate,
 )
-from rns_ros.control.motion_force import kernel_projector
+from rns_ros.control.motion_force.projectors import kernel_projector
 from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.resources import config_dir
@@ -124,7 +124,8 @@ def test_velocity_level_term_keeps_the_null_space_velocity_below_the_damper(fig7
 
 def _nudged_start(arm):
     """Start at rest on the arc plus 0.1 rad/s along ker W (an excited null-space mode)."""
-    from rns_ros.control.motion_force import PLANAR_ROWS, ReversedModel
+    from rns_ros.control.motion_force.reversed_model import ReversedModel
+    from rns_ros.control.motion_force.task_space import PLANAR_ROWS
 
     q0 = arc_start_configuration(arm)
     w = ReversedModel(arm, PLANAR_ROWS, virtual_mass=1e4).w(q0)

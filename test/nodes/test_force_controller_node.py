@@ -19,14 +19,12 @@ from rns_testing import status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from rns_ros.control.force_teleop import (
-    ForceControlSettings,
-    ForceTeleopController,
-    JointMeasurement,
-    WrenchSample,
-)
+from rns_ros.control.contact_topics import ERROR_LABELS
+from rns_ros.control.force.commands import JointMeasurement, WrenchSample
+from rns_ros.control.force.controller import ForceTeleopController
+from rns_ros.control.force.settings import ForceControlSettings
 from rns_ros.core.fixed_base import load_fixed_base_model
-from rns_ros.nodes.force_controller import ERROR_LABELS, PARAMETERS, ForceControllerNode
+from rns_ros.nodes.force_controller import PARAMETERS, ForceControllerNode
 from rns_ros.resources import config_dir
 
 REPO = Path(__file__).resolve().parents[2]

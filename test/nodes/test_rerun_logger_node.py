@@ -23,6 +23,7 @@ from rerun.chunk import RrdReader
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
 
+from rns_ros.control.contact_topics import CONTACT_LABELS, ERROR_LABELS
 from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.controller import ControllerNode
@@ -30,7 +31,7 @@ from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.rerun_logger import PARAMETERS, RerunLoggerNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.viz import paths
-from rns_ros.viz.contact import CONTACT_LABELS, ERROR_LABELS, ContactRecorder
+from rns_ros.viz.contact import ContactRecorder
 from rns_ros.viz.readback import read_components, read_scalars, read_static, recording_summary
 
 REPO = Path(__file__).resolve().parents[2]

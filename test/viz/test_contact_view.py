@@ -10,15 +10,14 @@ import pinocchio as pin
 import pytest
 from rerun.chunk import RrdReader
 
+from rns_ros.control.contact_topics import CONTACT_LABELS, ERROR_LABELS
 from rns_ros.core import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState, load_fixed_base_model
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.resources import default_model_config
 from rns_ros.viz import RecorderSettings, SinkSettings, paths
 from rns_ros.viz.contact import (
-    CONTACT_LABELS,
     CONTACT_STATE_COLORS,
-    ERROR_LABELS,
     WALL_HALF_SIZE,
     ContactRecorder,
     ContactSample,

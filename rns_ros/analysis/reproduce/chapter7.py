@@ -40,7 +40,8 @@ from rns_ros.analysis.virtual_mass import (
     mass_sweep,
     simulate,
 )
-from rns_ros.control.motion_force import MotionGains, VelocityTermForm
+from rns_ros.control.motion_force.null_space import VelocityTermForm
+from rns_ros.control.motion_force.outer_loops import MotionGains
 from rns_ros.core.errors import SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseModel, load_fixed_base_model
 from rns_ros.resources import config_dir

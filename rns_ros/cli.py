@@ -1,8 +1,8 @@
 """Command-line pieces shared by the executables: ROS-argument checks, one-line errors, start-up.
 
-Start-up contract of every console script (docs/ros2_integration.md, "Start-up errors"): a bad argument, parameter,
-params file or configuration is one line ``<executable>: <problem>`` on stderr and exit code 2;
-Ctrl-C at any time during start-up is exit code 0 without a traceback.
+Start-up contract of every console script (docs/ros2_integration.md, "Start-up errors"): a bad
+argument, parameter, params file or configuration is one line ``<executable>: <problem>`` on
+stderr and exit code 2; Ctrl-C at any time during start-up is exit code 0 without a traceback.
 
 This module is imported by ``rns_ros/__init__.py`` before anything heavy (numpy, Pinocchio,
 rclpy: about 0.4 s of imports), so it imports nothing beyond the standard library at module level.

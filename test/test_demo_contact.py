@@ -16,9 +16,9 @@ from rns_testing import status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
+from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.demo_contact import format_contact_table, run_contact_method
 from rns_ros.harness import Harness, ProcessStack
-from rns_ros.nodes.contact_simulator import CONTACT_LABELS
 from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE
 
 DOMAIN = 47

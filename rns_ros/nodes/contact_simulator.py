@@ -52,6 +52,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
 from std_srvs.srv import Trigger
 
+from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.core.config import read_yaml_mapping
 from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
@@ -69,24 +70,6 @@ from rns_ros.sim.contact import (
 )
 from rns_ros.sim.free_arm import FreeArmSimulator, JointBrake
 
-#: Layout of the ``contact`` topic (docs/part2_ros.md): time [s], contact_state (+1 pushing, 0
-#: no load, -1 pulling), normal_force lambda [N], gap phi [m] (> 0 penetration), gap_rate [m/s],
-#: contact point = EE point (world) [m], unit normal into the environment (world), number of
-#: joints whose torque was saturated this step.
-CONTACT_LABELS = (
-    "time",
-    "contact_state",
-    "normal_force",
-    "gap",
-    "gap_rate",
-    "point_x",
-    "point_y",
-    "point_z",
-    "normal_x",
-    "normal_y",
-    "normal_z",
-    "saturated_joints",
-)
 DEFAULT_MODEL = "lwr_7dof.yaml"
 
 

@@ -584,4 +584,4 @@ if __name__ == "__main__":
     raise SystemExit(main())
 
 
-__all__ = ["ERROR_LABELS", "PARAMETERS", "ForceControllerNode", "main"]
+__all__ = ["PARAMETERS", "ForceControllerNode", "main"]

@@ -21,9 +21,10 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 
 from rns_ros.analysis.part2_runs import ArcScenario
+from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
-from rns_ros.nodes.contact_simulator import CONTACT_LABELS, ContactSimulatorNode
+from rns_ros.nodes.contact_simulator import ContactSimulatorNode
 from rns_ros.nodes.contact_simulator_parameters import PARAMETERS, WALL_TASK_RAD
 from rns_ros.nodes.simulator import SimulatorNode, create_simulator_node
 from rns_ros.sim.contact import ArcConstraint, ContactSimulator, PlaneConstraint

@@ -64,6 +64,7 @@ from rns_ros.nodes.parameters import (
     specs_by_name,
     velocity_joint_order,
 )
+from rns_ros.nodes.runner import stop_worker
 from rns_ros.nodes.simulator import LOCKSTEP_PATIENCE, NODE_NAME, stamp_from_seconds
 from rns_ros.resources import config_dir
 from rns_ros.sim.contact import (
@@ -712,7 +713,5 @@ class ContactSimulatorNode(Node):
         self._joint_pub.publish(joints)
 
     def destroy_node(self) -> None:
-        self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=2.0)
+        stop_worker(self._thread, self._stop)
         super().destroy_node()

@@ -119,7 +119,7 @@ from rns_ros.nodes.parameters import (
     specs_by_name,
     velocity_joint_order,
 )
-from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, run_node
+from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, run_node, stop_worker
 from rns_ros.resources import default_model_config
 from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.sim.reaction_wheels import WHEEL_NAMES, ReactionWheels
@@ -1119,10 +1119,7 @@ class SimulatorNode(Node):
         self._energy_pub.publish(msg)
 
     def destroy_node(self) -> None:
-        self._stop.set()
-        self._command_arrived.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=2.0)
+        stop_worker(self._thread, self._stop, self._command_arrived)
         super().destroy_node()
 
 
@@ -1178,13 +1175,7 @@ def main(args=None) -> int:
     if _wants_help(argv):
         print(simulator_help())
         return 0
-    return run_node(
-        create_simulator_node,
-        executable=NODE_NAME,
-        summary=SUMMARY,
-        specs=PARAMETERS,
-        args=argv,
-    )
+    return run_node(create_simulator_node, sys.modules[__name__], argv)
 
 
 if __name__ == "__main__":

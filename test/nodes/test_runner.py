@@ -7,6 +7,7 @@ import os
 import re
 import signal
 import threading
+from types import SimpleNamespace
 
 import pytest
 import rclpy
@@ -15,6 +16,9 @@ from std_msgs.msg import String
 
 from rns_ros.nodes.parameters import ParameterSpec, declare_parameters, warn_unknown_parameters
 from rns_ros.nodes.runner import run_node
+
+#: What a node's parameters module defines, for the test nodes here.
+TEST_NODE = SimpleNamespace(NODE_NAME="rns_runner_test", SUMMARY="", PARAMETERS=())
 
 
 class _Busy(Node):
@@ -65,7 +69,7 @@ def test_a_signal_ends_the_spin_with_exit_code_0_and_a_live_context_for_the_last
         return nodes[-1]
 
     before = signal.getsignal(signum)
-    code = run_node(factory, executable="rns_runner_test", summary="", specs=(), args=["test"])
+    code = run_node(factory, TEST_NODE, ["test"])
     assert code == 0
     assert nodes[0].raised == []  # the handler only asks the spin loop to stop
     assert nodes[0].final == [True]  # destroy_node ran before the Context was shut down
@@ -92,13 +96,7 @@ class _Quiet(Node):
 )
 def test_bad_ros_arguments_give_one_line_and_exit_code_2(capsys, ros_args, message):
     before = signal.getsignal(signal.SIGINT)
-    code = run_node(
-        _Quiet,
-        executable="rns_runner_test",
-        summary="",
-        specs=(),
-        args=["t", "--ros-args", *ros_args],
-    )
+    code = run_node(_Quiet, TEST_NODE, ["t", "--ros-args", *ros_args])
     err = capsys.readouterr().err
     assert code == 2
     assert len(err.strip().splitlines()) == 1, err

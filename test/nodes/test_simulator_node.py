@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-import yaml
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
@@ -31,7 +30,6 @@ from rns_ros.core.momentum import base_twist_from_momentum
 from rns_ros.nodes.simulator import (
     LOCKSTEP_PATIENCE,
     MAX_GRID_AGE,
-    PARAMETERS,
     SATELLITE_OBSERVATION_RAD,
     SimulatorNode,
     stamp_from_seconds,
@@ -478,12 +476,6 @@ def test_publish_rate_follows_the_wall_clock(ros, rate, record_property):
     record_property("measured_rate_hz", measured)
     print(f"requested {rate} Hz, measured {measured:.2f} Hz")
     assert measured == pytest.approx(rate, rel=0.1)  # generous: shared 2-core machine
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "simulator.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 @pytest.mark.parametrize(

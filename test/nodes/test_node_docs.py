@@ -1,0 +1,81 @@
+"""Every node page shows the parameter table generated from its parameters module
+(scripts/node_docs.py)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from rns_ros.nodes.parameters import ParameterSpec, markdown_table
+
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "node_docs.py"
+
+
+def _load_script():
+    spec = importlib.util.spec_from_file_location("rns_node_docs_script", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+node_docs = _load_script()
+
+
+@pytest.mark.parametrize("name", node_docs.PARAMETER_MODULES)
+def test_every_node_page_shows_its_current_parameter_table(name):
+    try:
+        module = importlib.import_module(name)
+    except ModuleNotFoundError as exc:
+        if exc.name != name:
+            raise
+        pytest.skip(f"{name} does not exist yet")
+    path = node_docs.page(module)
+    if not path.is_file():
+        pytest.skip(f"no page {path} yet")
+    texts = node_docs.current_text(module)
+    assert texts is not None, f"{path} lacks the lines {node_docs.BEGIN} / {node_docs.END}"
+    assert texts[0] == texts[1], f"stale table in {path}: run scripts/node_docs.py --write"
+
+
+def test_the_table_replaces_only_the_text_between_the_markers():
+    text = f"# rns_x\n\nbefore\n{node_docs.BEGIN}\nold table\n{node_docs.END}\nafter\n"
+    updated = node_docs.with_table(text, "| new |")
+    assert updated == f"# rns_x\n\nbefore\n{node_docs.BEGIN}\n| new |\n{node_docs.END}\nafter\n"
+    assert node_docs.with_table(updated, "| new |") == updated
+    assert node_docs.with_table("no markers\n", "| new |") is None
+    assert node_docs.with_table(f"{node_docs.END}\n{node_docs.BEGIN}\n", "| new |") is None
+
+
+def test_check_names_a_stale_page_and_write_makes_it_current(tmp_path, capsys, monkeypatch):
+    from rns_ros.nodes import ptp_parameters
+
+    path = tmp_path / f"{ptp_parameters.NODE_NAME}.md"
+    path.write_text(f"# rns_ptp\n{node_docs.BEGIN}\n{node_docs.END}\n")
+    monkeypatch.setattr(node_docs, "PAGES", tmp_path)
+    assert node_docs.main(["--check"]) == 1
+    assert str(path) in capsys.readouterr().err
+    assert node_docs.main(["--write"]) == 0
+    assert node_docs.main(["--check"]) == 0
+    assert "| `method` | string | `three_phase` |" in path.read_text()
+
+
+def test_the_table_has_one_row_per_parameter_with_its_limits():
+    specs = (
+        ParameterSpec("rate", 50.0, "Rate | of output", "[Hz]", 1.0, 1000.0, read_only=False),
+        ParameterSpec("mode", "a", "Mode", choices=("a", "b")),
+        ParameterSpec("axis", [0.0, 0.0, 1.0], "Axis", "[-]", -1.0, 1.0, length=(3,)),
+        ParameterSpec("frame", "", "Frame"),
+        ParameterSpec("on", True, "On"),
+        ParameterSpec("names", ["x", "y"], "Names"),
+    )
+    lines = markdown_table(specs).splitlines()
+    assert len(lines) == 2 + len(specs)
+    assert lines[2] == r"| `rate` | double | `50.0` | Hz | [1, 1000] | no | Rate \| of output |"
+    assert lines[3] == "| `mode` | string | `a` |  | `a`, `b` | yes | Mode |"
+    axis = "| `axis` | double[] | `[0.0, 0.0, 1.0]` | - | [-1, 1]; length 3 | yes | Axis |"
+    assert lines[4] == axis
+    assert lines[5] == "| `frame` | string | `''` |  |  | yes | Frame |"
+    assert lines[6] == "| `on` | bool | `true` |  |  | yes | On |"
+    assert lines[7] == "| `names` | string[] | `[x, y]` |  |  | yes | Names |"

@@ -115,7 +115,7 @@ class RerunLoggerNode(Node):
             self.recorder = TelemetryRecorder(self.robot, urdf_path, sink, settings)
         try:
             # deep queue: a recorder should not drop samples while rerun work or a busy CPU
-            # holds it up (depth 10 lost ~12 % of a 100 Hz stream on a loaded CI machine)
+            # holds it up (1 s of a 100 Hz stream)
             qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
             self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
             if self.fixed_base:

@@ -120,8 +120,8 @@ def run_node(
     # rclpy's own SIGINT handler would shut the Context down before destroy_node() runs, and a
     # node could no longer publish its final zero command. Ctrl-C and SIGTERM only set a flag
     # that the spin loop reads: an exception raised from a signal handler can land inside
-    # rclpy's C++ argument conversion, which turns it into a RuntimeError (exit code 1 seen in
-    # CI). The handlers go in first, so Ctrl-C during rclpy.init or the node's construction is a
+    # rclpy's C++ argument conversion, which turns it into a RuntimeError (exit code 1). The
+    # handlers go in first, so Ctrl-C during rclpy.init or the node's construction is a
     # clean exit too. The Context is shut down last, in `finally`.
     stop = threading.Event()
     previous = {
@@ -142,13 +142,12 @@ def run_node(
         node = start_node(executable, factory, argv)
         if node is None:
             return 2
-        # The events executor: rclpy's wait-set executors cost ~0.6 ms of CPU per wake-up here,
-        # and the multi-threaded one kept the controller at 90 % of a core with output stalls of
-        # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.
+        # The events executor: rclpy's wait-set executors cost far more CPU per wake-up and stall
+        # the output under load (scripts/benchmark.py --only latency); this one ticks steadily.
         executor = EventsExecutor()
         executor.add_node(node)
-        # the executor dispatches in C++ for up to 0.1 s per call instead of returning to this
-        # loop after each event: ~10 % less CPU per received message here (53 vs 56-60 us)
+        # the executor dispatches in C++ for up to 0.1 s per call rather than returning to this
+        # loop after each event: less CPU per received message
         never = Future()
         while rclpy.ok() and not stop.is_set():
             # bounded waits: the stop flag is read at least every 0.1 s

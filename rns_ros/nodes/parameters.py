@@ -208,9 +208,11 @@ def specs_by_name(specs: Sequence[ParameterSpec]) -> dict[str, ParameterSpec]:
     return {spec.name: spec for spec in specs}
 
 
-def choices_of(enum: Iterable[Enum]) -> tuple[str, ...]:
-    """The values of a string enum, in declaration order: the choices of its parameter."""
-    return tuple(member.value for member in enum)
+def choices_of(enum: Iterable[Enum], without: Iterable[Enum] = ()) -> tuple[str, ...]:
+    """The values of a string enum but ``without``, in declaration order: the choices of its
+    parameter."""
+    excluded = set(without)
+    return tuple(member.value for member in enum if member not in excluded)
 
 
 def from_parameters(factory: Callable[..., Any], params: Mapping[str, Any], **overrides) -> Any:

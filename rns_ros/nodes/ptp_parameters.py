@@ -22,7 +22,7 @@ PARAMETERS = (
         PtpMethod.THREE_PHASE.value,
         "Planner of joint goals: three_phase, joint_space (JS-C), inverse_jacobian (IJ-C), "
         "transposed_jacobian (TJ-C)",
-        choices=choices_of(PtpMethod),
+        choices=choices_of(PtpMethod, without=(PtpMethod.DEPLOY,)),  # DEPLOY: goal ['deploy']
     ),
     ParameterSpec(
         "duration",

@@ -8,8 +8,6 @@ from pathlib import Path
 
 import pytest
 
-from rns_ros.nodes.parameters import ParameterSpec, markdown_table
-
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "node_docs.py"
 
 
@@ -59,23 +57,3 @@ def test_check_names_a_stale_page_and_write_makes_it_current(tmp_path, capsys, m
     assert node_docs.main(["--write"]) == 0
     assert node_docs.main(["--check"]) == 0
     assert "| `method` | string | `three_phase` |" in path.read_text()
-
-
-def test_the_table_has_one_row_per_parameter_with_its_limits():
-    specs = (
-        ParameterSpec("rate", 50.0, "Rate | of output", "[Hz]", 1.0, 1000.0, read_only=False),
-        ParameterSpec("mode", "a", "Mode", choices=("a", "b")),
-        ParameterSpec("axis", [0.0, 0.0, 1.0], "Axis", "[-]", -1.0, 1.0, length=(3,)),
-        ParameterSpec("frame", "", "Frame"),
-        ParameterSpec("on", True, "On"),
-        ParameterSpec("names", ["x", "y"], "Names"),
-    )
-    lines = markdown_table(specs).splitlines()
-    assert len(lines) == 2 + len(specs)
-    assert lines[2] == r"| `rate` | double | `50.0` | Hz | [1, 1000] | no | Rate \| of output |"
-    assert lines[3] == "| `mode` | string | `a` |  | `a`, `b` | yes | Mode |"
-    axis = "| `axis` | double[] | `[0.0, 0.0, 1.0]` | - | [-1, 1]; length 3 | yes | Axis |"
-    assert lines[4] == axis
-    assert lines[5] == "| `frame` | string | `''` |  |  | yes | Frame |"
-    assert lines[6] == "| `on` | bool | `true` |  |  | yes | On |"
-    assert lines[7] == "| `names` | string[] | `[x, y]` |  |  | yes | Names |"

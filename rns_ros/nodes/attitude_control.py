@@ -34,7 +34,6 @@ import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
-from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -46,16 +45,14 @@ from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError
 from rns_ros.core.validation import Choice
+from rns_ros.nodes import attitude_control_parameters
 from rns_ros.nodes.cdr import odometry_fields
-from rns_ros.nodes.parameters import MODEL_CONFIG, ParameterSpec, declare_parameters
+from rns_ros.nodes.parameters import declare_parameters
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import status_text
 from rns_ros.resources import default_model_config
 from rns_ros.sim.reaction_wheels import WHEEL_NAMES
-
-NODE_NAME = "rns_attitude_control"
-SUMMARY = "Holds the base attitude with three reaction wheels (eq. 5.14 feed-forward + PD)."
 
 
 class AttitudeState(Choice):
@@ -71,51 +68,13 @@ LEVELS = {
     AttitudeState.STALE_STATE: DiagnosticStatus.ERROR,
 }
 
-PARAMETERS = (
-    MODEL_CONFIG,
-    ParameterSpec("rate", 100.0, "Control rate", "[Hz]", 1.0, 1000.0),
-    ParameterSpec(
-        "natural_frequency",
-        0.1,
-        "Attitude loop natural frequency omega_n (gains scale with the base inertia)",
-        "[rad/s]",
-        1e-4,
-        100.0,
-    ),
-    ParameterSpec("damping_ratio", 1.0, "Attitude loop damping ratio", "[-]", 0.05, 10.0),
-    ParameterSpec(
-        "torque_limit", 0.1, "Motor torque limit per wheel (ETS-VII: 0.1)", "[N m]", 1e-6, 1e3
-    ),
-    ParameterSpec(
-        "feedforward", True, "Use the eq. (5.14) feed-forward -d/dt(M~_wm theta_dot_ref)"
-    ),
-    ParameterSpec("wheel_inertia", 0.11, "Spin inertia I_r of one wheel", "[kg m^2]", 1e-6, 1e3),
-    ParameterSpec(
-        "state_timeout",
-        0.1,
-        "joint_states, base_odom or wheel_states older than this (receipt time): zero torque, "
-        "STALE_STATE",
-        "[s]",
-        0.005,
-        10.0,
-    ),
-    ParameterSpec(
-        "reference_timeout",
-        0.1,
-        "joint_references older than this: the feed-forward uses the measured joint rates",
-        "[s]",
-        0.005,
-        10.0,
-    ),
-)
-
 
 class AttitudeControlNode(Node):
     """ROS 2 wrapper of :class:`AttitudeControlLaw` (see the module docstring)."""
 
     def __init__(self, **node_kwargs) -> None:
-        super().__init__(NODE_NAME, **node_kwargs)
-        params = declare_parameters(self, PARAMETERS)
+        super().__init__(attitude_control_parameters.NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, attitude_control_parameters.PARAMETERS)
         self.robot = load_model(params["model_config"] or default_model_config())
         self.gains = AttitudeGains(
             natural_frequency=params["natural_frequency"],
@@ -157,15 +116,28 @@ class AttitudeControlNode(Node):
         )
 
     # --- inputs ---------------------------------------------------------------------------------
-    def _on_joint_state(self, msg: JointState) -> None:
+    def _matched(self, topic: str, names, model_names, required: str = "", **values):
+        """:func:`match_named_command` of a message (with ``required`` values), or None after
+        logging why it is ignored."""
         try:
-            command = match_named_command(
-                msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
-            )
-            if command.positions is None:
-                raise InputError("joint_states has no positions")
+            command = match_named_command(names, model_names, **values)
+            if required and getattr(command, required) is None:
+                raise InputError(f"{topic} has no {required}")
         except InputError as exc:
-            self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
+            self.get_logger().error(f"ignored {topic}: {exc}", throttle_duration_sec=1.0)
+            return None
+        return command
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        command = self._matched(
+            "joint_states",
+            msg.name,
+            self.robot.joint_names,
+            "positions",
+            positions=msg.position,
+            velocities=msg.velocity,
+        )
+        if command is None:
             return
         self._theta = command.positions
         if command.velocities is not None:
@@ -183,12 +155,10 @@ class AttitudeControlNode(Node):
         self._received["odom"] = time.monotonic()
 
     def _on_wheels(self, msg: JointState) -> None:
-        try:
-            command = match_named_command(msg.name, WHEEL_NAMES, velocities=msg.velocity)
-            if command.velocities is None:
-                raise InputError("wheel_states has no velocities")
-        except InputError as exc:
-            self.get_logger().error(f"ignored wheel_states: {exc}", throttle_duration_sec=1.0)
+        command = self._matched(
+            "wheel_states", msg.name, WHEEL_NAMES, "velocities", velocities=msg.velocity
+        )
+        if command is None:
             return
         self._wheel_speeds = command.velocities
         self._received["wheels"] = time.monotonic()
@@ -196,14 +166,13 @@ class AttitudeControlNode(Node):
     def _on_reference(self, msg: JointTrajectory) -> None:
         if not msg.points:
             return
-        try:
-            command = match_named_command(
-                msg.joint_names, self.robot.joint_names, velocities=msg.points[0].velocities
-            )
-        except InputError as exc:
-            self.get_logger().error(f"ignored joint_references: {exc}", throttle_duration_sec=1.0)
-            return
-        if command.velocities is not None:
+        command = self._matched(
+            "joint_references",
+            msg.joint_names,
+            self.robot.joint_names,
+            velocities=msg.points[0].velocities,
+        )
+        if command is not None and command.velocities is not None:
             self._reference = command.velocities
             self._reference_received = time.monotonic()
             stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
@@ -313,18 +282,17 @@ class AttitudeControlNode(Node):
 
     def destroy_node(self) -> None:
         """Motors off: one zero torque, then tear down."""
-        try:
-            self._publish_torque(np.zeros(3))
-            self._torque_pub.wait_for_all_acked(Duration(seconds=0.5))
-        except Exception as exc:  # the context may already be shut down (Ctrl-C)
-            self.get_logger().warn(f"could not publish the final zero torque: {exc}")
+        publish_last(
+            self,
+            lambda: self._publish_torque(np.zeros(3)),
+            "zero torque",
+            acked_by=self._torque_pub,
+        )
         super().destroy_node()
 
 
 def main(args=None) -> int:
-    return run_node(
-        AttitudeControlNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
-    )
+    return run_node(AttitudeControlNode, attitude_control_parameters, args)
 
 
 if __name__ == "__main__":

@@ -59,6 +59,7 @@ from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.contact_simulator_parameters import NODE_NAME, PARAMETERS, SPECS
 from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE, LockstepPacer
 from rns_ros.nodes.parameters import declare_parameters, velocity_joint_order
+from rns_ros.nodes.runner import stop_worker
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator_parameters import check_parameter_changes
 from rns_ros.resources import config_dir
@@ -488,7 +489,5 @@ class ContactSimulatorNode(Node):
         self._joint_pub.publish(joints)
 
     def destroy_node(self) -> None:
-        self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=2.0)
+        stop_worker(self._thread, self._stop)
         super().destroy_node()

@@ -34,6 +34,7 @@ Publishes (joint commands only once a joint state has arrived):
 
 from __future__ import annotations
 
+import sys
 import time
 from collections import deque
 from collections.abc import Callable
@@ -45,7 +46,6 @@ from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
-from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
@@ -96,7 +96,7 @@ from rns_ros.nodes.parameters import (
     velocity_joint_order,
 )
 from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import level_rank, node_names, status_text, type_name
 from rns_ros.resources import default_model_config
 
@@ -976,19 +976,17 @@ class ControllerNode(Node):
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""
         if self._theta is not None:
-            try:
-                self._publish_output(self._theta, np.zeros(self.robot.n))
-                # reliable QoS: give subscribers a moment to acknowledge before the process ends
-                self._output.wait_for_all_acked(Duration(seconds=0.5))
-            except Exception as exc:  # the context may already be shut down (Ctrl-C)
-                self.get_logger().warn(f"could not publish the final zero velocity: {exc}")
+            publish_last(
+                self,
+                lambda: self._publish_output(self._theta, np.zeros(self.robot.n)),
+                "zero velocity",
+                acked_by=self._output,
+            )
         super().destroy_node()
 
 
 def main(args=None) -> int:
-    return run_node(
-        ControllerNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
-    )
+    return run_node(ControllerNode, sys.modules[__name__], args)
 
 
 if __name__ == "__main__":

@@ -34,7 +34,6 @@ import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
-from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -55,23 +54,13 @@ from rns_ros.control.force.status import ForceControlState, ForceStep
 from rns_ros.core.commands import joint_order
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.fixed_base import load_fixed_base_model
-from rns_ros.nodes.parameters import (
-    WORLD_FRAME,
-    ParameterSpec,
-    declare_parameters,
-    velocity_joint_order,
-)
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes import force_controller_parameters
+from rns_ros.nodes.force_controller_parameters import DEFAULT_MODEL
+from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
+from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import status_text
 from rns_ros.resources import config_dir
 
-NODE_NAME = "rns_force_controller"
-SUMMARY = (
-    "Motion/force control of a fixed-base arm in contact (thesis ch. 6, RNS-C or OS-C): "
-    "twist + force setpoint in, joint torques out, one step per joint state."
-)
-#: Default model file (config/): the 7-DoF LWR4-class arm of section 6.2.2.
-DEFAULT_MODEL = "lwr_7dof.yaml"
 #: Period of the stale-state check (wall clock) [s] and of /diagnostics [s].
 WATCHDOG_PERIOD, DIAGNOSTICS_PERIOD = 0.05, 1.0
 #: Window of the step-time statistics [s].
@@ -95,173 +84,6 @@ def state_level(state: ForceControlState) -> bytes:
     return DiagnosticStatus.OK if state in _OK else DiagnosticStatus.WARN
 
 
-def _timeout(name: str, default: float, what: str) -> ParameterSpec:
-    return ParameterSpec(name, default, what, "[s]", 1e-3, 60.0)
-
-
-PARAMETERS = (
-    ParameterSpec(
-        "model_config",
-        "",
-        "Fixed-base model YAML: a path, or a file name in config/; empty: lwr_7dof.yaml",
-    ),
-    ParameterSpec(
-        "method", "rns", "rns: RNS-C closed form (6.17); os: OS-C (6.13)", choices=("rns", "os")
-    ),
-    ParameterSpec(
-        "os_variant",
-        "literal",
-        "OS-C variant [A-4.2]: literal (6.13) with tau_a = 0, or kinematic",
-        choices=("literal", "kinematic"),
-    ),
-    ParameterSpec("k_p", 100.0, "Motion-loop position gain of (6.33)", "[1/s^2]", 0.0, 1e5),
-    ParameterSpec("k_d", 10.0, "Motion-loop velocity gain of (6.33)", "[1/s]", 0.0, 1e4),
-    ParameterSpec(
-        "k_f",
-        5.0,
-        "Force-loop gain of (6.34) (thesis 5; sampled force measurement needs < 1)",
-        "[-]",
-        0.0,
-        100.0,
-    ),
-    ParameterSpec(
-        "virtual_mass", 1.0e5, "RNS-C virtual link mass m_hat [A-4.9]", "[kg]", 1e-3, 1e12
-    ),
-    ParameterSpec(
-        "virtual_inertia",
-        0.0,
-        "RNS-C virtual link inertia I_hat (times E); 0: m_hat/12 [A-4.9]",
-        "[kg m^2]",
-        0.0,
-        1e12,
-    ),
-    ParameterSpec(
-        "task_axes",
-        ["x", "y", "z", "wx", "wy", "wz"],
-        "Task rows of J_e by world axis (x y z wx wy wz); the planar arc: x, y",
-    ),
-    ParameterSpec(
-        "constrained_frame",
-        "ee",
-        "Axes of constrained_axis: ee (taken at activation, then fixed in world) or world",
-        choices=("ee", "world"),
-    ),
-    ParameterSpec(
-        "constrained_axis",
-        [0.0, 0.0, 1.0],
-        "Contact normal into the environment (normal_mode fixed; the start normal for wrench)",
-        "[-]",
-        -1.0e3,
-        1.0e3,
-        length=(3,),
-    ),
-    ParameterSpec(
-        "normal_mode",
-        "fixed",
-        "fixed: n = constrained_axis (a plane); wrench: the measured force direction while "
-        "|f| >= contact_threshold (curved surfaces)",
-        choices=("fixed", "wrench"),
-    ),
-    ParameterSpec(
-        "surface_curvature",
-        0.0,
-        "Normal feed-forward a_n = curvature |v_t|^2 [A-4.8]; > 0 when the surface bends toward "
-        "the environment (1/R for a cylinder), 0 for a plane",
-        "[1/m]",
-        -1e3,
-        1e3,
-    ),
-    ParameterSpec(
-        "force_measurement",
-        "predicted",
-        "f in (6.34): predicted (rigid-contact model at the same instant, sensor-corrected) or "
-        "sampled (the one-step-late wrench; k_f < 1 only)",
-        choices=("predicted", "sampled"),
-    ),
-    ParameterSpec(
-        "joints",
-        [f"joint_{i}" for i in range(1, 8)],
-        "Joint order of joint_efforts (a permutation of the model's joints), like the 'joints' "
-        "parameter of a ros2_control forward_command_controller",
-    ),
-    WORLD_FRAME,
-    ParameterSpec(
-        "default_twist_frame",
-        "ee",
-        "Axes of a cmd_twist with an empty frame_id: ee or world",
-        choices=("ee", "world"),
-    ),
-    _timeout("command_timeout", 0.5, "A cmd_twist older than this (receipt) decelerates to rest"),
-    _timeout("force_timeout", 0.5, "A force_setpoint older than this: f_des held, status WARN"),
-    ParameterSpec(
-        "state_timeout",
-        0.1,
-        "No joint_states for this long (wall clock, receipt): one zero torque, STALE_STATE",
-        "[s]",
-        0.005,
-        10.0,
-    ),
-    ParameterSpec(
-        "max_linear_speed", 0.5, "Twists faster than this are scaled down", "[m/s]", 1e-6, 10.0
-    ),
-    ParameterSpec(
-        "max_angular_speed", 1.0, "Twists faster than this are scaled down", "[rad/s]", 1e-6, 20.0
-    ),
-    ParameterSpec(
-        "max_linear_acceleration",
-        5.0,
-        "Clip of the twist feed-forward and rate limit of the reference (angular: same ramp time)",
-        "[m/s^2]",
-        1e-6,
-        1e3,
-    ),
-    ParameterSpec("max_force_setpoint", 30.0, "f_des is clipped to [0, this]", "[N]", 0.0, 1e4),
-    ParameterSpec(
-        "max_contact_force",
-        40.0,
-        "Measured |force| over this: WRENCH_LIMIT stop (latched)",
-        "[N]",
-        1e-6,
-        1e5,
-    ),
-    ParameterSpec(
-        "max_contact_torque",
-        10.0,
-        "Measured |torque| over this: WRENCH_LIMIT stop (latched)",
-        "[N m]",
-        1e-6,
-        1e5,
-    ),
-    ParameterSpec(
-        "contact_threshold",
-        1.0,
-        "In contact when the measured normal force is at least this",
-        "[N]",
-        1e-6,
-        1e4,
-    ),
-    ParameterSpec(
-        "contact_loss_time",
-        0.02,
-        "Force below contact_threshold this long while f_des >= 2 thresholds: CONTACT_LOST / "
-        "NO_CONTACT stop (latched)",
-        "[s]",
-        0.0,
-        10.0,
-    ),
-    ParameterSpec(
-        "wrench_timeout",
-        0.05,
-        "No wrist_wrench stamped within this of the state while the force task is on: the push "
-        "pauses (f_des 0) and contact supervision waits, WRENCH_STALE",
-        "[s]",
-        1e-4,
-        10.0,
-    ),
-    ParameterSpec("status_rate", 50.0, "Rate of ~/status", "[Hz]", 0.1, 1000.0),
-)
-
-
 def _model_path(name: str) -> Path:
     if not name:
         return config_dir() / DEFAULT_MODEL
@@ -279,37 +101,11 @@ class ForceControllerNode(Node):
     """ROS 2 wrapper of :class:`ForceTeleopController` (see the module docstring)."""
 
     def __init__(self, **node_kwargs) -> None:
-        super().__init__(NODE_NAME, **node_kwargs)
-        params = declare_parameters(self, PARAMETERS)
+        super().__init__(force_controller_parameters.NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, force_controller_parameters.PARAMETERS)
         self._params = params
         self.robot = load_fixed_base_model(_model_path(params["model_config"]))
-        self.settings = ForceControlSettings(
-            method=params["method"],
-            os_variant=params["os_variant"],
-            k_p=params["k_p"],
-            k_d=params["k_d"],
-            k_f=params["k_f"],
-            virtual_mass=params["virtual_mass"],
-            virtual_inertia=params["virtual_inertia"],
-            task_axes=tuple(params["task_axes"]),
-            constrained_frame=params["constrained_frame"],
-            constrained_axis=tuple(params["constrained_axis"]),
-            normal_mode=params["normal_mode"],
-            surface_curvature=params["surface_curvature"],
-            force_measurement=params["force_measurement"],
-            default_twist_frame=params["default_twist_frame"],
-            command_timeout=params["command_timeout"],
-            force_timeout=params["force_timeout"],
-            max_linear_speed=params["max_linear_speed"],
-            max_angular_speed=params["max_angular_speed"],
-            max_linear_acceleration=params["max_linear_acceleration"],
-            max_force_setpoint=params["max_force_setpoint"],
-            max_contact_force=params["max_contact_force"],
-            max_contact_torque=params["max_contact_torque"],
-            contact_threshold=params["contact_threshold"],
-            contact_loss_time=params["contact_loss_time"],
-            wrench_timeout=params["wrench_timeout"],
-        )
+        self.settings = from_parameters(ForceControlSettings, params)
         self.controller = ForceTeleopController(self.robot, self.settings)
         # ros2_control convention: data[p[i]] is model joint i
         self._order = velocity_joint_order(params["joints"], self.robot.joint_names)
@@ -353,8 +149,9 @@ class ForceControllerNode(Node):
     # --- inputs ---------------------------------------------------------------------------------
     def _on_twist(self, msg: TwistStamped) -> None:
         lin, ang = msg.twist.linear, msg.twist.angular
-        try:
-            command = validate_twist(
+        self._command(
+            "cmd_twist",
+            lambda: validate_twist(
                 [lin.x, lin.y, lin.z],
                 [ang.x, ang.y, ang.z],
                 msg.header.frame_id,
@@ -362,28 +159,35 @@ class ForceControllerNode(Node):
                 self.settings.default_twist_frame,
                 _stamp_ns(msg.header.stamp),
                 time.monotonic(),
-            )
-        except InputError as exc:
-            self.controller.reject_twist(str(exc))
-            self.get_logger().error(f"rejected cmd_twist: {exc}", throttle_duration_sec=1.0)
-            return
-        self.controller.set_twist(command)
+            ),
+            self.controller.set_twist,
+            self.controller.reject_twist,
+        )
 
     def _on_setpoint(self, msg: WrenchStamped) -> None:
         f, m = msg.wrench.force, msg.wrench.torque
-        try:
-            setpoint = validate_force_setpoint(
+        self._command(
+            "force_setpoint",
+            lambda: validate_force_setpoint(
                 [f.x, f.y, f.z],
                 [m.x, m.y, m.z],
                 msg.header.frame_id,
                 self._frames,
                 time.monotonic(),
-            )
+            ),
+            self.controller.set_force,
+            self.controller.reject_force,
+        )
+
+    def _command(self, topic: str, validate, accept, reject) -> None:
+        """``accept(validate())``; an InputError goes to ``reject`` (the status) and the log."""
+        try:
+            command = validate()
         except InputError as exc:
-            self.controller.reject_force(str(exc))
-            self.get_logger().error(f"rejected force_setpoint: {exc}", throttle_duration_sec=1.0)
+            reject(str(exc))
+            self.get_logger().error(f"rejected {topic}: {exc}", throttle_duration_sec=1.0)
             return
-        self.controller.set_force(setpoint)
+        accept(command)
 
     def _on_wrench(self, msg: WrenchStamped) -> None:
         f, m = msg.wrench.force, msg.wrench.torque
@@ -566,22 +370,19 @@ class ForceControllerNode(Node):
     def destroy_node(self) -> None:
         """Motors off: one zero torque (when torques were published), then tear down."""
         if self._published:
-            try:
-                self._torque_pub.publish(Float64MultiArray(data=[0.0] * self.robot.n))
-                self._torque_pub.wait_for_all_acked(Duration(seconds=0.2))
-            except Exception as exc:  # the context may already be shut down
-                self.get_logger().warn(f"could not publish the final zero torque: {exc}")
+            publish_last(
+                self,
+                lambda: self._torque_pub.publish(Float64MultiArray(data=[0.0] * self.robot.n)),
+                "zero torque",
+                acked_by=self._torque_pub,
+                timeout=0.2,
+            )
         super().destroy_node()
 
 
 def main(args=None) -> int:
-    return run_node(
-        ForceControllerNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
-    )
+    return run_node(ForceControllerNode, force_controller_parameters, args)
 
 
 if __name__ == "__main__":
     raise SystemExit(main())
-
-
-__all__ = ["PARAMETERS", "ForceControllerNode", "main"]

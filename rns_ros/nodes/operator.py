@@ -35,8 +35,6 @@ setpoint) while the arm stops; releasing the push is the controller's business (
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.duration import Duration
@@ -50,9 +48,9 @@ from rns_ros.analysis.part2_scenarios import (
     load_operator_scenario,
     operator_sample,
 )
-from rns_ros.control.controller import TwistFrame
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
+from rns_ros.nodes import operator_parameters
 from rns_ros.nodes.cdr import (
     SerializedTemplate,
     TemplateError,
@@ -60,85 +58,17 @@ from rns_ros.nodes.cdr import (
     twist_stamped_template,
 )
 from rns_ros.nodes.clock_ticks import ClockTicks
-from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, declare_parameters
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.operator_parameters import MOTION_FORCE_RATE
+from rns_ros.nodes.parameters import declare_parameters, twist_frame_names
+from rns_ros.nodes.runner import publish_copies, publish_last, run_node
 from rns_ros.resources import scenario_path
 
-NODE_NAME = "rns_operator"
 #: Zero twists published when the node is stopped mid-profile, this far apart [s].
 FINAL_ZEROS = 3
 FINAL_ZERO_GAP = 0.02
 #: Under use_sim_time: missed sample instants played at once after the process waited for a core
 #: (the ten of a depth-10 /clock queue before; farther behind, the profile skips ahead).
 OPERATOR_CATCH_UP = 10
-SUMMARY = (
-    "Scripted operator: plays a scenario file (config/scenarios/*.yaml) as TwistStamped on "
-    "cmd_twist (and, kind: motion_force, WrenchStamped on force_setpoint)."
-)
-#: Rate suggested for motion/force scenarios [Hz] (the force controller runs at 1 kHz).
-MOTION_FORCE_RATE = 500.0
-
-PARAMETERS = (
-    ParameterSpec(
-        "scenario",
-        "satellite_observation",
-        "Scenario file path, or the name of a shipped one in config/scenarios/",
-    ),
-    ParameterSpec(
-        "rate",
-        50.0,
-        f"Command publishing rate (motion_force scenarios: {MOTION_FORCE_RATE:g} Hz suggested)",
-        "[Hz]",
-        1.0,
-        1000.0,
-    ),
-    ParameterSpec(
-        "start_delay",
-        0.5,
-        "Wait after the start condition before the profile begins",
-        "[s]",
-        0.0,
-        3600.0,
-    ),
-    ParameterSpec(
-        "wait_for_subscriber",
-        True,
-        "Start only once cmd_twist (motion_force: and force_setpoint) has a subscriber",
-    ),
-    ParameterSpec(
-        "min_subscribers",
-        1,
-        "With wait_for_subscriber: start once cmd_twist has at least this many subscribers "
-        "(a controller and recorders: discovery can match one seconds after another)",
-        "[-]",
-        1,
-        100,
-    ),
-    ParameterSpec(
-        "zero_duration",
-        1.0,
-        "Publish zero twists (motion_force: and the held force setpoint) this long after the "
-        "profile",
-        "[s]",
-        0.0,
-        3600.0,
-    ),
-    ParameterSpec(
-        "lead",
-        0.0,
-        "Under use_sim_time, twist scenarios: publish each sample this long before its instant, "
-        "stamped with the instant, for a controller that serves twists at their stamps "
-        "(rns_controller's await_commands, lockstep: rns_demo off real time uses two samples). "
-        "From the start condition on, samples before the profile are zeros, and the profile "
-        "starts at least this long after it. 0, wall clock or motion_force: at the instant",
-        "[s]",
-        0.0,
-        1.0,
-    ),
-    WORLD_FRAME,
-    ParameterSpec("base_frame", "base_link", "frame_id used for base-frame scenarios"),
-    ParameterSpec("camera_frame", "camera", "frame_id used for camera-frame scenarios"),
-)
 
 
 class OperatorNode(Node):
@@ -151,8 +81,8 @@ class OperatorNode(Node):
     """
 
     def __init__(self, **node_kwargs) -> None:
-        super().__init__(NODE_NAME, **node_kwargs)
-        params = declare_parameters(self, PARAMETERS)
+        super().__init__(operator_parameters.NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, operator_parameters.PARAMETERS)
         self.scenario: Scenario | MotionForceScenario = load_operator_scenario(
             scenario_path(params["scenario"])
         )
@@ -160,11 +90,7 @@ class OperatorNode(Node):
         if self.motion_force:
             self._frame_id = params["world_frame"]
         else:
-            self._frame_id = {
-                TwistFrame.WORLD: params["world_frame"],
-                TwistFrame.BASE: params["base_frame"],
-                TwistFrame.CAMERA: params["camera_frame"],
-            }[self.scenario.frame]
+            self._frame_id = twist_frame_names(params)[self.scenario.frame]
         self._start_delay = params["start_delay"]
         sim_time = bool(self.get_parameter("use_sim_time").value)
         # [ns] each sample goes out ahead of its instant (lockstep with an awaiting controller)
@@ -335,23 +261,23 @@ class OperatorNode(Node):
         then tear down. ``run_node`` calls this on Ctrl-C while the Context still runs."""
         if self._playing and self.context.ok():
             self._playing = False
-            try:
-                for i in range(FINAL_ZEROS):
-                    if i:
-                        time.sleep(FINAL_ZERO_GAP)
-                    if self.motion_force:  # the current force setpoint once more
-                        self._publish_motion_force(None, self._force, self.get_clock().now())
-                    else:
-                        self._publish((0.0, 0.0, 0.0), self.get_clock().now())
-            except Exception as exc:  # the Context may be going down (a second signal)
-                self.get_logger().warn(f"could not publish the final zero twist: {exc}")
+            publish_last(
+                self,
+                lambda: publish_copies(self._publish_zero, FINAL_ZEROS, FINAL_ZERO_GAP),
+                "zero twist",
+            )
         super().destroy_node()
+
+    def _publish_zero(self) -> None:
+        """A zero twist (motion_force: with the current force setpoint once more)."""
+        if self.motion_force:
+            self._publish_motion_force(None, self._force, self.get_clock().now())
+        else:
+            self._publish((0.0, 0.0, 0.0), self.get_clock().now())
 
 
 def main(args=None) -> int:
-    return run_node(
-        OperatorNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
-    )
+    return run_node(OperatorNode, operator_parameters, args)
 
 
 if __name__ == "__main__":

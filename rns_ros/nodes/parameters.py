@@ -10,8 +10,10 @@ range. The same table is mirrored in ``config/<node>.yaml`` and a test keeps the
 from __future__ import annotations
 
 import difflib
-from collections.abc import Sequence
+import inspect
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from enum import Enum
 from typing import Any
 
 import numpy as np
@@ -19,6 +21,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.node import Node
 
+from rns_ros.control.controller import TwistFrame
 from rns_ros.core.commands import joint_order
 from rns_ros.core.errors import ConfigError, InputError
 
@@ -115,9 +118,21 @@ WORLD_FRAME = ParameterSpec("world_frame", "world", "Frame id of the inertial fr
 JOINTS = ParameterSpec(
     "joints",
     [f"joint_{i}" for i in range(1, 8)],
-    "Joint order of Float64MultiArray velocities (velocity interface), like the 'joints' "
-    "parameter of a ros2_control forward_command_controller; a permutation of the model's joints",
+    "Joint order of Float64MultiArray velocities (velocity interface): a permutation of the "
+    "model's joints",
 )
+#: frame_id of twists in the base and camera frames (nodes that send or read TwistStamped).
+BASE_FRAME = ParameterSpec("base_frame", "base_link", "frame_id of base-frame twists")
+CAMERA_FRAME = ParameterSpec("camera_frame", "camera", "frame_id of camera-frame twists")
+
+
+def twist_frame_names(params: Mapping[str, Any]) -> dict[TwistFrame, str]:
+    """frame_id of each twist frame from the world_frame, base_frame and camera_frame values."""
+    return {
+        TwistFrame.WORLD: params["world_frame"],
+        TwistFrame.BASE: params["base_frame"],
+        TwistFrame.CAMERA: params["camera_frame"],
+    }
 
 
 def velocity_joint_order(joints: Sequence[str], model_joints: Sequence[str]) -> np.ndarray:
@@ -191,3 +206,81 @@ def _range_text(spec: ParameterSpec) -> str:
 
 def specs_by_name(specs: Sequence[ParameterSpec]) -> dict[str, ParameterSpec]:
     return {spec.name: spec for spec in specs}
+
+
+def choices_of(enum: Iterable[Enum], without: Iterable[Enum] = ()) -> tuple[str, ...]:
+    """The values of a string enum but ``without``, in declaration order: the choices of its
+    parameter."""
+    excluded = set(without)
+    return tuple(member.value for member in enum if member not in excluded)
+
+
+def from_parameters(factory: Callable[..., Any], params: Mapping[str, Any], **overrides) -> Any:
+    """``factory(**kwargs)`` with every keyword argument of ``factory`` that names a parameter
+    taken from ``params`` (lists as tuples), and ``overrides`` on top."""
+    names = inspect.signature(factory).parameters
+    kwargs = {
+        name: tuple(value) if isinstance(value, list) else value
+        for name, value in params.items()
+        if name in names
+    }
+    return factory(**{**kwargs, **overrides})
+
+
+# --- documentation ------------------------------------------------------------------------------
+#: Columns of :func:`markdown_table`.
+TABLE_HEADER = ("Name", "Type", "Default", "Unit", "Range / choices", "Read-only", "Description")
+
+
+def type_name(default: Any) -> str:
+    """The ROS parameter type of ``default``: bool, integer, double, string or an array."""
+    if isinstance(default, list):
+        return f"{type_name(default[0]) if default else 'double'}[]"
+    if isinstance(default, bool):
+        return "bool"
+    if isinstance(default, int):
+        return "integer"
+    if isinstance(default, float):
+        return "double"
+    return "string"
+
+
+def _limits_text(spec: ParameterSpec) -> str:
+    parts = []
+    if spec.choices:
+        parts.append(", ".join(f"`{choice}`" for choice in spec.choices))
+    if spec.low is not None:
+        parts.append(f"[{spec.low:g}, {spec.high:g}]")
+    if spec.length is not None:
+        parts.append(f"length {' or '.join(str(n) for n in spec.length)}")
+    return "; ".join(parts)
+
+
+def _yaml_text(value: Any) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(_yaml_text(item) for item in value) + "]"
+    if isinstance(value, bool):
+        return str(value).lower()
+    return "''" if value == "" else str(value)
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def markdown_table(specs: Sequence[ParameterSpec]) -> str:
+    """The parameters as a Markdown table, one row each: name, type, default, unit,
+    range/choices, read-only (no: changes apply while the node runs) and description."""
+    lines = ["| " + " | ".join(TABLE_HEADER) + " |", "|" + "---|" * len(TABLE_HEADER)]
+    for spec in specs:
+        row = (
+            f"`{spec.name}`",
+            type_name(spec.default),
+            f"`{_yaml_text(spec.default)}`",
+            spec.unit.strip("[]"),
+            _limits_text(spec),
+            "yes" if spec.read_only else "no",
+            spec.description,
+        )
+        lines.append("| " + " | ".join(_cell(cell) for cell in row) + " |")
+    return "\n".join(lines)

@@ -1,4 +1,4 @@
-"""rns_ptp: reactionless point-to-point motion of the arm (thesis chapter 4, issue 14).
+"""rns_ptp: reactionless point-to-point motion of the arm (thesis chapter 4).
 
 The planner is :func:`rns_ros.control.ptp.plan_ptp` (and :func:`plan_deployment`); this node only
 converts messages, plans a goal in a worker thread and plays the plan back once per period from an
@@ -30,7 +30,6 @@ Service:
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import threading
 import time
@@ -40,7 +39,6 @@ import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType
-from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -53,22 +51,14 @@ from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.validation import Choice
+from rns_ros.nodes import ptp_parameters
 from rns_ros.nodes.cdr import odometry_fields
-from rns_ros.nodes.parameters import (
-    JOINTS,
-    MODEL_CONFIG,
-    WORLD_FRAME,
-    ParameterSpec,
-    declare_parameters,
-    velocity_joint_order,
-)
+from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import level_rank, node_names, status_text
 from rns_ros.resources import default_model_config
 
-NODE_NAME = "rns_ptp"
-SUMMARY = "Reactionless point-to-point motion: joint goal in, planned joint references out."
 #: A goal whose JointState name list is exactly this runs the full reactionless deployment.
 DEPLOY_GOAL = ["deploy"]
 #: A stale state while a goal is planned does not abandon it: planning (pure Python, holding the
@@ -98,81 +88,16 @@ STATE_LEVELS = {
     PtpState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
 }
 
-PARAMETERS = (
-    MODEL_CONFIG,
-    ParameterSpec(
-        "method",
-        "three_phase",
-        "Planner of joint goals: three_phase (reactionless folds + joint-space middle phase), "
-        "joint_space (JS-C), inverse_jacobian (IJ-C), transposed_jacobian (TJ-C)",
-        choices=("three_phase", "joint_space", "inverse_jacobian", "transposed_jacobian"),
-    ),
-    ParameterSpec(
-        "duration",
-        30.0,
-        "Planned duration of a joint_space / inverse_jacobian / transposed_jacobian motion "
-        "(the planner may stretch it to keep the joint velocity limits)",
-        "[s]",
-        0.1,
-        3600.0,
-    ),
-    ParameterSpec(
-        "phase_durations",
-        [5.0, 20.0, 5.0],
-        "Planned durations of the three_phase phases I, II, III (the planner may stretch them)",
-        "[s]",
-        0.01,
-        3600.0,
-        length=(3,),
-    ),
-    ParameterSpec(
-        "deploy_duration",
-        30.0,
-        "Planned duration of the full deployment (goal ['deploy'])",
-        "[s]",
-        0.1,
-        3600.0,
-    ),
-    ParameterSpec("rate", 100.0, "Output rate (playback period)", "[Hz]", 1.0, 1000.0),
-    ParameterSpec(
-        "state_timeout",
-        0.1,
-        "joint_states (and base_odom once it has arrived) older than this by receipt time stop "
-        "the arm: zero velocity, STALE_STATE error, the plan is abandoned",
-        "[s]",
-        0.005,
-        10.0,
-    ),
-    ParameterSpec(
-        "cancel_deceleration",
-        2.0,
-        "On ~/cancel the playback rate (plan seconds per second, 1 while moving) falls to 0 at "
-        "this rate: the arm stops on its path within 1/cancel_deceleration seconds",
-        "[1/s]",
-        0.01,
-        1000.0,
-    ),
-    ParameterSpec(
-        "output_interface",
-        "trajectory",
-        "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
-        "joint_velocities (order: the joints parameter)",
-        choices=("trajectory", "velocity"),
-    ),
-    JOINTS,
-    WORLD_FRAME,
-)
-
 
 class PtpNode(Node):
     """ROS 2 wrapper of the point-to-point planner (see the module docstring)."""
 
     def __init__(self, **node_kwargs) -> None:
-        super().__init__(NODE_NAME, **node_kwargs)
-        self._params = params = declare_parameters(self, PARAMETERS)
+        super().__init__(ptp_parameters.NODE_NAME, **node_kwargs)
+        self._params = params = declare_parameters(self, ptp_parameters.PARAMETERS)
         self.robot = load_model(params["model_config"] or default_model_config())
         self.method = PtpMethod.parse(params["method"])
-        self.settings = _settings(params)
+        self.settings = from_parameters(PtpSettings, params)
         self._period = 1.0 / params["rate"]
         self._deceleration = params["cancel_deceleration"]
         self._theta: np.ndarray | None = None
@@ -566,23 +491,8 @@ class PtpNode(Node):
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""
         if self._theta is not None:
-            try:
-                self._stop_output()
-                self._output.wait_for_all_acked(Duration(seconds=0.5))
-            except Exception as exc:  # the context may already be shut down (Ctrl-C)
-                self.get_logger().warn(f"could not publish the final zero velocity: {exc}")
+            publish_last(self, self._stop_output, "zero velocity", acked_by=self._output)
         super().destroy_node()
-
-
-def _settings(params: dict) -> PtpSettings:
-    """PtpSettings from the parameters (only the fields the planner has)."""
-    fields = {field.name for field in dataclasses.fields(PtpSettings)}
-    values = {
-        "duration": float(params["duration"]),
-        "phase_durations": tuple(float(x) for x in params["phase_durations"]),
-        "deploy_duration": float(params["deploy_duration"]),
-    }
-    return PtpSettings(**{k: v for k, v in values.items() if k in fields})
 
 
 #: States in which the measured state cannot be trusted (zero output, the plan abandoned).
@@ -590,7 +500,7 @@ FAULTS = (PtpState.STALE_STATE, PtpState.CONFLICTING_STATE)
 
 
 def main(args=None) -> int:
-    return run_node(PtpNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args)
+    return run_node(PtpNode, ptp_parameters, args)
 
 
 if __name__ == "__main__":

@@ -64,18 +64,12 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 
 from rns_ros.control.contact_topics import CONTACT_LABELS, ERROR_LABELS
-from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import twist_frame_ids
 from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError
 from rns_ros.core.fixed_base import FixedBaseModel
-from rns_ros.nodes.parameters import (
-    MODEL_CONFIG,
-    WORLD_FRAME,
-    ParameterSpec,
-    declare_parameters,
-    specs_by_name,
-)
+from rns_ros.nodes import rerun_logger_parameters
+from rns_ros.nodes.parameters import declare_parameters, from_parameters
 from rns_ros.nodes.ptp import DEPLOY_GOAL
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
@@ -87,113 +81,18 @@ from rns_ros.viz.contact import (
     parse_environment,
 )
 from rns_ros.viz.recorder import RecorderSettings, TelemetryRecorder
-from rns_ros.viz.sinks import SinkKind, SinkSettings
+from rns_ros.viz.sinks import SinkSettings
 
-NODE_NAME = "rns_rerun_logger"
-SUMMARY = (
-    "Logs the satellite + arm to rerun: 3D robot from its URDF, base attitude, coupling momentum, "
-    "commanded vs achieved angular velocity, joint velocities, singularity measures."
-)
 #: Wall time between batches sent to the sink [s] (samples are sent as columns).
 SEND_PERIOD = 0.1
-
-PARAMETERS = (
-    MODEL_CONFIG,
-    WORLD_FRAME,
-    ParameterSpec(
-        "sink",
-        "auto",
-        "spawn: start a native viewer; connect: stream to connect_url; serve: web viewer on "
-        "127.0.0.1:web_port; save: write rrd_path; auto: spawn with a display, else save",
-        choices=tuple(kind.value for kind in SinkKind),
-    ),
-    ParameterSpec(
-        "rrd_path",
-        "rns_ros.rrd",
-        "Recording file for sink save (relative: to the working directory); overwritten",
-    ),
-    ParameterSpec(
-        "connect_url",
-        "rerun+http://127.0.0.1:9876/proxy",
-        "Viewer to stream to for sink connect (rerun+http://HOST:PORT/proxy)",
-    ),
-    ParameterSpec(
-        "grpc_port",
-        9876,
-        "Port of the spawned viewer (spawn) or of the local gRPC server (serve)",
-        "[-]",
-        1024,
-        65535,
-    ),
-    ParameterSpec("web_port", 9090, "HTTP port of the web viewer (serve)", "[-]", 1024, 65535),
-    ParameterSpec(
-        "application_id",
-        "rns_ros",
-        "rerun application id; recordings with the same id share the viewer layout",
-    ),
-    ParameterSpec(
-        "recording_name", "", "Recording name shown in the viewer (e.g. the method); empty: none"
-    ),
-    ParameterSpec(
-        "controller_status_topic",
-        "rns_controller/status",
-        "DiagnosticArray status of the controller",
-    ),
-    ParameterSpec(
-        "ptp_status_topic",
-        "rns_ptp/status",
-        "DiagnosticArray status of the point-to-point node",
-    ),
-    ParameterSpec(
-        "default_twist_frame",
-        "camera",
-        "Axes of cmd_twist with an empty header.frame_id (as the controller's parameter)",
-        choices=tuple(frame.value for frame in TwistFrame),
-    ),
-    ParameterSpec("trail_length", 300, "Camera trail points kept; 0: no trail", "[-]", 0, 100000),
-    ParameterSpec(
-        "trail_period", 0.1, "Stamp time between two camera trail points", "[s]", 0.0, 60.0
-    ),
-    ParameterSpec(
-        "max_rate",
-        200.0,
-        "Highest recorded rate per input topic (by stamp); 0: every message",
-        "[Hz]",
-        0.0,
-        10000.0,
-    ),
-    ParameterSpec(
-        "force_errors_topic",
-        "/rns_force_controller/errors",
-        "Float64MultiArray task errors of the force controller (fixed-base arms only)",
-    ),
-    ParameterSpec(
-        "contact_log_rate",
-        50.0,
-        "Highest recorded rate of contact, wrist_wrench and the force errors, by their own clock "
-        "(fixed-base arms only); 0: every message",
-        "[Hz]",
-        0.0,
-        10000.0,
-    ),
-    ParameterSpec(
-        "force_arrow_scale",
-        0.01,
-        "Length of the measured and commanded force arrows per newton (fixed-base arms only)",
-        "[m/N]",
-        1e-6,
-        10.0,
-    ),
-)
-SPECS = specs_by_name(PARAMETERS)
 
 
 class RerunLoggerNode(Node):
     """ROS 2 front end of :class:`TelemetryRecorder` (see the module docstring)."""
 
     def __init__(self, **node_kwargs) -> None:
-        super().__init__(NODE_NAME, **node_kwargs)
-        params = declare_parameters(self, PARAMETERS)
+        super().__init__(rerun_logger_parameters.NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, rerun_logger_parameters.PARAMETERS)
         self.robot, urdf_path = load_arm_model(params["model_config"] or default_model_config())
         #: A Part II fixed-base arm (contact topics) instead of the free-floating robot.
         self.fixed_base = isinstance(self.robot, FixedBaseModel)
@@ -204,34 +103,18 @@ class RerunLoggerNode(Node):
             self._frames = twist_frame_ids(
                 self.robot, params["world_frame"], params["default_twist_frame"]
             )
-        sink = SinkSettings(
-            kind=params["sink"],
-            rrd_path=params["rrd_path"],
-            connect_url=params["connect_url"],
-            grpc_port=params["grpc_port"],
-            web_port=params["web_port"],
-        )
-        settings = RecorderSettings(
-            application_id=params["application_id"],
-            recording_name=params["recording_name"],
-            trail_length=params["trail_length"],
-            trail_period=params["trail_period"],
-            max_rate=params["max_rate"],
-            send_period=SEND_PERIOD,
-        )
+        sink = from_parameters(SinkSettings, params, kind=params["sink"])
+        settings = from_parameters(RecorderSettings, params, send_period=SEND_PERIOD)
         # From here on the recording is open: close it if the rest of the set-up is interrupted
         # (Ctrl-C during start-up), or the file would lack its footer.
         if self.fixed_base:
-            contact = ContactSettings(
-                contact_log_rate=params["contact_log_rate"],
-                force_arrow_scale=params["force_arrow_scale"],
-            )
+            contact = from_parameters(ContactSettings, params)
             self.recorder = ContactRecorder(self.robot, urdf_path, sink, settings, contact=contact)
         else:
             self.recorder = TelemetryRecorder(self.robot, urdf_path, sink, settings)
         try:
             # deep queue: a recorder should not drop samples while rerun work or a busy CPU
-            # holds it up (depth 10 lost ~12 % of a 100 Hz stream on a loaded CI machine)
+            # holds it up (1 s of a 100 Hz stream)
             qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
             self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
             if self.fixed_base:
@@ -433,9 +316,7 @@ class RerunLoggerNode(Node):
 
 
 def main(args=None) -> int:
-    return run_node(
-        RerunLoggerNode, executable=NODE_NAME, summary=SUMMARY, specs=PARAMETERS, args=args
-    )
+    return run_node(RerunLoggerNode, rerun_logger_parameters, args)
 
 
 if __name__ == "__main__":

@@ -1,18 +1,23 @@
-"""The Jazzy ``main()`` idiom shared by all rns_ros nodes, and ``--help`` from parameters."""
+"""The Jazzy ``main()`` idiom shared by all rns_ros nodes, ``--help`` from parameters, and the
+last words of a node going down (a final zero command, its worker thread stopped)."""
 
 from __future__ import annotations
 
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Sequence
+from typing import Protocol
 
 import rclpy
+from rclpy.duration import Duration
 from rclpy.exceptions import NameValidationException, ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 from rclpy.utilities import remove_ros_args
@@ -39,6 +44,14 @@ ROS_STARTUP_ERRORS = (
 )
 
 
+class NodeParameters(Protocol):
+    """What a node's parameters module defines (e.g. :mod:`rns_ros.nodes.ptp_parameters`)."""
+
+    NODE_NAME: str
+    SUMMARY: str
+    PARAMETERS: tuple[ParameterSpec, ...]
+
+
 def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]) -> str:
     """Text for ``<executable> --help``: what the node does and every parameter."""
     lines = [
@@ -61,6 +74,19 @@ def parameter_help(executable: str, summary: str, specs: Sequence[ParameterSpec]
     return "\n".join(lines)
 
 
+def answer_help(parameters: NodeParameters, argv: Sequence[str]) -> int | None:
+    """Exit code 0 after printing ``--help`` (``-h``), 2 after one line naming unparsable ROS
+    arguments; None when the node is to start."""
+    try:
+        if {"-h", "--help"} & set(remove_ros_args(list(argv))[1:]):
+            print(parameter_help(parameters.NODE_NAME, parameters.SUMMARY, parameters.PARAMETERS))
+            return 0
+    except ROS_STARTUP_ERRORS as exc:
+        print(f"{parameters.NODE_NAME}: {describe_ros_error(exc)}", file=sys.stderr)
+        return 2
+    return None
+
+
 def start_node(executable: str, factory: Callable[[], Node], argv: Sequence[str]) -> Node | None:
     """rclpy.init (without rclpy's signal handlers) and ``factory()``; None after printing one
     line ``<executable>: <problem>`` when rcl rejects the ROS arguments, params file or
@@ -79,16 +105,14 @@ def start_node(executable: str, factory: Callable[[], Node], argv: Sequence[str]
 
 def run_node(
     factory: Callable[[], Node],
-    *,
-    executable: str,
-    summary: str,
-    specs: Sequence[ParameterSpec],
+    parameters: NodeParameters,
     args: Sequence[str] | None = None,
 ) -> int:
-    """Create the node, spin it until Ctrl-C or shutdown, tear down cleanly; return an exit code.
+    """The ``main()`` of a node: create it, spin it until Ctrl-C or shutdown, tear down cleanly;
+    return an exit code. ``parameters`` names the node and its parameters (``--help``).
 
     Exit codes: 0 after Ctrl-C / SIGTERM (also during start-up) or shutdown; 2 with one line
-    ``<executable>: <problem>`` on stderr for a start-up failure: bad parameters, model or
+    ``<NODE_NAME>: <problem>`` on stderr for a start-up failure: bad parameters, model or
     configuration (:class:`RnsError`), or ROS arguments / params file / environment that rcl
     rejects (:data:`ROS_STARTUP_ERRORS`). Parameter overrides that name no parameter of the node
     are logged as warnings naming the closest valid name.
@@ -96,8 +120,8 @@ def run_node(
     # rclpy's own SIGINT handler would shut the Context down before destroy_node() runs, and a
     # node could no longer publish its final zero command. Ctrl-C and SIGTERM only set a flag
     # that the spin loop reads: an exception raised from a signal handler can land inside
-    # rclpy's C++ argument conversion, which turns it into a RuntimeError (exit code 1 seen in
-    # CI). The handlers go in first, so Ctrl-C during rclpy.init or the node's construction is a
+    # rclpy's C++ argument conversion, which turns it into a RuntimeError (exit code 1). The
+    # handlers go in first, so Ctrl-C during rclpy.init or the node's construction is a
     # clean exit too. The Context is shut down last, in `finally`.
     stop = threading.Event()
     previous = {
@@ -106,28 +130,24 @@ def run_node(
     }
     if startup_interrupted():  # Ctrl-C while the imports ran (rns_ros.cli)
         stop.set()
+    executable = parameters.NODE_NAME
     node = executor = None
     try:
-        try:
-            argv = list(sys.argv if args is None else args)
-            if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
-                print(parameter_help(executable, summary, specs))
-                return 0
-            if stop.is_set():
-                return 0
-        except ROS_STARTUP_ERRORS as exc:
-            print(f"{executable}: {describe_ros_error(exc)}", file=sys.stderr)
-            return 2
+        argv = list(sys.argv if args is None else args)
+        code = answer_help(parameters, argv)
+        if code is not None:
+            return code
+        if stop.is_set():
+            return 0
         node = start_node(executable, factory, argv)
         if node is None:
             return 2
-        # The events executor: rclpy's wait-set executors cost ~0.6 ms of CPU per wake-up here,
-        # and the multi-threaded one kept the controller at 90 % of a core with output stalls of
-        # up to 1.5 s (scripts/benchmark.py --only latency); this one ticks steadily.
+        # The events executor: rclpy's wait-set executors cost far more CPU per wake-up and stall
+        # the output under load (scripts/benchmark.py --only latency); this one ticks steadily.
         executor = EventsExecutor()
         executor.add_node(node)
-        # the executor dispatches in C++ for up to 0.1 s per call instead of returning to this
-        # loop after each event: ~10 % less CPU per received message here (53 vs 56-60 us)
+        # the executor dispatches in C++ for up to 0.1 s per call rather than returning to this
+        # loop after each event: less CPU per received message
         never = Future()
         while rclpy.ok() and not stop.is_set():
             # bounded waits: the stop flag is read at least every 0.1 s
@@ -146,3 +166,39 @@ def run_node(
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     return 0
+
+
+def publish_last(
+    node: Node,
+    publish: Callable[[], None],
+    what: str,
+    *,
+    acked_by: Publisher | None = None,
+    timeout: float = 0.5,
+) -> None:
+    """A node's last message (a zero command) from ``destroy_node``: ``publish()``, then up to
+    ``timeout`` [s] for the reliable subscribers of ``acked_by`` to acknowledge it. The Context
+    may already be going down (a second signal): a failure is logged as a warning."""
+    try:
+        publish()
+        if acked_by is not None:
+            acked_by.wait_for_all_acked(Duration(seconds=timeout))
+    except Exception as exc:  # the Context may already be shut down
+        node.get_logger().warn(f"could not publish the final {what}: {exc}")
+
+
+def publish_copies(publish: Callable[[], None], count: int, gap: float) -> None:
+    """``publish()`` ``count`` times, ``gap`` [s] apart: best effort may drop one copy."""
+    for i in range(count):
+        if i:
+            time.sleep(gap)
+        publish()
+
+
+def stop_worker(thread: threading.Thread, *events: threading.Event, timeout: float = 2.0) -> None:
+    """Set ``events`` (the worker's stop and wake-up flags), then join ``thread`` for up to
+    ``timeout`` [s]."""
+    for event in events:
+        event.set()
+    if thread.is_alive():
+        thread.join(timeout=timeout)

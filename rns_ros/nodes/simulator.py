@@ -86,11 +86,11 @@ from std_srvs.srv import Trigger
 
 from rns_ros.core import FreeFloatingModel, load_model_config
 from rns_ros.core.errors import ConfigError, SimulationDivergedError
-from rns_ros.nodes import contact_simulator_parameters
+from rns_ros.nodes import contact_simulator_parameters, simulator_parameters
 from rns_ros.nodes.contact_simulator import ContactSimulatorNode
 from rns_ros.nodes.lockstep import CALLBACK_POLL, LOCKSTEP_PATIENCE, LockstepPacer
 from rns_ros.nodes.parameters import declare_parameters
-from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, run_node
+from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, run_node, stop_worker
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator_commands import CommandIntake, RunState
 from rns_ros.nodes.simulator_parameters import (
@@ -353,10 +353,7 @@ class SimulatorNode(Node):
         return self.get_clock().now() + Duration(nanoseconds=round(lead * 1e9))
 
     def destroy_node(self) -> None:
-        self._stop.set()
-        self._command_arrived.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=2.0)
+        stop_worker(self._thread, self._stop, self._command_arrived)
         super().destroy_node()
 
 
@@ -406,13 +403,7 @@ def main(args=None) -> int:
     if _wants_help(argv):
         print(simulator_help())
         return 0
-    return run_node(
-        create_simulator_node,
-        executable=NODE_NAME,
-        summary=SUMMARY,
-        specs=PARAMETERS,
-        args=argv,
-    )
+    return run_node(create_simulator_node, simulator_parameters, argv)
 
 
 if __name__ == "__main__":

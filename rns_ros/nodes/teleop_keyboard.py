@@ -57,14 +57,8 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.utilities import remove_ros_args
 
-from rns_ros.cli import (
-    describe_ros_error,
-    one_line,
-    startup_interrupted,
-)
-from rns_ros.control.controller import TwistFrame
+from rns_ros.cli import one_line, startup_interrupted
 from rns_ros.core.errors import RnsError
 from rns_ros.keyboard import (
     ControllerStatus,
@@ -75,19 +69,11 @@ from rns_ros.keyboard import (
     split_keys,
     status_line,
 )
-from rns_ros.nodes.parameters import (
-    WORLD_FRAME,
-    ParameterSpec,
-    declare_parameters,
-)
-from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, start_node
+from rns_ros.nodes import teleop_keyboard_parameters
+from rns_ros.nodes.parameters import declare_parameters, from_parameters, twist_frame_names
+from rns_ros.nodes.runner import answer_help, publish_copies, start_node
+from rns_ros.nodes.teleop_keyboard_parameters import NODE_NAME
 
-NODE_NAME = "rns_teleop_keyboard"
-SUMMARY = (
-    "Keyboard teleop: held keys -> TwistStamped on cmd_twist (q/e roll, w/s pitch, a/d yaw, "
-    "i/k j/l u/o linear, +/- speed, f frame, space stop, Q or Ctrl-C quit; m force mode: EE x/y "
-    "twist + force_setpoint, +/- push). Needs a terminal."
-)
 #: Exit code when the terminal went away (a zero twist was still sent).
 EXIT_TERMINAL_LOST = 1
 #: Zero twists sent on the way out, this far apart [s]: best effort may drop one.
@@ -95,91 +81,6 @@ EXIT_ZEROS = 3
 EXIT_ZERO_GAP = 0.02
 #: Longest wait for a key before the loop looks at the clock again [s].
 POLL = 0.05
-
-PARAMETERS = (
-    ParameterSpec("rate", 20.0, "Publishing rate while a key is held", "[Hz]", 1.0, 200.0),
-    ParameterSpec(
-        "angular_speed", 0.1, "Initial angular speed of a held key", "[rad/s]", 0.001, 1.0
-    ),
-    ParameterSpec(
-        "max_angular_speed",
-        1.0,
-        "Upper bound of the angular speed keys and of |angular| when keys combine (scaled "
-        "down uniformly, direction kept); keep it <= the controller's max_angular_speed",
-        "[rad/s]",
-        0.001,
-        10.0,
-    ),
-    ParameterSpec(
-        "linear_speed",
-        0.05,
-        "Initial linear speed of a held key (force mode: the EE speed along EE x / y)",
-        "[m/s]",
-        0.001,
-        1.0,
-    ),
-    ParameterSpec(
-        "max_linear_speed",
-        0.5,
-        "Upper bound of the linear speed keys and of |linear| when keys combine",
-        "[m/s]",
-        0.001,
-        10.0,
-    ),
-    ParameterSpec(
-        "speed_step", 1.25, "Factor of one speed-up (+) or slow-down (-) key", "[-]", 1.01, 10.0
-    ),
-    ParameterSpec(
-        "key_hold",
-        0.7,
-        "A key counts as held this long after its last auto-repeat; must exceed the terminal's "
-        "auto-repeat delay (X11 default 660 ms), may exceed the controller's command_timeout",
-        "[s]",
-        0.05,
-        5.0,
-    ),
-    ParameterSpec(
-        "zero_duration",
-        0.5,
-        "Zero twists are published at rate this long after release or stop, then nothing",
-        "[s]",
-        0.0,
-        60.0,
-    ),
-    WORLD_FRAME,
-    ParameterSpec("base_frame", "base_link", "frame_id sent in the base frame"),
-    ParameterSpec("camera_frame", "camera", "frame_id sent in the camera frame"),
-    ParameterSpec(
-        "initial_frame",
-        "camera",
-        "Command frame at start (key f cycles camera -> world -> base)",
-        choices=tuple(frame.value for frame in TwistFrame),
-    ),
-    ParameterSpec(
-        "controller_status_topic",
-        "rns_controller/status",
-        "DiagnosticArray status of the controller, shown in the panel",
-    ),
-    ParameterSpec(
-        "ee_frame", "ee", "frame_id of force-mode twists and force setpoints (the EE frame)"
-    ),
-    ParameterSpec(
-        "force_step",
-        1.0,
-        "Force setpoint change per push key (+/-) in force mode",
-        "[N]",
-        0.01,
-        100.0,
-    ),
-    ParameterSpec(
-        "max_force", 20.0, "Upper bound of the force setpoint (lower bound 0)", "[N]", 0.1, 1000.0
-    ),
-    ParameterSpec(
-        "force_status_topic",
-        "/rns_force_controller/status",
-        "DiagnosticArray status of the force controller, shown in the panel (force mode)",
-    ),
-)
 
 
 class TerminalLost(Exception):  # noqa: N818 - an event, not a programming error
@@ -195,26 +96,11 @@ class TeleopKeyboardNode(Node):
 
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
-        params = declare_parameters(self, PARAMETERS)
-        self.teleop = KeyboardTeleop(
-            angular_speed=params["angular_speed"],
-            linear_speed=params["linear_speed"],
-            key_hold=params["key_hold"],
-            zero_duration=params["zero_duration"],
-            speed_step=params["speed_step"],
-            max_angular_speed=params["max_angular_speed"],
-            max_linear_speed=params["max_linear_speed"],
-            frame=params["initial_frame"],
-            force_step=params["force_step"],
-            max_force=params["max_force"],
-        )
+        params = declare_parameters(self, teleop_keyboard_parameters.PARAMETERS)
+        self.teleop = from_parameters(KeyboardTeleop, params, frame=params["initial_frame"])
         self.ee_frame = params["ee_frame"]
         self.period = 1.0 / params["rate"]
-        self.frame_ids = {
-            TwistFrame.WORLD: params["world_frame"],
-            TwistFrame.BASE: params["base_frame"],
-            TwistFrame.CAMERA: params["camera_frame"],
-        }
+        self.frame_ids = twist_frame_names(params)
         # Commands: best effort, depth 1 - a late twist is worth nothing (as rns_operator).
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._publisher = self.create_publisher(TwistStamped, "cmd_twist", qos)
@@ -277,10 +163,7 @@ class TeleopKeyboardNode(Node):
         zero = TeleopCommand(
             (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), self.teleop.frame, self.teleop.force_mode
         )
-        for i in range(EXIT_ZEROS):
-            if i:
-                time.sleep(EXIT_ZERO_GAP)
-            self.publish(zero)
+        publish_copies(lambda: self.publish(zero), EXIT_ZEROS, EXIT_ZERO_GAP)
 
 
 #: Status keys holding the force error [N] (rns_force_controller's first), shown in the panel.
@@ -459,13 +342,9 @@ def main(args: Sequence[str] | None = None) -> int:
     """Run the teleop in this terminal; exit code 0 (quit, Ctrl-C, SIGTERM), 1 (terminal lost)
     or 2 (bad parameters, stdin not a terminal)."""
     argv = list(sys.argv if args is None else args)
-    try:
-        if {"-h", "--help"} & set(remove_ros_args(argv)[1:]):
-            print(parameter_help(NODE_NAME, SUMMARY, PARAMETERS))
-            return 0
-    except ROS_STARTUP_ERRORS as exc:
-        print(f"{NODE_NAME}: {describe_ros_error(exc)}", file=sys.stderr)
-        return 2
+    code = answer_help(teleop_keyboard_parameters, argv)
+    if code is not None:
+        return code
     # Our own handlers (no rclpy one), before rclpy.init: the Context must outlive the final zero
     # twists, and Ctrl-C during start-up (imports included, see rns_ros.cli) is a clean exit 0.
     _signals.clear()

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
@@ -18,7 +17,7 @@ from rns_testing import Recorder, status_values
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.nodes.attitude_control import PARAMETERS, AttitudeControlNode
+from rns_ros.nodes.attitude_control import AttitudeControlNode
 from rns_ros.nodes.simulator import SimulatorNode
 
 REPO = Path(__file__).resolve().parents[2]
@@ -121,12 +120,6 @@ def test_stale_state_turns_the_wheels_off(ros):
     message = status.messages[-1].status[0].message
     assert any(topic in message for topic in ("base_odom", "joint_states", "wheel_states"))
     assert "s old (state_timeout 0.1 s)" in message
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "attitude_control.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 @pytest.mark.parametrize(

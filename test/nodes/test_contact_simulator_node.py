@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
@@ -25,7 +24,7 @@ from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.contact_simulator import ContactSimulatorNode
-from rns_ros.nodes.contact_simulator_parameters import PARAMETERS, WALL_TASK_RAD
+from rns_ros.nodes.contact_simulator_parameters import WALL_TASK_RAD
 from rns_ros.nodes.simulator import SimulatorNode, create_simulator_node
 from rns_ros.sim.contact import ArcConstraint, ContactSimulator, PlaneConstraint
 
@@ -79,12 +78,6 @@ def _all_finite(joints, wrenches, contacts) -> bool:
         values.append(np.array([f.x, f.y, f.z, t.x, t.y, t.z]))
     values += [np.array(m.data) for m in contacts.messages]
     return all(np.isfinite(v).all() for v in values)
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "contact_simulator.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 def test_static_push_reads_the_force_on_the_wrist_and_in_the_contact_sample(ros):

@@ -370,12 +370,6 @@ def test_shutdown_publishes_zero_velocity(ros, stack):
     ), [list(msg.points[0].velocities) for msg in references[count:]]
 
 
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "controller.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
-
-
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [

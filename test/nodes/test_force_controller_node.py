@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -24,7 +23,7 @@ from rns_ros.control.force.commands import JointMeasurement, WrenchSample
 from rns_ros.control.force.controller import ForceTeleopController
 from rns_ros.control.force.settings import ForceControlSettings
 from rns_ros.core.fixed_base import load_fixed_base_model
-from rns_ros.nodes.force_controller import PARAMETERS, ForceControllerNode
+from rns_ros.nodes.force_controller import ForceControllerNode
 from rns_ros.resources import config_dir
 
 REPO = Path(__file__).resolve().parents[2]
@@ -136,14 +135,6 @@ def test_shutdown_publishes_zero_torque(ros):
     node.destroy_node()
     assert ros.spin_until(lambda: len(torques) >= 2, 5.0)
     assert torques.latest().data.tolist() == [0.0] * 7
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "force_controller.yaml").read_text())
-    assert content["/**"]["ros__parameters"] == {spec.name: spec.default for spec in PARAMETERS}
-    arc = yaml.safe_load((REPO / "config" / "force_controller_arc.yaml").read_text())
-    names = {spec.name for spec in PARAMETERS}
-    assert set(arc["/**"]["ros__parameters"]) <= names
 
 
 def test_config_files_load_through_rcl(ros):

@@ -14,9 +14,8 @@ from rns_ros.analysis.part2_scenarios import load_motion_force_scenario, operato
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
-from rns_ros.nodes.operator import FINAL_ZEROS, PARAMETERS, OperatorNode
+from rns_ros.nodes.operator import FINAL_ZEROS, OperatorNode
 from rns_ros.nodes.sim_clock import stamp_from_seconds
-from rns_ros.resources import config_dir
 
 SCENARIO = {
     "initial_joint_positions_deg": [0, 10, 0, 20, 0, 30, 0],
@@ -214,11 +213,6 @@ def test_unknown_scenario_is_a_clear_error(ros):
             context=ros.context,
             parameter_overrides=[Parameter("scenario", value="nope")],
         )
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((config_dir() / "operator.yaml").read_text())
-    assert content["/**"]["ros__parameters"] == {spec.name: spec.default for spec in PARAMETERS}
 
 
 # --- Part II: kind motion_force ----------------------------------------------------------------

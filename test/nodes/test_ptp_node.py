@@ -9,7 +9,6 @@ from types import SimpleNamespace
 import numpy as np
 import pinocchio as pin
 import pytest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
@@ -23,7 +22,7 @@ from rns_ros.analysis.ptp_runs import run_plan
 from rns_ros.control.ptp import plan_ptp
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.nodes.ptp import PARAMETERS, PtpNode
+from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
 
@@ -266,12 +265,6 @@ def test_status_before_the_first_joint_state(ros):
     entry = diagnostics.messages[-1].status[0]
     assert entry.hardware_id == node.robot.name
     assert entry.level == entry.WARN
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "ptp.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 @pytest.mark.parametrize(

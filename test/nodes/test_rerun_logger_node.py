@@ -28,7 +28,7 @@ from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.ptp import PtpNode
-from rns_ros.nodes.rerun_logger import PARAMETERS, RerunLoggerNode
+from rns_ros.nodes.rerun_logger import RerunLoggerNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.viz import paths
 from rns_ros.viz.contact import ContactRecorder
@@ -86,12 +86,6 @@ def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
     assert progress.max() == pytest.approx(1.0)
     log = [row["TextLog:text"][0] for row in read_components(rrd, paths.PTP_LOG)]
     assert any(line.startswith("phase JS-C") for line in log), log
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "rerun_logger.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):

@@ -3,10 +3,13 @@ node code, while the Context still works, so destroy_node() can publish a final 
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
 import signal
 import threading
+import time
+from types import SimpleNamespace
 
 import pytest
 import rclpy
@@ -14,7 +17,10 @@ from rclpy.node import Node
 from std_msgs.msg import String
 
 from rns_ros.nodes.parameters import ParameterSpec, declare_parameters, warn_unknown_parameters
-from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.runner import publish_copies, publish_last, run_node, stop_worker
+
+#: What a node's parameters module defines, for the test nodes here.
+TEST_NODE = SimpleNamespace(NODE_NAME="rns_runner_test", SUMMARY="", PARAMETERS=())
 
 
 class _Busy(Node):
@@ -65,7 +71,7 @@ def test_a_signal_ends_the_spin_with_exit_code_0_and_a_live_context_for_the_last
         return nodes[-1]
 
     before = signal.getsignal(signum)
-    code = run_node(factory, executable="rns_runner_test", summary="", specs=(), args=["test"])
+    code = run_node(factory, TEST_NODE, ["test"])
     assert code == 0
     assert nodes[0].raised == []  # the handler only asks the spin loop to stop
     assert nodes[0].final == [True]  # destroy_node ran before the Context was shut down
@@ -92,13 +98,7 @@ class _Quiet(Node):
 )
 def test_bad_ros_arguments_give_one_line_and_exit_code_2(capsys, ros_args, message):
     before = signal.getsignal(signal.SIGINT)
-    code = run_node(
-        _Quiet,
-        executable="rns_runner_test",
-        summary="",
-        specs=(),
-        args=["t", "--ros-args", *ros_args],
-    )
+    code = run_node(_Quiet, TEST_NODE, ["t", "--ros-args", *ros_args])
     err = capsys.readouterr().err
     assert code == 2
     assert len(err.strip().splitlines()) == 1, err
@@ -145,3 +145,66 @@ def test_help_marks_the_parameters_that_change_at_run_time():
     assert {"method", "state_timeout", "max_angular_speed"} <= {
         spec.name for spec in controller.PARAMETERS if not spec.read_only
     }
+
+
+# --- last words ----------------------------------------------------------------------------------
+class _Logger:
+    def __init__(self) -> None:
+        self.warnings: list[str] = []
+
+    def warn(self, text: str) -> None:
+        self.warnings.append(text)
+
+
+class _Node:
+    def __init__(self) -> None:
+        self.logger = _Logger()
+
+    def get_logger(self) -> _Logger:
+        return self.logger
+
+
+class _Publisher:
+    def __init__(self) -> None:
+        self.waits: list[float] = []
+
+    def wait_for_all_acked(self, timeout) -> bool:
+        self.waits.append(timeout.nanoseconds * 1e-9)
+        return True
+
+
+def test_the_last_message_waits_for_acknowledgement_and_a_failure_is_only_logged():
+    node, publisher, sent = _Node(), _Publisher(), []
+    publish_last(node, lambda: sent.append("zero"), "zero torque", acked_by=publisher, timeout=0.2)
+    assert sent == ["zero"]
+    assert publisher.waits == [0.2]
+    assert node.logger.warnings == []
+
+    def broken() -> None:
+        raise RuntimeError("context is not valid")
+
+    publish_last(node, broken, "zero torque", acked_by=publisher)
+    assert publisher.waits == [0.2]  # nothing published, nothing to wait for
+    assert node.logger.warnings == ["could not publish the final zero torque: context is not valid"]
+
+
+def test_copies_go_out_gap_apart():
+    times: list[float] = []
+    publish_copies(lambda: times.append(time.monotonic()), 3, 0.02)
+    assert len(times) == 3
+    assert all(later - earlier >= 0.02 for earlier, later in itertools.pairwise(times))
+
+
+def test_a_worker_is_woken_and_joined():
+    stop, wake = threading.Event(), threading.Event()
+
+    def work() -> None:
+        while not stop.is_set():
+            wake.wait()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    stop_worker(thread, stop, wake)
+    assert stop.is_set()
+    assert wake.is_set()
+    assert not thread.is_alive()

@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-import yaml
 from geometry_msgs.msg import Vector3Stamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
@@ -32,7 +31,7 @@ from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.nodes.simulator_commands import MAX_GRID_AGE
-from rns_ros.nodes.simulator_parameters import PARAMETERS, SATELLITE_OBSERVATION_RAD
+from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -470,12 +469,6 @@ def test_publish_rate_follows_the_wall_clock(ros, rate, record_property):
     record_property("measured_rate_hz", measured)
     print(f"requested {rate} Hz, measured {measured:.2f} Hz")
     assert measured == pytest.approx(rate, rel=0.1)  # generous: shared 2-core machine
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "simulator.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 @pytest.mark.parametrize(

@@ -17,14 +17,12 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.qos import QoSProfile
 
 from rns_ros.harness import ros_environment
-from rns_ros.nodes.teleop_keyboard import PARAMETERS
-from rns_ros.resources import config_dir
+from rns_ros.nodes.teleop_keyboard_parameters import PARAMETERS
 
 REPO = Path(__file__).resolve().parents[2]
 TMUX = shutil.which("tmux")
@@ -431,8 +429,3 @@ def test_help_lists_every_parameter(ros):
     assert result.stdout.startswith("usage: rns_teleop_keyboard")
     for spec in PARAMETERS:
         assert f"  {spec.name} = " in result.stdout
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((config_dir() / "teleop_keyboard.yaml").read_text())
-    assert content["/**"]["ros__parameters"] == {spec.name: spec.default for spec in PARAMETERS}

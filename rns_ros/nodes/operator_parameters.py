@@ -1,0 +1,79 @@
+"""Parameters of rns_operator (:mod:`rns_ros.nodes.operator`); mirrored in config/operator.yaml."""
+
+from __future__ import annotations
+
+from rns_ros.nodes.parameters import (
+    BASE_FRAME,
+    CAMERA_FRAME,
+    WORLD_FRAME,
+    ParameterSpec,
+    specs_by_name,
+)
+
+NODE_NAME = "rns_operator"
+SUMMARY = (
+    "Scripted operator: plays a scenario file as twists on cmd_twist (motion_force: and force "
+    "setpoints on force_setpoint)."
+)
+#: Rate suggested for motion/force scenarios [Hz] (the force controller runs at 1 kHz).
+MOTION_FORCE_RATE = 500.0
+
+PARAMETERS = (
+    ParameterSpec(
+        "scenario",
+        "satellite_observation",
+        "Scenario file path, or the name of a shipped one in config/scenarios/",
+    ),
+    ParameterSpec(
+        "rate",
+        50.0,
+        f"Command publishing rate (motion_force scenarios: {MOTION_FORCE_RATE:g} Hz suggested)",
+        "[Hz]",
+        1.0,
+        1000.0,
+    ),
+    ParameterSpec(
+        "start_delay",
+        0.5,
+        "Wait after the start condition before the profile begins",
+        "[s]",
+        0.0,
+        3600.0,
+    ),
+    ParameterSpec(
+        "wait_for_subscriber",
+        True,
+        "Start only once cmd_twist (motion_force: and force_setpoint) has a subscriber",
+    ),
+    ParameterSpec(
+        "min_subscribers",
+        1,
+        "With wait_for_subscriber: start once cmd_twist has at least this many subscribers "
+        "(a controller and recorders)",
+        "[-]",
+        1,
+        100,
+    ),
+    ParameterSpec(
+        "zero_duration",
+        1.0,
+        "Publish zero twists (motion_force: and the held force setpoint) this long after the "
+        "profile",
+        "[s]",
+        0.0,
+        3600.0,
+    ),
+    ParameterSpec(
+        "lead",
+        0.0,
+        "Under use_sim_time, twist scenarios: publish each sample this long before its instant, "
+        "stamped with the instant",
+        "[s]",
+        0.0,
+        1.0,
+    ),
+    WORLD_FRAME,
+    BASE_FRAME,
+    CAMERA_FRAME,
+)
+SPECS = specs_by_name(PARAMETERS)

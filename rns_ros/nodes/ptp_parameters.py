@@ -1,0 +1,82 @@
+"""Parameters of rns_ptp (:mod:`rns_ros.nodes.ptp`); mirrored in config/ptp.yaml."""
+
+from __future__ import annotations
+
+from rns_ros.control.ptp import PtpMethod
+from rns_ros.nodes.parameters import (
+    JOINTS,
+    MODEL_CONFIG,
+    WORLD_FRAME,
+    ParameterSpec,
+    choices_of,
+    specs_by_name,
+)
+
+NODE_NAME = "rns_ptp"
+SUMMARY = "Reactionless point-to-point motion: joint goal in, planned joint references out."
+
+PARAMETERS = (
+    MODEL_CONFIG,
+    ParameterSpec(
+        "method",
+        PtpMethod.THREE_PHASE.value,
+        "Planner of joint goals: three_phase, joint_space (JS-C), inverse_jacobian (IJ-C), "
+        "transposed_jacobian (TJ-C)",
+        choices=choices_of(PtpMethod, without=(PtpMethod.DEPLOY,)),  # DEPLOY: goal ['deploy']
+    ),
+    ParameterSpec(
+        "duration",
+        30.0,
+        "Planned duration of a joint_space / inverse_jacobian / transposed_jacobian motion "
+        "(stretched to the velocity limits)",
+        "[s]",
+        0.1,
+        3600.0,
+    ),
+    ParameterSpec(
+        "phase_durations",
+        [5.0, 20.0, 5.0],
+        "Planned durations of the three_phase phases I, II, III (the planner may stretch them)",
+        "[s]",
+        0.01,
+        3600.0,
+        length=(3,),
+    ),
+    ParameterSpec(
+        "deploy_duration",
+        30.0,
+        "Planned duration of the full deployment (goal ['deploy'])",
+        "[s]",
+        0.1,
+        3600.0,
+    ),
+    ParameterSpec("rate", 100.0, "Output rate (playback period)", "[Hz]", 1.0, 1000.0),
+    ParameterSpec(
+        "state_timeout",
+        0.1,
+        "joint_states (base_odom once arrived) older than this by receipt time: zero velocity, "
+        "STALE_STATE, plan abandoned",
+        "[s]",
+        0.005,
+        10.0,
+    ),
+    ParameterSpec(
+        "cancel_deceleration",
+        2.0,
+        "On ~/cancel the playback rate (1 while moving) falls to 0 at this rate: the arm stops on "
+        "its path",
+        "[1/s]",
+        0.01,
+        1000.0,
+    ),
+    ParameterSpec(
+        "output_interface",
+        "trajectory",
+        "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
+        "joint_velocities (order: joints)",
+        choices=("trajectory", "velocity"),
+    ),
+    JOINTS,
+    WORLD_FRAME,
+)
+SPECS = specs_by_name(PARAMETERS)

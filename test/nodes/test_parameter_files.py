@@ -1,0 +1,43 @@
+"""config/<node>.yaml mirrors the declared defaults of every node, and its overlay files name
+only declared parameters."""
+
+from __future__ import annotations
+
+import importlib
+
+import pytest
+import yaml
+
+from rns_ros.resources import config_dir
+
+#: (module with the node's PARAMETERS, its config file).
+DEFAULTS = (
+    ("rns_ros.nodes.simulator_parameters", "simulator.yaml"),
+    ("rns_ros.nodes.contact_simulator_parameters", "contact_simulator.yaml"),
+    ("rns_ros.nodes.controller", "controller.yaml"),
+    ("rns_ros.nodes.ptp_parameters", "ptp.yaml"),
+    ("rns_ros.nodes.force_controller_parameters", "force_controller.yaml"),
+    ("rns_ros.nodes.attitude_control_parameters", "attitude_control.yaml"),
+    ("rns_ros.nodes.operator_parameters", "operator.yaml"),
+    ("rns_ros.nodes.rerun_logger_parameters", "rerun_logger.yaml"),
+    ("rns_ros.nodes.teleop_keyboard_parameters", "teleop_keyboard.yaml"),
+)
+#: (module with the node's PARAMETERS, a config file that overrides some of them).
+OVERLAYS = (("rns_ros.nodes.force_controller_parameters", "force_controller_arc.yaml"),)
+
+
+def _values(file_name: str) -> dict:
+    content = yaml.safe_load((config_dir() / file_name).read_text())
+    return content["/**"]["ros__parameters"]
+
+
+@pytest.mark.parametrize(("module", "file_name"), DEFAULTS)
+def test_config_yaml_mirrors_the_declared_defaults(module, file_name):
+    parameters = importlib.import_module(module).PARAMETERS
+    assert _values(file_name) == {spec.name: spec.default for spec in parameters}
+
+
+@pytest.mark.parametrize(("module", "file_name"), OVERLAYS)
+def test_config_overlays_name_declared_parameters(module, file_name):
+    parameters = importlib.import_module(module).PARAMETERS
+    assert set(_values(file_name)) <= {spec.name for spec in parameters}

@@ -1,0 +1,62 @@
+"""Parameter tables: settings built from parameter values, enum choices, the Markdown table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rns_ros.control.controller import TwistFrame
+from rns_ros.control.ptp import PtpMethod
+from rns_ros.nodes.parameters import (
+    ParameterSpec,
+    choices_of,
+    from_parameters,
+    markdown_table,
+    twist_frame_names,
+)
+
+
+@dataclass(frozen=True)
+class _Settings:
+    rate: float = 1.0
+    axes: tuple[str, ...] = ("x",)
+    period: float = 0.1
+    derived: int = field(init=False, default=0)
+
+
+def test_settings_take_the_parameters_named_by_their_keywords():
+    params = {"rate": 50.0, "axes": ["x", "y"], "world_frame": "world", "derived": 3}
+    settings = from_parameters(_Settings, params, period=0.5)
+    assert settings == _Settings(rate=50.0, axes=("x", "y"), period=0.5)
+    assert from_parameters(_Settings, {}) == _Settings()
+
+
+def test_choices_follow_the_enum_and_leave_out_the_excluded_members():
+    assert choices_of(TwistFrame) == ("world", "base", "camera")
+    assert "deploy" not in choices_of(PtpMethod, without=(PtpMethod.DEPLOY,))
+    assert len(choices_of(PtpMethod, without=(PtpMethod.DEPLOY,))) == len(PtpMethod) - 1
+
+
+def test_twist_frame_names_map_every_frame():
+    params = {"world_frame": "w", "base_frame": "b", "camera_frame": "c"}
+    names = twist_frame_names(params)
+    assert names == {TwistFrame.WORLD: "w", TwistFrame.BASE: "b", TwistFrame.CAMERA: "c"}
+
+
+def test_the_table_has_one_row_per_parameter_with_its_limits():
+    specs = (
+        ParameterSpec("rate", 50.0, "Rate | of output", "[Hz]", 1.0, 1000.0, read_only=False),
+        ParameterSpec("mode", "a", "Mode", choices=("a", "b")),
+        ParameterSpec("axis", [0.0, 0.0, 1.0], "Axis", "[-]", -1.0, 1.0, length=(3,)),
+        ParameterSpec("frame", "", "Frame"),
+        ParameterSpec("on", True, "On"),
+        ParameterSpec("names", ["x", "y"], "Names"),
+    )
+    lines = markdown_table(specs).splitlines()
+    assert len(lines) == 2 + len(specs)
+    assert lines[2] == r"| `rate` | double | `50.0` | Hz | [1, 1000] | no | Rate \| of output |"
+    assert lines[3] == "| `mode` | string | `a` |  | `a`, `b` | yes | Mode |"
+    axis = "| `axis` | double[] | `[0.0, 0.0, 1.0]` | - | [-1, 1]; length 3 | yes | Axis |"
+    assert lines[4] == axis
+    assert lines[5] == "| `frame` | string | `''` |  |  | yes | Frame |"
+    assert lines[6] == "| `on` | bool | `true` |  |  | yes | On |"
+    assert lines[7] == "| `names` | string[] | `[x, y]` |  |  | yes | Names |"

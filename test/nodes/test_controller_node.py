@@ -28,7 +28,8 @@ from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.nodes.controller import PARAMETERS, ControllerNode
+from rns_ros.nodes.controller import ControllerNode
+from rns_ros.nodes.controller_parameters import PARAMETERS
 from rns_ros.nodes.simulator import SimulatorNode, stamp_from_seconds
 
 REPO = Path(__file__).resolve().parents[2]
@@ -936,4 +937,4 @@ def test_a_joint_state_in_big_endian_cdr_is_read_through_rclpy(ros):
         big_endian_joint_state(list(reversed(names)), angles[shuffled].tolist())
     )
     assert np.array_equal(controller._theta, angles)
-    assert controller._theta_stamp.nanoseconds == 3 * 10**9 + 4
+    assert controller._theta_stamp == 3 * 10**9 + 4  # [ns]

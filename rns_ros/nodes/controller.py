@@ -37,10 +37,8 @@ Publishes (joint commands only once a joint state has arrived):
 from __future__ import annotations
 
 import time
-from collections import deque
 
 import numpy as np
-from builtin_interfaces.msg import Time as TimeMsg
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
@@ -50,8 +48,6 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
-from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.controller import (
     ControllerSettings,
@@ -60,7 +56,7 @@ from rns_ros.control.controller import (
     TwistFrame,
     angular_velocity_in_world,
 )
-from rns_ros.control.prediction import OutputTiming, PublishedOutput, predict_joint_angles
+from rns_ros.control.prediction import OutputTiming, predict_joint_angles
 from rns_ros.control.teleop import (
     CommandGate,
     ControllerState,
@@ -73,17 +69,9 @@ from rns_ros.control.ticks import AwaitedTicks, ServedTick, TickInstants, next_t
 from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError, RnsError
-from rns_ros.nodes.cdr import (
-    JointStateReader,
-    SerializedTemplate,
-    TemplateError,
-    TwistFields,
-    joint_trajectory_template,
-    read_odometry,
-    read_twist_stamped,
-    split_stamp,
-)
+from rns_ros.nodes.cdr import JointStateReader, TwistFields, read_odometry, read_twist_stamped
 from rns_ros.nodes.clock_ticks import ClockTicks
+from rns_ros.nodes.controller_output import JointOutput
 from rns_ros.nodes.controller_parameters import (
     NODE_NAME,
     PARAMETERS,
@@ -96,10 +84,11 @@ from rns_ros.nodes.controller_status import (
     DIAGNOSTICS_PERIOD,
     InputPublishers,
     StatusReporter,
+    joint_limit_text,
     step_values,
 )
-from rns_ros.nodes.parameters import declare_parameters, velocity_joint_order
-from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
+from rns_ros.nodes.parameters import declare_parameters
+from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 
@@ -145,8 +134,6 @@ class ControllerNode(Node):
         self._jump: str | None = None
         self._stopped = True  # the last output was zero velocity: the next one ramps up
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
-        # what this node published recently (node clock), for the prediction
-        self._outputs: deque[PublishedOutput] = deque()
         self._predict = params["predict_state"]
         self._sim_time = bool(self.get_parameter("use_sim_time").value)
         # [s] from a tick to its output's stamp (sim time only: lockstep side by side)
@@ -159,7 +146,14 @@ class ControllerNode(Node):
         self._instants = TickInstants(self._period, self._lead)
         self._awaited = self._awaited_ticks(params)
         self._create_inputs(params)
-        self._create_output(params)
+        self._joint_output = JointOutput(
+            self,
+            params["output_interface"],
+            self.robot.joint_names,
+            params["joints"],
+            keep=2 * MAX_PREDICTION_AGE,
+        )
+        self._output = self._joint_output.publisher  # destroy_node waits for its acks
         self._reporter = StatusReporter(self, self.robot.name)
         self._sources = InputPublishers(self, self._topics, self._command_type)
         self.add_on_set_parameters_callback(self._validate_parameters)
@@ -216,23 +210,6 @@ class ControllerNode(Node):
         self._topics = {
             name: self.resolve_topic_name(name) for name in ("cmd_twist", "joint_states")
         }
-
-    def _create_output(self, params: dict) -> None:
-        """The joint command publisher of ``output_interface``."""
-        output_qos = QoSProfile(depth=1)
-        self._velocity_order = None  # JointTrajectory output
-        self._output_template: SerializedTemplate | None = None
-        if params["output_interface"] == "trajectory":
-            self._output = self.create_publisher(JointTrajectory, "joint_references", output_qos)
-            try:
-                # pre-serialized: converting the message costs more than publishing it
-                self._output_template = joint_trajectory_template(self.robot.joint_names)
-            except TemplateError as exc:
-                self.get_logger().warn(f"{exc}: publishing JointTrajectory messages")
-        else:
-            # ros2_control convention: data[p[i]] is model joint i (see velocity_joint_order)
-            self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
-            self._output = self.create_publisher(Float64MultiArray, "joint_velocities", output_qos)
 
     def _start_ticks(self) -> None:
         """The control timer, or with output_lead the ticks of /clock itself: the events
@@ -527,7 +504,9 @@ class ControllerNode(Node):
             latency=self._lead if self._sim_time else self._params["output_latency"],
             plant_period=self._params["plant_period"],
         )
-        start = predict_joint_angles(theta, self._theta_rate, stamp, seconds, self._outputs, timing)
+        start = predict_joint_angles(
+            theta, self._theta_rate, stamp, seconds, self._joint_output.recent, timing
+        )
         if hold is not None:
             ends = timing.acting_time(seconds + hold, stamp)
             hold = ends - start.acting_time if ends > start.acting_time else None
@@ -540,21 +519,11 @@ class ControllerNode(Node):
             return gate.state
         if step.output.position_limited:
             if self._reporter.last_state is not ControllerState.JOINT_LIMIT:
-                self.get_logger().warn(self._limit_text(state))  # once per episode
+                self.get_logger().warn(joint_limit_text(self.robot, state.theta))  # once a stop
             return ControllerState.JOINT_LIMIT
         if step.output.sigma_min < self.controller.settings.gains.epsilon:
             return ControllerState.SINGULAR_REGION
         return gate.state
-
-    def _limit_text(self, state: FreeFloatingState) -> str:
-        lower, upper = self.robot.lower_limits, self.robot.upper_limits
-        margin = np.minimum(state.theta - lower, upper - state.theta)
-        joint = int(np.argmin(margin))
-        return (
-            f"JOINT_LIMIT: {self.robot.joint_names[joint]} at {state.theta[joint]:.4g} rad is "
-            f"{margin[joint]:.3g} rad from its limit [{lower[joint]:.4g}, {upper[joint]:.4g}]; "
-            "the motion is slowed or stopped (choose another direction)"
-        )
 
     def _publish_output(
         self,
@@ -563,30 +532,10 @@ class ControllerNode(Node):
         at: int | None = None,
         lead: float = 0.0,
     ) -> None:
-        """One joint command planned at ``at`` [ns] (default now), stamped ``lead`` [s] later: a
-        tick stamps the instant its output was planned to act from, which a plant acting from
-        the stamp starts it at. The record for the prediction keeps ``at`` (the timing adds the
-        lead)."""
+        """One joint command planned at ``at`` [ns] (default now), stamped ``lead`` [s] later
+        (:meth:`JointOutput.publish`)."""
         now = self.get_clock().now().nanoseconds if at is None else at
-        stamp_ns = now + round(lead * 1e9)
-        seconds = now * 1e-9
-        self._outputs.append(PublishedOutput(seconds, velocities))
-        while self._outputs and self._outputs[0].time < seconds - 2 * MAX_PREDICTION_AGE:
-            self._outputs.popleft()
-        if self._output_template is not None:
-            values = {"positions": positions, "velocities": velocities}
-            self._output.publish(self._output_template.serialize(values, split_stamp(stamp_ns)))
-            return
-        sec, nanosec = split_stamp(stamp_ns)
-        self._output.publish(
-            joint_command(
-                TimeMsg(sec=sec, nanosec=nanosec),
-                self.robot.joint_names,
-                positions,
-                velocities,
-                self._velocity_order,
-            )
-        )
+        self._joint_output.publish(positions, velocities, now, lead)
 
     # --- once a second: who publishes our inputs, /diagnostics --------------------------------
     def _on_diagnostics(self) -> None:

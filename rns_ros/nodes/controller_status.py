@@ -14,6 +14,7 @@ from sensor_msgs.msg import JointState
 
 from rns_ros.control.controller import ControllerStep
 from rns_ros.control.teleop import ControllerState, GateOutput
+from rns_ros.core.model import FreeFloatingModel
 from rns_ros.nodes.status import level_rank, node_names, status_text, type_name
 
 #: Period of the /diagnostics publication and of the check of who publishes the inputs [s].
@@ -48,6 +49,18 @@ def step_values(method: str, step: ControllerStep, gate: GateOutput) -> dict:
         "unachieved_linear": gate.linear,
         "coupling_momentum": out.coupling_momentum if not gate.stopped else np.zeros(3),
     }
+
+
+def joint_limit_text(robot: FreeFloatingModel, theta: np.ndarray) -> str:
+    """The warning of a joint limit stop: the joint closest to its limit at ``theta`` [rad] (n,)."""
+    lower, upper = robot.lower_limits, robot.upper_limits
+    margin = np.minimum(theta - lower, upper - theta)
+    joint = int(np.argmin(margin))
+    return (
+        f"JOINT_LIMIT: {robot.joint_names[joint]} at {theta[joint]:.4g} rad is "
+        f"{margin[joint]:.3g} rad from its limit [{lower[joint]:.4g}, {upper[joint]:.4g}]; "
+        "the motion is slowed or stopped (choose another direction)"
+    )
 
 
 class StatusReporter:

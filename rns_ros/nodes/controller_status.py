@@ -67,9 +67,10 @@ class StatusReporter:
     """The newest status of ``node``: published on ~/status to a subscriber at each report, and
     on /diagnostics by :meth:`publish_diagnostics` (hardware_id = ``hardware_id``).
 
-    The message and its key values are built only when someone reads them: a status per tick
-    costs ~0.2 ms. ``advisories`` (set by the graph check) raise the level to WARN and are
-    appended to the message.
+    The message and its key values are built only when someone reads them (a ~/status
+    subscriber, /diagnostics): building them every tick would cost a good part of the tick.
+    ``advisories`` (set by the graph check) raise the level to WARN and are appended to the
+    message.
     """
 
     def __init__(self, node: Node, hardware_id: str) -> None:

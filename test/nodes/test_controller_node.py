@@ -348,6 +348,24 @@ def test_runtime_parameter_changes_are_validated(ros):
     assert controller.controller.settings.gains.wrist_gain == 10.0
 
 
+def test_a_rejected_parameter_change_leaves_the_node_as_it_was_and_an_accepted_one_applies(ros):
+    """The on-set callback only judges a change; the post-set one applies it (law and gate)."""
+    controller = _node(ros, ControllerNode)
+    result = controller.set_parameters([Parameter("command_timeout", value=0.001)])[0]
+    assert not result.successful
+    assert controller.get_parameter("command_timeout").value == 0.5
+    assert controller._gate.timeout == 0.5
+    result = controller.set_parameters([Parameter("hold_correction", value="sideways")])[0]
+    assert "'hold_correction' must be one of ['midpoint', 'naive']" in result.reason
+    results = controller.set_parameters(
+        [Parameter("command_timeout", value=2.0), Parameter("rate", value=50.0)]
+    )
+    assert results[0].successful
+    assert not results[1].successful  # read-only: changes only at start-up
+    assert controller._gate.timeout == 2.0
+    assert controller.controller.settings.period == 0.01
+
+
 def test_shutdown_publishes_zero_velocity(ros, stack):
     controller, probe, streams = stack.controller, stack.probe, stack.streams
     operator = Operator(probe)
@@ -368,12 +386,6 @@ def test_shutdown_publishes_zero_velocity(ros, stack):
         lambda: len(references) > count and not np.any(references[-1].points[0].velocities),
         timeout=2.0,
     ), [list(msg.points[0].velocities) for msg in references[count:]]
-
-
-def test_config_yaml_mirrors_the_declared_defaults():
-    content = yaml.safe_load((REPO / "config" / "controller.yaml").read_text())
-    values = content["/**"]["ros__parameters"]
-    assert values == {spec.name: spec.default for spec in PARAMETERS}
 
 
 @pytest.mark.parametrize(

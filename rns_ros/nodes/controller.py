@@ -105,7 +105,7 @@ SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_
 #: Shortest interval between two ticks when commands are served at once [s]: a command flood
 #: cannot make the controller compute faster than this; a change within it waits for the tick.
 MIN_TICK_INTERVAL = 1e-3
-NS_PER_S = 1_000_000_000
+NS_PER_S = 1_000_000_000  # nanoseconds per second (message stamps)
 
 
 class ControllerNode(Node):
@@ -519,7 +519,7 @@ class ControllerNode(Node):
             return gate.state
         if step.output.position_limited:
             if self._reporter.last_state is not ControllerState.JOINT_LIMIT:
-                self.get_logger().warn(joint_limit_text(self.robot, state.theta))  # once a stop
+                self.get_logger().warn(joint_limit_text(self.robot, state.theta))  # on entering it
             return ControllerState.JOINT_LIMIT
         if step.output.sigma_min < self.controller.settings.gains.epsilon:
             return ControllerState.SINGULAR_REGION

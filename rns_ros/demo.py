@@ -59,7 +59,7 @@ from rns_ros.demo_ptp import (
     run_ptp_method,
 )
 from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
-from rns_ros.nodes.controller import SPECS as CONTROLLER_SPECS
+from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.resources import default_model_config, scenario_path
 
 #: ``conventional+wheels``: the conventional controller with rns_attitude_control holding the

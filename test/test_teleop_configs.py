@@ -15,7 +15,7 @@ from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import CommandGate, TwistCommand
 from rns_ros.core.errors import ConfigError
 from rns_ros.keyboard import key_event_tap_angle
-from rns_ros.nodes.controller import SPECS
+from rns_ros.nodes.controller_parameters import SPECS
 
 REPO = Path(__file__).resolve().parents[1]
 DOC = (REPO / "docs" / "teleop.md").read_text()

@@ -11,16 +11,12 @@ Pure logic (no ROS), used by the ``rns_controller`` node once per control period
   velocity ramp down to zero at a fixed angular deceleration. Starting from rest (the first
   command, after a stop, after a zero command, or after :meth:`CommandGate.stop`) the speed
   ramps up at a fixed angular acceleration. The output never jumps up from rest.
-* :class:`CommandSchedule` holds twists stamped ahead of simulated time until their stamps, and
-  says when a control tick knows which twist is in force (lockstep runs on /clock).
 """
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Generic, TypeVar
 
 import numpy as np
 
@@ -279,76 +275,3 @@ class CommandGate:
         else:
             state, detail = ControllerState.OK, ""
         return GateOutput(angular, command.linear, command.frame, state, False, detail)
-
-
-Item = TypeVar("Item")
-
-
-class CommandSchedule(Generic[Item]):
-    """Stamped commands released at their stamps, for a controller ticking on simulated time.
-
-    In lockstep the simulation waits for the controller but not for the operator, so a twist
-    that acts on receipt acts whenever the operator's process got a core: a few milliseconds of
-    wall time are a period or more of simulated time at ten times real time (the camera ended
-    1-16 deg short in about one run in thirty on a busy 2-core machine). A scripted operator
-    can publish each sample ahead of its instant, stamped with the instant. The controller then
-    serves the tick at t with the newest command stamped at or before t, which it knows to be
-    the one in force once it holds a command stamped at or after t (:meth:`ready`).
-
-    A command whose stamp goes back (a clock reset, an operator's final stop stamped now)
-    replaces everything still waiting: it is the newest word of the operator.
-
-    Stamps are integer nanoseconds of the node clock. At most ``max_waiting`` commands wait: a
-    publisher stamping far ahead cannot grow the schedule without bound (the oldest waiting
-    command is dropped, and :attr:`dropped` counts it).
-    """
-
-    def __init__(self, max_waiting: int = 1000) -> None:
-        if max_waiting < 1:
-            raise ConfigError(f"max_waiting must be >= 1, got {max_waiting!r}")
-        self._waiting: deque[tuple[int, Item]] = deque()
-        self._max_waiting = max_waiting
-        self.dropped = 0  # commands dropped unreleased (more than max_waiting waited)
-        self._newest: int | None = None  # stamp of the newest command received [ns]
-        self._moving = False  # the newest command asks for motion
-        self._moved = False  # some command asked for motion
-        self._released = False  # waiting for a newer command was given up (release_all)
-
-    @property
-    def newest(self) -> int | None:
-        """Stamp of the newest command received [ns], None before the first."""
-        return self._newest
-
-    def push(self, stamp: int, item: Item, moving: bool) -> None:
-        """A command stamped ``stamp`` [ns]; ``moving``: it asks for motion (non-zero)."""
-        if self._newest is not None and stamp < self._newest:
-            self._waiting.clear()
-        if len(self._waiting) >= self._max_waiting:
-            self._waiting.popleft()
-            self.dropped += 1
-        self._waiting.append((stamp, item))
-        self._newest, self._moving, self._released = stamp, moving, False
-        self._moved = self._moved or moving
-
-    def due(self, tick: int) -> list[Item]:
-        """The commands stamped at or before ``tick`` [ns], oldest first, taken off the
-        schedule (the last one is in force at ``tick``)."""
-        items = []
-        while self._waiting and self._waiting[0][0] <= tick:
-            items.append(self._waiting.popleft()[1])
-        return items
-
-    def ready(self, tick: int) -> bool:
-        """True when the command in force at ``tick`` [ns] is known: no command yet (nothing
-        to wait for), one stamped at or after ``tick`` received, or :meth:`release_all` since
-        the newest; or the newest is a stop after motion (a stream may end on a stop, which
-        is then waited on no longer: a scripted profile ends with zeros). Zeros before any
-        motion are waited on: a profile starts at rest, and a stall there would skip its
-        start."""
-        if self._newest is None or self._newest >= tick or self._released:
-            return True
-        return not self._moving and self._moved
-
-    def release_all(self) -> None:
-        """Stop waiting for a newer command until one arrives (the stream stalled or ended)."""
-        self._released = True

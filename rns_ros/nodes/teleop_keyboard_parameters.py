@@ -27,8 +27,8 @@ PARAMETERS = (
     ParameterSpec(
         "max_angular_speed",
         1.0,
-        "Upper bound of the angular speed keys and of |angular| when keys combine; keep it <= "
-        "the controller's max_angular_speed",
+        "Bound of the angular speed keys and of combined keys; keep it <= the controller's "
+        "max_angular_speed",
         "[rad/s]",
         0.001,
         10.0,

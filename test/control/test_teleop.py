@@ -6,13 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
 
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import (
     CommandGate,
-    CommandSchedule,
     ControllerState,
     twist_frame_ids,
     validate_twist,
@@ -160,94 +157,3 @@ def test_every_state_has_a_plot_code():
 
     assert set(CONTROLLER_STATE_CODES) == {state.value for state in ControllerState}
     assert len(set(CONTROLLER_STATE_CODES.values())) == len(ControllerState)
-
-
-# --- CommandSchedule: twists stamped ahead, released at their stamps -------------------------
-
-
-def test_a_schedule_releases_each_command_at_its_stamp_and_waits_for_the_next_one():
-    schedule = CommandSchedule()
-    assert schedule.ready(10)  # no stream: nothing to wait for
-    assert schedule.due(10) == []
-    schedule.push(0, "zero", moving=False)
-    schedule.push(20, "a", moving=True)
-    schedule.push(40, "b", moving=True)
-    assert schedule.ready(10)
-    assert schedule.due(10) == ["zero"]
-    assert schedule.ready(30)
-    assert schedule.due(30) == ["a"]
-    assert schedule.ready(40)
-    assert schedule.due(40) == ["b"]
-    # b asks for motion and nothing stamped at or after 50 came: the command in force is unknown
-    assert not schedule.ready(50)
-    schedule.push(60, "c", moving=True)
-    assert schedule.ready(50)  # b is still in force at 50
-    assert schedule.due(50) == []
-
-
-def test_a_schedule_waits_on_a_resting_start_but_not_on_a_stop_and_can_give_up_waiting():
-    schedule = CommandSchedule()
-    schedule.push(0, "rest", moving=False)  # a profile starts at rest: its next sample matters
-    assert not schedule.ready(10)
-    schedule.push(10, "a", moving=True)
-    assert not schedule.ready(20)
-    schedule.release_all()  # the stream stalled or ended: serve with what there is
-    assert schedule.ready(20)
-    assert schedule.ready(1000)
-    schedule.push(20, "b", moving=True)  # a newer command: waiting resumes
-    assert not schedule.ready(30)
-    schedule.push(40, "stop", moving=False)
-    assert schedule.ready(10**9)  # the operator's stream may end on a stop
-
-
-def test_a_command_stamped_back_replaces_the_waiting_ones():
-    schedule = CommandSchedule()
-    for stamp in (100, 120, 140):
-        schedule.push(stamp, stamp, moving=True)
-    schedule.push(90, "final stop", moving=False)  # e.g. an operator stopped, stamped now
-    assert schedule.newest == 90
-    assert schedule.due(200) == ["final stop"]
-
-
-def test_a_schedule_holds_at_most_max_waiting_commands():
-    schedule = CommandSchedule(max_waiting=3)
-    for stamp in range(5):  # e.g. a publisher stamping years ahead
-        schedule.push(10**18 + stamp, stamp, moving=True)
-    assert schedule.dropped == 2
-    assert schedule.due(10**19) == [2, 3, 4]
-    with pytest.raises(ConfigError, match="max_waiting"):
-        CommandSchedule(max_waiting=0)
-
-
-@given(
-    gaps=st.lists(st.integers(1, 40), min_size=1, max_size=40),
-    leads=st.lists(st.integers(0, 60), min_size=40, max_size=40),
-    period=st.integers(1, 30),
-)
-def test_a_ready_tick_always_serves_the_newest_command_stamped_before_it(gaps, leads, period):
-    """Commands stamped on any increasing grid, each published any time before its stamp up to
-    a lead (an operator's process that gets the core late publishes late), ticks on another
-    grid: whenever a tick is ready, the command in force is the newest stamped at or before it,
-    whatever the arrival times."""
-    stamps = list(np.cumsum(gaps))
-    # one publisher: commands go out in stamp order, each no earlier than the one before
-    published = np.maximum.accumulate(
-        [stamp - lead for stamp, lead in zip(stamps, leads, strict=False)]
-    )
-    arrivals = list(zip(published.tolist(), stamps, strict=True))
-    schedule, in_force, k = CommandSchedule(), None, 0
-    for tick in range(0, stamps[-1] + 2 * period, period):
-        while k < len(arrivals) and arrivals[k][0] <= tick:
-            schedule.push(arrivals[k][1], arrivals[k][1], moving=True)
-            k += 1
-        while not schedule.ready(tick):  # the tick waits for the next command to arrive
-            if k == len(arrivals):
-                schedule.release_all()  # the stream ended (a controller's wait times out)
-                break
-            schedule.push(arrivals[k][1], arrivals[k][1], moving=True)
-            k += 1
-        released = schedule.due(tick)
-        if released:
-            in_force = released[-1]
-        expected = max((s for s in stamps if s <= tick), default=None)
-        assert in_force == expected

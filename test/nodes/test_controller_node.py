@@ -28,7 +28,8 @@ from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.nodes.controller import PARAMETERS, ControllerNode
+from rns_ros.nodes.controller import ControllerNode
+from rns_ros.nodes.controller_parameters import PARAMETERS
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
 
@@ -346,6 +347,24 @@ def test_runtime_parameter_changes_are_validated(ros):
     assert results[3].successful
     assert controller.controller.settings.method == "sc"
     assert controller.controller.settings.gains.wrist_gain == 10.0
+
+
+def test_a_rejected_parameter_change_leaves_the_node_as_it_was_and_an_accepted_one_applies(ros):
+    """The on-set callback only judges a change; the post-set one applies it (law and gate)."""
+    controller = _node(ros, ControllerNode)
+    result = controller.set_parameters([Parameter("command_timeout", value=0.001)])[0]
+    assert not result.successful
+    assert controller.get_parameter("command_timeout").value == 0.5
+    assert controller._gate.timeout == 0.5
+    result = controller.set_parameters([Parameter("hold_correction", value="sideways")])[0]
+    assert "'hold_correction' must be one of ['midpoint', 'naive']" in result.reason
+    results = controller.set_parameters(
+        [Parameter("command_timeout", value=2.0), Parameter("rate", value=50.0)]
+    )
+    assert results[0].successful
+    assert not results[1].successful  # read-only: changes only at start-up
+    assert controller._gate.timeout == 2.0
+    assert controller.controller.settings.period == 0.01
 
 
 def test_shutdown_publishes_zero_velocity(ros, stack):
@@ -931,4 +950,4 @@ def test_a_joint_state_in_big_endian_cdr_is_read_through_rclpy(ros):
         big_endian_joint_state(list(reversed(names)), angles[shuffled].tolist())
     )
     assert np.array_equal(controller._theta, angles)
-    assert controller._theta_stamp.nanoseconds == 3 * 10**9 + 4
+    assert controller._theta_stamp == 3 * 10**9 + 4  # [ns]

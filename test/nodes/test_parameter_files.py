@@ -1,5 +1,5 @@
-"""config/<node>.yaml mirrors the declared defaults of every node, and its overlay files name
-only declared parameters."""
+"""config/<node>.yaml mirrors the declared defaults of every node, its overlay files name only
+declared parameters, and every description is one line."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from rns_ros.resources import config_dir
 DEFAULTS = (
     ("rns_ros.nodes.simulator_parameters", "simulator.yaml"),
     ("rns_ros.nodes.contact_simulator_parameters", "contact_simulator.yaml"),
-    ("rns_ros.nodes.controller", "controller.yaml"),
+    ("rns_ros.nodes.controller_parameters", "controller.yaml"),
     ("rns_ros.nodes.ptp_parameters", "ptp.yaml"),
     ("rns_ros.nodes.force_controller_parameters", "force_controller.yaml"),
     ("rns_ros.nodes.attitude_control_parameters", "attitude_control.yaml"),
@@ -41,3 +41,16 @@ def test_config_yaml_mirrors_the_declared_defaults(module, file_name):
 def test_config_overlays_name_declared_parameters(module, file_name):
     parameters = importlib.import_module(module).PARAMETERS
     assert set(_values(file_name)) <= {spec.name for spec in parameters}
+
+
+#: Longest description with its unit [characters]: `ros2 param describe` and the docs' tables
+#: show one line; longer explanations belong in the node's page.
+DESCRIPTION_LIMIT = 120
+
+
+@pytest.mark.parametrize(("module", "file_name"), DEFAULTS)
+def test_every_description_is_one_short_line(module, file_name):
+    for spec in importlib.import_module(module).PARAMETERS:
+        text = f"{spec.description} {spec.unit}".strip()
+        assert "\n" not in text, spec.name
+        assert len(text) <= DESCRIPTION_LIMIT, f"{spec.name}: {len(text)} characters"

@@ -134,7 +134,7 @@ def test_unknown_overrides_are_warned_about_with_the_closest_name():
 def test_help_marks_the_parameters_that_change_at_run_time():
     """--help says which parameters the node applies while running: exactly the specs that are
     not read-only, and the controller applies each of them (its set-parameters callback)."""
-    from rns_ros.nodes import controller
+    from rns_ros.nodes import controller_parameters as controller
     from rns_ros.nodes import simulator_parameters as simulator
     from rns_ros.nodes.runner import parameter_help
 

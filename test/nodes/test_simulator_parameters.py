@@ -4,7 +4,6 @@ from rclpy.parameter import Parameter
 
 from rns_ros.nodes import contact_simulator_parameters as contact
 from rns_ros.nodes import simulator_parameters as free_floating
-from rns_ros.nodes.parameters import JOINTS
 from rns_ros.sim.free_floating import SimulationMode
 
 
@@ -19,15 +18,6 @@ def test_shared_specs_differ_only_in_defaults_and_bounds():
         assert contact.SPECS[name].description == free_floating.SPECS[name].description
         assert contact.SPECS[name].read_only == free_floating.SPECS[name].read_only
     assert contact.NODE_NAME == free_floating.NODE_NAME
-
-
-def test_descriptions_are_one_short_line():
-    for specs in (free_floating.PARAMETERS, contact.PARAMETERS):
-        for spec in specs:
-            if spec is JOINTS:
-                continue  # the row every node shares (rns_ros.nodes.parameters)
-            assert "\n" not in spec.description
-            assert len(f"{spec.description} {spec.unit}".strip()) <= 120, spec.name
 
 
 def test_on_set_check_rejects_what_a_spec_refuses_and_passes_the_rest():

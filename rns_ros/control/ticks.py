@@ -1,0 +1,271 @@
+"""Control ticks on the node clock: the instant each tick serves and the command in force there.
+
+Pure logic (no ROS), used by the ``rns_controller`` node:
+
+* :class:`TickInstants` keeps the last tick served (the hold it ended) and, with ``output_lead``
+  (lockstep side by side on simulated time), moves a late tick to the state's instant.
+* :class:`CommandSchedule` holds twists stamped ahead of simulated time until their stamps, and
+  says when a tick knows which twist is in force; :class:`AwaitedTicks` keeps the ticks that wait
+  for it (``await_commands``), under a wall-clock watchdog.
+* :func:`next_tick_in` checks a timer's time to its next call.
+
+Instants are integer nanoseconds of the node clock (the stamps the node publishes, exactly);
+durations are seconds. Clocks and timers are injected.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Generic, NamedTuple, Protocol, TypeVar
+
+from rns_ros.core.errors import ConfigError
+
+#: output_lead: a state stamped up to this far [s] past a tick is caught up to (the simulation
+#: ran ahead of the ticks); farther is another clock, not a lag.
+MAX_LEAD_CATCH_UP = 1.0
+#: A timer's next call farther than this many periods away is not on its grid [-].
+MAX_TIMER_DELAY = 1.5
+
+Item = TypeVar("Item")
+
+
+def next_tick_in(until_next_call: int | None, period: float) -> float | None:
+    """Time until a periodic timer's next call [s] from its ``until_next_call`` [ns] (None: the
+    timer is cancelled), or None when it is not in (0, MAX_TIMER_DELAY * ``period``] (a
+    cancelled or badly late timer: the caller assumes the period)."""
+    if until_next_call is None:
+        return None
+    seconds = until_next_call * 1e-9
+    return seconds if 0.0 < seconds <= MAX_TIMER_DELAY * period else None
+
+
+class TickInstants:
+    """The instants of the control ticks served, and the catch-up of late ticks.
+
+    With ``output_lead`` (lockstep side by side) the simulator runs at most the lead past a
+    tick before that tick's output arrives. A state stamped later than that (by half a period
+    more) means the simulation got ahead of the ticks (a first command reaching it while it ran
+    in real time, a patience step): the tick's output would start late, and every later one
+    too, each letting the simulation run one more period (the lockstep period counts from the
+    newest command), so the lag would last the whole run and the base would turn by the motion
+    made up after the controller had predicted it. Such a tick is served at the state's instant
+    (its output acts a lead later, as usual), and the ticks up to that instant are skipped. A
+    clock that went back (a reset) starts over, and a state received before it, or more than
+    ``max_catch_up`` ahead, is not caught up to.
+
+    Args:
+        period: control period T [s], > 0.
+        lead: output_lead [s], >= 0 (0: ticks are served at their instants).
+        monotonic: the wall clock of receipt times [s].
+        max_catch_up: farthest catch-up [s].
+    """
+
+    def __init__(
+        self,
+        period: float,
+        lead: float = 0.0,
+        monotonic: Callable[[], float] = time.monotonic,
+        max_catch_up: float = MAX_LEAD_CATCH_UP,
+    ) -> None:
+        if not period > 0.0:
+            raise ConfigError(f"tick period must be > 0 s, got {period!r}")
+        self.period, self.lead = period, lead
+        self._monotonic = monotonic
+        self._max_catch_up = max_catch_up
+        self.last: float | None = None  # node-clock instant of the last tick served [s]
+        self.last_wall = -math.inf  # monotonic time the last tick was served [s]
+        self._clock_tick: float | None = None  # the newest tick as the clock gave it [s]
+        self._clock_back_at = -math.inf  # monotonic time [s] the clock last went back
+
+    def serve(self, instant: int) -> tuple[float, float | None]:
+        """Record the tick of ``instant`` [ns] as served now.
+
+        Returns:
+            (monotonic time now [s], how long the previous tick's output was held on the node
+            clock [s], None for the first tick).
+        """
+        now, seconds = self._monotonic(), instant * 1e-9
+        held = None if self.last is None else seconds - self.last
+        self.last_wall, self.last = now, seconds
+        return now, held
+
+    def lead_instant(self, tick: int, state_stamp: int | None, state_received: float) -> int | None:
+        """With ``output_lead``: the instant [ns] to serve for the clock's tick ``tick`` [ns],
+        or None to skip it (served already by a catch-up).
+
+        Args:
+            state_stamp: stamp of the newest joint state [ns], None before the first.
+            state_received: its monotonic receipt time [s].
+        """
+        seconds = tick * 1e-9
+        previous, self._clock_tick = self._clock_tick, seconds
+        if previous is not None and seconds < previous - 0.5 * self.period:
+            # the clock went back: states received before are from before the reset
+            self._clock_back_at = self._monotonic()
+        elif self.last is not None and seconds <= self.last + 1e-9:
+            return None  # this instant was served already (caught up past it)
+        if state_stamp is not None and state_received > self._clock_back_at:
+            ahead = state_stamp * 1e-9 - seconds
+            if self.lead + 0.5 * self.period <= ahead <= self._max_catch_up:
+                return state_stamp
+        return tick
+
+
+class CommandSchedule(Generic[Item]):
+    """Stamped commands released at their stamps, for a controller ticking on simulated time.
+
+    In lockstep the simulation waits for the controller but not for the operator, so a twist
+    that acts on receipt acts whenever the operator's process got a core: a few milliseconds of
+    wall time are a period or more of simulated time at ten times real time. A scripted operator
+    can publish each sample ahead of its instant, stamped with the instant. The controller then
+    serves the tick at t with the newest command stamped at or before t, which it knows to be
+    the one in force once it holds a command stamped at or after t (:meth:`ready`).
+
+    A command whose stamp goes back (a clock reset, an operator's final stop stamped now)
+    replaces everything still waiting: it is the newest word of the operator.
+
+    Stamps are integer nanoseconds of the node clock. At most ``max_waiting`` commands wait: a
+    publisher stamping far ahead cannot grow the schedule without bound (the oldest waiting
+    command is dropped, and :attr:`dropped` counts it).
+    """
+
+    def __init__(self, max_waiting: int = 1000) -> None:
+        if max_waiting < 1:
+            raise ConfigError(f"max_waiting must be >= 1, got {max_waiting!r}")
+        self._waiting: deque[tuple[int, Item]] = deque()
+        self._max_waiting = max_waiting
+        self.dropped = 0  # commands dropped unreleased (more than max_waiting waited)
+        self._newest: int | None = None  # stamp of the newest command received [ns]
+        self._moving = False  # the newest command asks for motion
+        self._moved = False  # some command asked for motion
+        self._released = False  # waiting for a newer command was given up (release_all)
+
+    @property
+    def newest(self) -> int | None:
+        """Stamp of the newest command received [ns], None before the first."""
+        return self._newest
+
+    def push(self, stamp: int, item: Item, moving: bool) -> None:
+        """A command stamped ``stamp`` [ns]; ``moving``: it asks for motion (non-zero)."""
+        if self._newest is not None and stamp < self._newest:
+            self._waiting.clear()
+        if len(self._waiting) >= self._max_waiting:
+            self._waiting.popleft()
+            self.dropped += 1
+        self._waiting.append((stamp, item))
+        self._newest, self._moving, self._released = stamp, moving, False
+        self._moved = self._moved or moving
+
+    def due(self, tick: int) -> list[Item]:
+        """The commands stamped at or before ``tick`` [ns], oldest first, taken off the
+        schedule (the last one is in force at ``tick``)."""
+        items = []
+        while self._waiting and self._waiting[0][0] <= tick:
+            items.append(self._waiting.popleft()[1])
+        return items
+
+    def ready(self, tick: int) -> bool:
+        """True when the command in force at ``tick`` [ns] is known: no command yet (nothing
+        to wait for), one stamped at or after ``tick`` received, or :meth:`release_all` since
+        the newest; or the newest is a stop after motion (a stream may end on a stop, which
+        is then waited on no longer: a scripted profile ends with zeros). Zeros before any
+        motion are waited on: a profile starts at rest, and a stall there would skip its
+        start."""
+        if self._newest is None or self._newest >= tick or self._released:
+            return True
+        return not self._moving and self._moved
+
+    def release_all(self) -> None:
+        """Stop waiting for a newer command until one arrives (the stream stalled or ended)."""
+        self._released = True
+
+
+class Watchdog(Protocol):
+    """A one-shot wall-clock alarm (an rclpy timer on the steady clock has this interface)."""
+
+    def reset(self) -> None:
+        """(Re)start the countdown."""
+
+    def cancel(self) -> None:
+        """Stop the countdown."""
+
+
+class ServedTick(NamedTuple, Generic[Item]):
+    """A tick whose command in force is known.
+
+    Attributes:
+        instant: the tick [ns].
+        commands: the commands stamped up to it, oldest first, to apply before serving it.
+    """
+
+    instant: int
+    commands: list[Item]
+
+
+class AwaitedTicks(Generic[Item]):
+    """Ticks that wait for the command in force (``await_commands``), oldest first.
+
+    A tick is served once its command in force is known (:meth:`CommandSchedule.ready`), in
+    order: a tick waits while an older one does. The ``watchdog`` runs while ticks wait; it
+    restarts with each command that arrives (the operator is alive) and its alarm
+    (:meth:`give_up`) serves the waiting ticks with the newest command.
+    """
+
+    def __init__(self, watchdog: Watchdog, max_waiting: int = 1000) -> None:
+        self.schedule: CommandSchedule[Item] = CommandSchedule(max_waiting)
+        self._waiting: deque[int] = deque()
+        self._watchdog = watchdog
+
+    @property
+    def oldest_waiting(self) -> int | None:
+        """The oldest tick waiting [ns], None when none waits."""
+        return self._waiting[0] if self._waiting else None
+
+    def tick(self, instant: int) -> list[ServedTick[Item]]:
+        """The tick of ``instant`` [ns]: served now (one entry) or waiting ([])."""
+        if self._waiting or not self.schedule.ready(instant):
+            if not self._waiting:
+                self._watchdog.reset()
+            self._waiting.append(instant)
+            return []
+        return [ServedTick(instant, self.schedule.due(instant))]
+
+    def push(self, stamp: int, item: Item, moving: bool) -> list[ServedTick[Item]]:
+        """A command stamped ``stamp`` [ns] (see :meth:`CommandSchedule.push`); returns the
+        waiting ticks it makes ready, in order."""
+        self.schedule.push(stamp, item, moving)
+        return self._ready()
+
+    def give_up(self) -> list[ServedTick[Item]]:
+        """The watchdog's alarm: no command came for its time while ticks waited; the waiting
+        ticks are served with the newest command."""
+        self._watchdog.cancel()
+        if not self._waiting:
+            return []
+        self.schedule.release_all()
+        return self._ready()
+
+    def _ready(self) -> list[ServedTick[Item]]:
+        served = []
+        while self._waiting and self.schedule.ready(self._waiting[0]):
+            instant = self._waiting.popleft()
+            served.append(ServedTick(instant, self.schedule.due(instant)))
+        if self._waiting:
+            self._watchdog.reset()
+        else:
+            self._watchdog.cancel()
+        return served
+
+
+__all__ = [
+    "MAX_LEAD_CATCH_UP",
+    "AwaitedTicks",
+    "CommandSchedule",
+    "ServedTick",
+    "TickInstants",
+    "Watchdog",
+    "next_tick_in",
+]

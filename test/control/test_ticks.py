@@ -1,0 +1,252 @@
+"""Control ticks: instants served and caught up, commands released at their stamps, ticks that
+wait for the command in force under a watchdog. No ROS: clocks and timers are fakes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from rns_ros.control.ticks import (
+    AwaitedTicks,
+    CommandSchedule,
+    ServedTick,
+    TickInstants,
+    next_tick_in,
+)
+from rns_ros.core import ConfigError
+
+MS = 1_000_000  # [ns]
+PERIOD = 0.01  # [s]
+
+
+class FakeClock:
+    """A monotonic clock [s] the test sets."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class FakeWatchdog:
+    """Records whether the countdown runs."""
+
+    def __init__(self) -> None:
+        self.running, self.resets = False, 0
+
+    def reset(self) -> None:
+        self.running, self.resets = True, self.resets + 1
+
+    def cancel(self) -> None:
+        self.running = False
+
+
+# --- next_tick_in: a timer's next call on its grid -------------------------------------------
+
+
+def test_next_tick_in_is_the_timer_delay_within_its_grid_else_none():
+    assert next_tick_in(4 * MS, PERIOD) == pytest.approx(0.004)
+    assert next_tick_in(14 * MS, PERIOD) == pytest.approx(0.014)  # late, still on its grid
+    assert next_tick_in(16 * MS, PERIOD) is None  # badly late: assume the period
+    assert next_tick_in(0, PERIOD) is None
+    assert next_tick_in(None, PERIOD) is None  # cancelled timer
+
+
+# --- TickInstants: the hold each tick ends, late ticks caught up ------------------------------
+
+
+def test_each_served_tick_ends_the_hold_of_the_one_before():
+    clock = FakeClock()
+    ticks = TickInstants(PERIOD, monotonic=clock)
+    assert ticks.serve(1000 * MS) == (100.0, None)  # first tick: nothing held before it
+    clock.now = 100.5
+    now, held = ticks.serve(1010 * MS)
+    assert now == 100.5
+    assert ticks.last_wall == 100.5
+    assert held == pytest.approx(PERIOD)
+    assert ticks.last == pytest.approx(1.01)
+    with pytest.raises(ConfigError, match="period"):
+        TickInstants(0.0)
+
+
+def _lead_ticks(clock):
+    return TickInstants(PERIOD, lead=PERIOD, monotonic=clock)
+
+
+def test_a_tick_in_step_with_the_state_is_served_at_its_instant():
+    clock = FakeClock()
+    ticks = _lead_ticks(clock)
+    for k in range(5):
+        tick = (1000 + 10 * k) * MS
+        # the state of a simulation in step is stamped at the tick, or up to the lead past it
+        assert ticks.lead_instant(tick, tick + 10 * MS, clock()) == tick
+        ticks.serve(tick)
+
+
+def test_a_simulation_ahead_of_the_ticks_is_caught_up_and_the_ticks_up_to_it_skipped():
+    clock = FakeClock()
+    ticks = _lead_ticks(clock)
+    ticks.serve(ticks.lead_instant(1000 * MS, 1000 * MS, clock()))
+    # the state is stamped 1.04 s: more than lead + T/2 past the tick of 1.01 s
+    served = ticks.lead_instant(1010 * MS, 1040 * MS, clock())
+    assert served == 1040 * MS
+    ticks.serve(served)
+    for tick in (1020, 1030, 1040):
+        assert ticks.lead_instant(tick * MS, 1040 * MS, clock()) is None  # served already
+    assert ticks.lead_instant(1050 * MS, 1050 * MS, clock()) == 1050 * MS
+
+
+def test_a_state_farther_ahead_than_the_catch_up_limit_is_another_clock():
+    clock = FakeClock()
+    ticks = _lead_ticks(clock)
+    assert ticks.lead_instant(1000 * MS, 2001 * MS, clock()) == 1000 * MS
+
+
+def test_after_a_clock_reset_the_state_from_before_it_is_not_caught_up_to():
+    clock = FakeClock()
+    ticks = _lead_ticks(clock)
+    ticks.serve(ticks.lead_instant(500 * MS, 500 * MS, clock()))
+    clock.now += 0.1
+    # /clock went back to 0: the newest state (0.5 s, received before) is from before the reset
+    assert ticks.lead_instant(0, 500 * MS, clock() - 0.1) == 0
+    ticks.serve(0)
+    clock.now += 0.1
+    # the first state after the reset, received after it, is caught up to as usual
+    assert ticks.lead_instant(10 * MS, 40 * MS, clock()) == 40 * MS
+
+
+# --- AwaitedTicks: ticks wait for the command in force, under a watchdog ----------------------
+
+
+def test_a_tick_waits_for_its_command_in_force_and_is_served_with_the_commands_up_to_it():
+    watchdog = FakeWatchdog()
+    awaited = AwaitedTicks(watchdog)
+    assert awaited.tick(10) == [ServedTick(10, [])]  # no operator: nothing to wait for
+    assert awaited.push(10, "rest", moving=False) == []
+    assert awaited.tick(20) == []  # what follows the rest is not known yet
+    assert awaited.oldest_waiting == 20
+    assert watchdog.running
+    assert awaited.tick(30) == []  # waits behind the older tick
+    assert awaited.push(25, "a", moving=True) == [ServedTick(20, ["rest"])]
+    assert awaited.oldest_waiting == 30
+    assert watchdog.running
+    assert awaited.push(40, "b", moving=True) == [ServedTick(30, ["a"])]
+    assert awaited.oldest_waiting is None
+    assert not watchdog.running
+    assert awaited.tick(40) == [ServedTick(40, ["b"])]
+
+
+def test_the_watchdog_serves_the_waiting_ticks_with_the_newest_command():
+    watchdog = FakeWatchdog()
+    awaited = AwaitedTicks(watchdog)
+    awaited.push(10, "a", moving=True)
+    assert awaited.tick(10) == [ServedTick(10, ["a"])]
+    assert awaited.tick(20) == []
+    assert awaited.tick(30) == []
+    assert watchdog.resets == 1  # started by the first waiting tick only
+    assert awaited.give_up() == [ServedTick(20, []), ServedTick(30, [])]
+    assert not watchdog.running
+    assert awaited.give_up() == []  # nothing waits: a late alarm does nothing
+    awaited.push(40, "stop", moving=False)  # a stop after motion is not waited on
+    assert awaited.tick(50) == [ServedTick(50, ["stop"])]
+
+
+def test_the_awaited_schedule_counts_the_commands_dropped():
+    awaited = AwaitedTicks(FakeWatchdog(), max_waiting=2)
+    for stamp in range(3):
+        awaited.push(10**18 + stamp, stamp, moving=True)
+    assert awaited.schedule.dropped == 1
+
+
+# --- CommandSchedule: twists stamped ahead, released at their stamps -------------------------
+
+
+def test_a_schedule_releases_each_command_at_its_stamp_and_waits_for_the_next_one():
+    schedule = CommandSchedule()
+    assert schedule.ready(10)  # no stream: nothing to wait for
+    assert schedule.due(10) == []
+    schedule.push(0, "zero", moving=False)
+    schedule.push(20, "a", moving=True)
+    schedule.push(40, "b", moving=True)
+    assert schedule.ready(10)
+    assert schedule.due(10) == ["zero"]
+    assert schedule.ready(30)
+    assert schedule.due(30) == ["a"]
+    assert schedule.ready(40)
+    assert schedule.due(40) == ["b"]
+    # b asks for motion and nothing stamped at or after 50 came: the command in force is unknown
+    assert not schedule.ready(50)
+    schedule.push(60, "c", moving=True)
+    assert schedule.ready(50)  # b is still in force at 50
+    assert schedule.due(50) == []
+
+
+def test_a_schedule_waits_on_a_resting_start_but_not_on_a_stop_and_can_give_up_waiting():
+    schedule = CommandSchedule()
+    schedule.push(0, "rest", moving=False)  # a profile starts at rest: its next sample matters
+    assert not schedule.ready(10)
+    schedule.push(10, "a", moving=True)
+    assert not schedule.ready(20)
+    schedule.release_all()  # the stream stalled or ended: serve with what there is
+    assert schedule.ready(20)
+    assert schedule.ready(1000)
+    schedule.push(20, "b", moving=True)  # a newer command: waiting resumes
+    assert not schedule.ready(30)
+    schedule.push(40, "stop", moving=False)
+    assert schedule.ready(10**9)  # the operator's stream may end on a stop
+
+
+def test_a_command_stamped_back_replaces_the_waiting_ones():
+    schedule = CommandSchedule()
+    for stamp in (100, 120, 140):
+        schedule.push(stamp, stamp, moving=True)
+    schedule.push(90, "final stop", moving=False)  # e.g. an operator stopped, stamped now
+    assert schedule.newest == 90
+    assert schedule.due(200) == ["final stop"]
+
+
+def test_a_schedule_holds_at_most_max_waiting_commands():
+    schedule = CommandSchedule(max_waiting=3)
+    for stamp in range(5):  # e.g. a publisher stamping years ahead
+        schedule.push(10**18 + stamp, stamp, moving=True)
+    assert schedule.dropped == 2
+    assert schedule.due(10**19) == [2, 3, 4]
+    with pytest.raises(ConfigError, match="max_waiting"):
+        CommandSchedule(max_waiting=0)
+
+
+@given(
+    gaps=st.lists(st.integers(1, 40), min_size=1, max_size=40),
+    leads=st.lists(st.integers(0, 60), min_size=40, max_size=40),
+    period=st.integers(1, 30),
+)
+def test_a_ready_tick_always_serves_the_newest_command_stamped_before_it(gaps, leads, period):
+    """Commands stamped on any increasing grid, each published any time before its stamp up to
+    a lead (an operator's process that gets the core late publishes late), ticks on another
+    grid: whenever a tick is ready, the command in force is the newest stamped at or before it,
+    whatever the arrival times."""
+    stamps = list(np.cumsum(gaps))
+    # one publisher: commands go out in stamp order, each no earlier than the one before
+    published = np.maximum.accumulate(
+        [stamp - lead for stamp, lead in zip(stamps, leads, strict=False)]
+    )
+    arrivals = list(zip(published.tolist(), stamps, strict=True))
+    schedule, in_force, k = CommandSchedule(), None, 0
+    for tick in range(0, stamps[-1] + 2 * period, period):
+        while k < len(arrivals) and arrivals[k][0] <= tick:
+            schedule.push(arrivals[k][1], arrivals[k][1], moving=True)
+            k += 1
+        while not schedule.ready(tick):  # the tick waits for the next command to arrive
+            if k == len(arrivals):
+                schedule.release_all()  # the stream ended (a controller's wait times out)
+                break
+            schedule.push(arrivals[k][1], arrivals[k][1], moving=True)
+            k += 1
+        released = schedule.due(tick)
+        if released:
+            in_force = released[-1]
+        expected = max((s for s in stamps if s <= tick), default=None)
+        assert in_force == expected

@@ -55,7 +55,7 @@ PARAMETERS = (
     ParameterSpec(
         "key_hold",
         0.7,
-        "A key counts as held this long after its last auto-repeat; must exceed the terminal's "
+        "A key counts as held this long after its last auto-repeat; above the terminal's "
         "auto-repeat delay (X11: 660 ms)",
         "[s]",
         0.05,

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rns_ros.analysis.arrays import read_only
 from rns_ros.control.motion_force import (
     DEFAULT_DAMPER_GAIN,
     PLANAR_ROWS,
@@ -54,6 +55,7 @@ from rns_ros.control.motion_force import (
 )
 from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState
+from rns_ros.core.timing import quintic_shape
 from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Arc of section 7.1.1 / 6.2.1: centre [m] and radius [m] (thesis_rest 4.4, 4.6).
@@ -82,15 +84,6 @@ class Variant(Choice):
     RESOLVED = "resolved"
     DAMPER = "damper"
     VELOCITY = "velocity"
-
-
-def _quintic(tau: float) -> tuple[float, float, float]:
-    """Rest-to-rest quintic s(tau), ds/dtau, d2s/dtau2 for tau clamped to [0, 1]."""
-    tau = min(max(tau, 0.0), 1.0)
-    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    ds = 30.0 * tau**2 * (1.0 - tau) ** 2
-    dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
-    return s, ds, dds
 
 
 @dataclass(frozen=True)
@@ -135,7 +128,7 @@ class ArcPath:
     def angle(self, t: float) -> tuple[float, float, float]:
         """phi [rad], phi_dot [rad/s], phi_ddot [rad/s^2] at time t [s]."""
         index = min(int(max(t, 0.0) // self.half_period), self.halves - 1)
-        s, ds, dds = _quintic((t - index * self.half_period) / self.half_period)
+        s, ds, dds = quintic_shape((t - index * self.half_period) / self.half_period)
         sign = 1.0 if index % 2 == 0 else -1.0
         sigma = s if sign > 0 else 1.0 - s
         scale = self.sweep / self.half_period
@@ -192,12 +185,6 @@ class RunSettings:
     def damper(self) -> float:
         """The damper gain in use [1/s]."""
         return self.damper_gain if self.damper_gain is not None else DAMPER_GAIN_STEP / self.step
-
-
-def _frozen(array) -> np.ndarray:
-    out = np.array(array, dtype=float)
-    out.setflags(write=False)
-    return out
 
 
 @dataclass(frozen=True)
@@ -395,13 +382,13 @@ def simulate(
         virtual_mass,
         h,
         settings.damper if variant is Variant.DAMPER else None,
-        _frozen(t_all),
-        _frozen(qs),
-        _frozen(vs),
-        _frozen(ee),
-        _frozen(ref),
-        _frozen(ns_rns),
-        _frozen(ns_jac),
+        read_only(t_all),
+        read_only(qs),
+        read_only(vs),
+        read_only(ee),
+        read_only(ref),
+        read_only(ns_rns),
+        read_only(ns_jac),
         path,
     )
 
@@ -472,8 +459,8 @@ def mass_sweep(
         if run is None:
             run = simulate(robot, Variant.RNS, virtual_mass=mass, path=path, settings=settings)
         out.append(run)
-    rms = _frozen([rms_difference(run, reference) for run in out])
-    return MassSweep(_frozen(masses), tuple(out), reference, rms)
+    rms = read_only([rms_difference(run, reference) for run in out])
+    return MassSweep(read_only(masses), tuple(out), reference, rms)
 
 
 __all__ = [

@@ -44,7 +44,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 
-from rns_ros.analysis.part2_scenarios import (
+from rns_ros.analysis.contact_scenarios import (
     MotionForceScenario,
     OperatorSample,
     load_operator_scenario,

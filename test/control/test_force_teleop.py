@@ -15,7 +15,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rns_ros.analysis.part2_runs import QUICK_PERIOD, ArcScenario, WallScenario, run_closed_loop
+from rns_ros.analysis.contact_tasks import ArcScenario, WallScenario
+from rns_ros.analysis.motion_force_runs import QUICK_PERIOD, run_closed_loop
 from rns_ros.control.force_teleop import (
     ERROR_LABELS,
     CommandFrame,

@@ -22,23 +22,25 @@ import functools
 
 import numpy as np
 
-from rns_ros.analysis.part2_runs import (
-    CONTROL_PERIOD,
-    CONTROLLERS,
+from rns_ros.analysis.contact_tasks import (
     FORCE,
     FORCE_RAMP,
     PLANAR_HALF_CYCLE,
+    WALL_STROKE,
+    WALL_STROKES,
+    ArcScenario,
+    WallScenario,
+)
+from rns_ros.analysis.motion_force_runs import (
+    CONTROL_PERIOD,
+    CONTROLLERS,
     QUICK_PERIOD,
     THESIS_FORCE_GAINS,
     THESIS_MOTION_GAINS,
     VIRTUAL_MASS,
-    WALL_STROKE,
-    WALL_STROKES,
-    ArcScenario,
     ClosedLoopRun,
     Controller,
     ForceMeasurement,
-    WallScenario,
     run_closed_loop,
 )
 from rns_ros.analysis.reproduce.registry import (

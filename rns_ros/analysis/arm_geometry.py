@@ -21,8 +21,7 @@ from rns_ros.core.errors import InputError, ModelError
 from rns_ros.core.model import FreeFloatingModel, ModelSpec
 
 _ROOT = Path(__file__).resolve().parents[2]
-#: The default arm whose base, mount, masses and moments every candidate reuses.
-#: The first (inferred) geometry: Table 4.1 masses and moments, mount and base are read from it.
+#: The first, inferred arm: every candidate reuses its base, mount, masses and moments (Table 4.1).
 REFERENCE_URDF = _ROOT / "config" / "urdf" / "rns_7dof_arm_inferred.urdf"
 
 _JOINTS = tuple(f"joint_{i}" for i in range(1, 8))
@@ -197,11 +196,10 @@ def uniform_lengths() -> np.ndarray:
     return np.array([link.uniform_length() for link in reference().links])
 
 
-#: The current default geometry (docs/model.md).
-#: The first, inferred geometry (config/urdf/rns_7dof_arm_inferred.urdf).
+#: The first, inferred geometry (config/urdf/rns_7dof_arm_inferred.urdf, docs/model.md).
 CURRENT = Geometry()
-#: The identified geometry, best of ``scripts/identify_arm.py`` (seed 13): the default model since
-#: issue 13 (config/urdf/rns_7dof_arm.urdf is ``geometry_urdf(IDENTIFIED, "rns_7dof_arm")``).
+#: The identified geometry, best of ``scripts/identify_arm.py`` (seed 13): the default model
+#: (config/urdf/rns_7dof_arm.urdf is ``geometry_urdf(IDENTIFIED, "rns_7dof_arm")``).
 IDENTIFIED = Geometry(
     direction="+z",
     axes=("-z", "+y", "+z", "+x", "+z", "+y", "+z"),

@@ -17,7 +17,7 @@ MODEL_YAML = ag.REFERENCE_URDF.parents[1] / "model.yaml"
 
 @pytest.fixture(scope="module")
 def default_robot():
-    """The first, inferred geometry (the default model until issue 13)."""
+    """The first, inferred geometry (config/urdf/rns_7dof_arm_inferred.urdf)."""
     return FreeFloatingModel.from_urdf(ag.REFERENCE_URDF, ag.SPEC)
 
 

@@ -1,34 +1,9 @@
 r"""Thesis chapter 7: the virtual-link mass of RNS-C and the velocity-level null-space term.
 
-The planar 3-DoF arm of section 7.1.1 (``config/planar_3dof.yaml``: links 1 m / 10 kg, plane x-y
-for the thesis' x-z) moves its end effector (EE) along a circular arc, **without contact** ("no
-interaction ... without losing generality"). With computed torque on a free arm the joint
-acceleration equals the controller's theta_ddot_ref, so a run integrates
-
-    q_dot = theta_dot,   theta_dot_dot = theta_ddot_ref(t, q, theta_dot)
-
-with classical RK4 (thesis_rest 4.7: RK4 at 1 ms). The controller is evaluated at each of the four
-RK4 stages (a continuous-time controller, no sample-and-hold), so the damper's null-space mode
-has the eigenvalue -k_d that sets RK4's stability limit h k_d ~ 2.785.
-
-Variants (:class:`Variant`), all with the motion loop (6.33) nu_dot_ref = a_des + k_d (v_des - v)
-+ k_p (p_des - p) on the REAL EE (k_d = 10 1/s, k_p = 100 1/s^2):
-
-* ``rns``: RNS-C in closed form, theta_ddot = W^T (J W^T)^-1 (nu_dot_ref - J_dot theta_dot)
-  (:func:`rns_ros.control.motion_force.rns_control`), W = M_hat_Al of the control model with
-  virtual mass m_hat and I_hat = m_hat / 12 ([A-4.9]); theta_ddot_a = 0 (section 7.1.3).
-* ``resolved``: resolved acceleration (7.2), theta_ddot = J^+ (nu_dot_ref - J_dot theta_dot).
-* ``damper``: (7.3)-type RNS-C plus theta_ddot_a = -k_d theta_dot (section 7.2.2, k_d = 2770 1/s
-  at 1 ms; rescale as 2.77 / step).
-* ``velocity``: RNS-C plus the velocity-level term (7.13)
-  (:func:`rns_ros.control.motion_force.velocity_level_term`, ``velocity`` form by default).
-
-Each run records t, q, theta_dot, the EE and its reference, and the null-space velocities
-||P_hat_RNS theta_dot|| and ||P_J theta_dot|| of (7.14) ([A-4.14]) at every step
-(:class:`ArmRun`). :func:`rms_difference` is RMS[Delta theta] of (7.7)-(7.8) between two runs on
-the same time grid; :func:`mass_sweep` runs RNS-C for several m_hat against one J^+ run.
-
-No rclpy, no rerun: numpy, Pinocchio and rns_ros.core / rns_ros.control only.
+The planar 3-DoF arm of section 7.1.1 follows a circular arc without contact, integrated with RK4
+(thesis_rest 4.7) under one of the :class:`Variant` joint-acceleration solutions; :class:`ArmRun`
+records it, :func:`rms_difference` is RMS[Delta theta] of (7.7)-(7.8) and :func:`mass_sweep` runs
+RNS-C for several m_hat. Variants and integration: docs/part2_chapter7.md, "The runs".
 """
 
 from __future__ import annotations

@@ -32,6 +32,9 @@ CONDITION_SEED = 5
 #: Rotation of every inspection condition: pi rad over 20 s, quintic (thesis_rest A-3.7).
 CONDITION_ANGLE = np.pi
 CONDITION_DURATION = 20.0
+#: Default controller rate [Hz] and RK4 step [s] of the inspection runs (docs/chapter5_inspection.md).
+CONTROL_RATE = 100.0
+SIMULATION_STEP = 1e-3
 
 
 # --------------------------------------------------------------------------- costs and torque
@@ -239,8 +242,8 @@ def energy_run(
     scenario: Scenario,
     method: str,
     *,
-    rate: float = 100.0,
-    simulation_step: float = 1e-3,
+    rate: float = CONTROL_RATE,
+    simulation_step: float = SIMULATION_STEP,
     wheel_inertia: float = WHEEL_INERTIA,
 ) -> EnergyRun:
     """Run ``scenario`` with ``method`` in the kinematic closed loop
@@ -380,8 +383,8 @@ def compare(
     robot: FreeFloatingModel,
     condition: InspectionCondition,
     *,
-    rate: float = 100.0,
-    simulation_step: float = 1e-3,
+    rate: float = CONTROL_RATE,
+    simulation_step: float = SIMULATION_STEP,
     wheel_inertia: float = WHEEL_INERTIA,
 ) -> ConditionComparison:
     """Run ``condition`` with both controllers and form the cost ratios (total Lambda each)."""

@@ -32,7 +32,7 @@ CONDITION_SEED = 5
 #: Rotation of every inspection condition: pi rad over 20 s, quintic (thesis_rest A-3.7).
 CONDITION_ANGLE = np.pi
 CONDITION_DURATION = 20.0
-#: Default controller rate [Hz] and RK4 step [s] of the inspection runs (docs/chapter5_inspection.md).
+#: Default controller rate [Hz] and RK4 step [s] of the inspection runs.
 CONTROL_RATE = 100.0
 SIMULATION_STEP = 1e-3
 

@@ -9,8 +9,6 @@ import pytest
 
 from rns_ros.analysis import chain_energy_maps as cem
 from rns_ros.analysis import energy_maps as em
-from rns_ros.core.energy import c_ratio, energy_metric
-from rns_ros.core.state import FreeFloatingState
 
 EPS = np.finfo(float).eps
 
@@ -25,24 +23,6 @@ def chain(robot):
     return cem.positioning_chain(robot)
 
 
-def _reference(model, theta, joints=None):
-    """(C_ratio of core.energy, cond(Lambda), an independent accurate C_ratio) at theta."""
-    state = FreeFloatingState.compute(model, model.configuration(theta))
-    joints = np.arange(model.n) if joints is None else joints
-    metric = energy_metric(state, em.WHEEL_INERTIA, joints)
-    coupling = state.coupling_angular_momentum_matrix[:, joints]
-    eigenvalues = np.linalg.eigvalsh(metric.total)
-    # sigma_min(Lambda) as the squared smallest singular value of [chol(M~_m)^T; G / sqrt(I_r)]:
-    # no assembled Lambda, so accurate to ~eps sqrt(cond) instead of eps cond
-    stacked = np.vstack(
-        (np.linalg.cholesky(metric.manipulator).T, coupling / math.sqrt(em.WHEEL_INERTIA))
-    )
-    t_min = np.linalg.svd(stacked, compute_uv=False)[-1] ** 2
-    kernel = np.linalg.svd(coupling)[2][-1]
-    accurate = kernel @ metric.manipulator @ kernel / t_min
-    return c_ratio(metric, coupling), eigenvalues[-1] / eigenvalues[0], accurate
-
-
 def test_wheeled_model_adds_30_kg_at_the_base_com_only(robot, heavy):
     assert heavy.total_mass == pytest.approx(robot.total_mass + 30.0)
     base, heavier = robot.model.inertias[1], heavy.model.inertias[1]
@@ -51,7 +31,9 @@ def test_wheeled_model_adds_30_kg_at_the_base_com_only(robot, heavy):
     assert robot.total_mass == 2760.0  # the original model is untouched
 
 
-def test_4dof_kernel_matches_pinocchio_at_1000_random_configurations(heavy, chain):
+def test_4dof_kernel_matches_pinocchio_at_1000_random_configurations(
+    heavy, chain, reference_c_ratio
+):
     """Against core.energy.c_ratio on the Pinocchio state of the 30-kg-heavier model.
 
     c_ratio takes sigma_min from LAPACK on the assembled Lambda, accurate to ~eps cond(Lambda)
@@ -64,7 +46,7 @@ def test_4dof_kernel_matches_pinocchio_at_1000_random_configurations(heavy, chai
         theta = np.zeros(7)
         theta[:4] = rng.uniform(-math.pi, math.pi, 4)
         theta[1] *= 0.5  # the map's theta_2 range
-        reference, condition, accurate = _reference(heavy, theta, joints)
+        reference, condition, accurate = reference_c_ratio(heavy, theta, joints)
         ours = cem.chain_c_ratio_chunk(chain, [theta[0]], theta[1], [[theta[2]], [theta[3]]])
         ours = float(ours.item())
         error = abs(ours / reference - 1.0)
@@ -76,7 +58,7 @@ def test_4dof_kernel_matches_pinocchio_at_1000_random_configurations(heavy, chai
     assert worst_reference < 1e-8
 
 
-def test_wrist_held_at_other_angles_is_a_different_rigid_payload(robot):
+def test_wrist_held_at_other_angles_is_a_different_rigid_payload(robot, reference_c_ratio):
     """The held joints are folded in at their given angles (checked at theta_5..7 != 0)."""
     model = cem.wheeled_model(robot)
     held = np.array([0.0, 0.0, 0.0, 0.0, 0.7, -1.1, 0.4])
@@ -85,7 +67,7 @@ def test_wrist_held_at_other_angles_is_a_different_rigid_payload(robot):
     for _ in range(20):
         theta = held.copy()
         theta[:4] = rng.uniform(-math.pi, math.pi, 4)
-        _, _, accurate = _reference(model, theta, robot.subchains.positioning)
+        _, _, accurate = reference_c_ratio(model, theta, robot.subchains.positioning)
         ours = cem.chain_c_ratio_chunk(chain, [theta[0]], theta[1], [[theta[2]], [theta[3]]])
         assert ours.item() == pytest.approx(accurate, rel=1e-9)
 

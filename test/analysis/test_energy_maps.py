@@ -10,29 +10,10 @@ import pytest
 
 from rns_ros.analysis import energy_maps as em
 from rns_ros.analysis.planar_field import fixed_points
-from rns_ros.core.energy import c_ratio, energy_metric
+from rns_ros.core.energy import c_ratio
 from rns_ros.core.planar import planar_2dof_model
-from rns_ros.core.state import FreeFloatingState
 
 EPS = np.finfo(float).eps
-
-
-def _reference(model, theta, joints=None):
-    """(C_ratio of core.energy, cond(Lambda), an independent accurate C_ratio) at theta."""
-    state = FreeFloatingState.compute(model, model.configuration(theta))
-    joints = np.arange(model.n) if joints is None else joints
-    metric = energy_metric(state, em.WHEEL_INERTIA, joints)
-    coupling = state.coupling_angular_momentum_matrix[:, joints]
-    eigenvalues = np.linalg.eigvalsh(metric.total)
-    # sigma_min(Lambda) as the squared smallest singular value of [chol(M~_m)^T; G / sqrt(I_r)]:
-    # no assembled Lambda, so accurate to ~eps sqrt(cond) instead of eps cond
-    stacked = np.vstack(
-        (np.linalg.cholesky(metric.manipulator).T, coupling / math.sqrt(em.WHEEL_INERTIA))
-    )
-    t_min = np.linalg.svd(stacked, compute_uv=False)[-1] ** 2
-    kernel = np.linalg.svd(coupling)[2][-1]
-    accurate = kernel @ metric.manipulator @ kernel / t_min
-    return c_ratio(metric, coupling), eigenvalues[-1] / eigenvalues[0], accurate
 
 
 def test_c_ratio_is_one_where_the_coupling_vanishes():
@@ -79,7 +60,7 @@ def test_rank_two_coupling_uses_the_plane_of_reactionless_motions():
     assert em.c_ratio_batch(tilde, coupling) == pytest.approx(expected, rel=1e-12)
 
 
-def test_planar_map_matches_pinocchio_and_has_the_thesis_mean():
+def test_planar_map_matches_pinocchio_and_has_the_thesis_mean(reference_c_ratio):
     """Fig. 5.1: the section-5.2 arm (r = 0.945 m, 1010 kg base, I_i = 8.3 kg m^2)."""
     model = planar_2dof_model(0.945, 0.0, base_mass=1010.0, link_inertia=8.3)
     grid, ratio = em.planar_c_ratio_map(count=100)
@@ -87,14 +68,14 @@ def test_planar_map_matches_pinocchio_and_has_the_thesis_mean():
     assert grid[0] == -math.pi
     assert grid[-1] < math.pi
     for i, j in [(0, 0), (10, 73), (55, 20), (99, 42)]:
-        reference, _, _ = _reference(model, [grid[j], grid[i]])
+        reference, _, _ = reference_c_ratio(model, [grid[j], grid[i]])
         assert ratio[i, j] == pytest.approx(reference, rel=1e-9)
     assert ratio.min() >= 1.0 - 1e-12
     assert ratio.mean() == pytest.approx(1.0015, abs=1e-4)  # thesis: 1.002
     assert np.median(ratio) < 1.0001
 
 
-def test_parameter_variation_scales_masses_inertias_and_com_distances():
+def test_parameter_variation_scales_masses_inertias_and_com_distances(reference_c_ratio):
     """alpha, beta of eqs. (5.6)-(5.7) against a Pinocchio model edited the same way."""
     alpha, beta = 0.7, 1.3
     arm = em.planar_arm(alpha, beta)
@@ -107,7 +88,7 @@ def test_parameter_variation_scales_masses_inertias_and_com_distances():
         )
     edited = type(base)(model, base.spec, name="planar_scaled")
     for theta in ([0.3, -1.2], [2.5, 0.4], [-3.0, 2.9]):
-        reference, _, _ = _reference(edited, theta)
+        reference, _, _ = reference_c_ratio(edited, theta)
         assert em.planar_c_ratio(arm, theta) == pytest.approx(reference, rel=1e-9)
     means = em.parameter_variation_map([0.5, 1.5], [1.0], count=40)
     assert means.shape == (2, 1)

@@ -31,13 +31,13 @@ from geometry_msgs.msg import TwistStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from rns_ros.analysis.part2_runs import run_closed_loop
-from rns_ros.analysis.part2_scenarios import (
+from rns_ros.analysis.contact_scenarios import (
     ScenarioKind,
     Task,
     load_motion_force_scenario,
     scenario_kind,
 )
+from rns_ros.analysis.motion_force_runs import run_closed_loop
 from rns_ros.analysis.recorded_contact import ContactRunFigures, contact_run_figures
 from rns_ros.core import ConfigError, RnsError
 from rns_ros.harness import Harness, ProcessStack, TopicLog

@@ -92,7 +92,7 @@ def _run(reproductions, out: Path, quick: bool, progress: bool):
 def _use_dask_scheduler(address: str, ids: list[str]) -> None:
     """Check the scheduler answers, then hand its address to fig5.3 (the only result that uses
     one) through the environment variable chapter5.DASK_SCHEDULER_ENV."""
-    from rns_ros.analysis.energy_maps import check_dask_scheduler
+    from rns_ros.analysis.chain_energy_maps import check_dask_scheduler
     from rns_ros.analysis.reproduce.chapter5 import DASK_SCHEDULER_ENV
     from rns_ros.core.errors import ConfigError
 

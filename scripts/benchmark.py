@@ -568,15 +568,15 @@ def _cpu_seconds(pid: int) -> float:
 
 
 def cratio(workers: int | None) -> None:
-    from rns_ros.analysis import energy_maps
+    from rns_ros.analysis import chain_energy_maps as cem
 
-    chain = energy_maps.positioning_chain()
-    grids = energy_maps.positioning_grids(50)
+    chain = cem.positioning_chain()
+    grids = cem.positioning_grids(50)
     sub = [grids[0], grids[1][::10], grids[2], grids[3]]
     cores = os.cpu_count() or 1
     label = f"{workers or cores} processes"
     print(f"\n{'C_ratio map, 4-DoF (Fig. 5.3)':<34}{'points':>12}{'wall [s]':>12}{'points/s':>12}")
-    energy_maps.chain_c_ratio_map(chain, [g[:2] for g in grids], workers=1)  # warm-up
+    cem.chain_c_ratio_map(chain, [g[:2] for g in grids], workers=1)  # warm-up
     runs = (
         ("1/10 sub-grid, 1 process", sub, 1),
         (f"1/10 sub-grid, {label}", sub, workers),
@@ -584,7 +584,7 @@ def cratio(workers: int | None) -> None:
     )
     for name, grid, count in runs:
         start = time.perf_counter()
-        values = energy_maps.chain_c_ratio_map(chain, grid, workers=count)
+        values = cem.chain_c_ratio_map(chain, grid, workers=count)
         wall = time.perf_counter() - start
         print(f"{name:<34}{values.size:>12}{wall:>12.2f}{values.size / wall:>12.0f}")
     print(f"full map mean C_ratio {values.mean():.6f} (goal: wall < 60 s; {cores} cores here)")
@@ -642,9 +642,9 @@ def lockstep(runs: int, domain_id: int) -> None:
 
 
 def force_controller(samples: int) -> None:
-    """rns_force_controller's step (rns_ros.control.force_teleop) on the LWR wall task, one
+    """rns_force_controller's step (rns_ros.control.force.controller) on the LWR wall task, one
     stroke closed around the in-process ContactSimulator, and the simulator's contact step."""
-    from rns_ros.analysis.part2_runs import WallScenario
+    from rns_ros.analysis.contact_tasks import WallScenario
     from rns_ros.control.force.commands import (
         ForceSetpoint,
         JointMeasurement,

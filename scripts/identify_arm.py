@@ -33,6 +33,7 @@ from scipy.optimize import least_squares, minimize
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from rns_ros.analysis import arm_geometry as ag
 from rns_ros.analysis import arm_identification as ai
 from rns_ros.core.errors import RnsError
 
@@ -47,11 +48,11 @@ def discrete_space(directions: list[str]) -> list[tuple[str, tuple[str, ...]]]:
     """(u, axes) candidates of the symmetry-reduced space."""
     out = []
     for u in directions:
-        uv = ai.axis_vector(u)
-        e1, e2 = ai.perpendicular_basis(u)
-        pitches = [ai.axis_label(s * e) for e in (e1, e2) for s in (1, -1)]
-        roll = ai.axis_label(uv)
-        firsts = [roll, ai.axis_label(-uv)]
+        uv = ag.axis_vector(u)
+        e1, e2 = ag.perpendicular_basis(u)
+        pitches = [ag.axis_label(s * e) for e in (e1, e2) for s in (1, -1)]
+        roll = ag.axis_label(uv)
+        firsts = [roll, ag.axis_label(-uv)]
         if abs(uv[2]) < 0.5:
             firsts += ["+z", "-z"]
         for j1, j2, j4, j6 in itertools.product(firsts, pitches, pitches, pitches):
@@ -59,10 +60,10 @@ def discrete_space(directions: list[str]) -> list[tuple[str, tuple[str, ...]]]:
     return out
 
 
-def geometry_from(u: str, axes: tuple[str, ...], x: np.ndarray) -> ai.Geometry:
+def geometry_from(u: str, axes: tuple[str, ...], x: np.ndarray) -> ag.Geometry:
     """Continuous vector x (13,): log length scales (7), shoulder, elbow, wrist offsets (2 each)."""
-    lengths = ai.uniform_lengths() * np.exp(x[:7])
-    return ai.Geometry(
+    lengths = ag.uniform_lengths() * np.exp(x[:7])
+    return ag.Geometry(
         direction=u,
         axes=axes,
         lengths=tuple(float(v) for v in lengths),
@@ -80,7 +81,7 @@ def _bounds():
 
 def _ee_residual(x, u, axes, final):
     geometry = geometry_from(u, axes, x)
-    error = ai.camera_position(geometry, final) - ai.THESIS_EE_POSITION
+    error = ag.camera_position(geometry, final) - ai.THESIS_EE_POSITION
     elbow = math.hypot(x[9], x[10])
     return np.concatenate((error, 0.05 * x[:7], 0.05 * x[7:], [max(0.0, ELBOW_MIN - elbow)]))
 
@@ -193,12 +194,12 @@ def main(argv=None) -> int:
         jobs = [(r[0], r[1].direction, r[1].axes, _x_of(r[1]), True) for r in stage4[: args.full]]
         full = pool.map(stage_four, jobs, chunksize=1)
     full.sort(key=lambda r: ai.total_shortfall(r[2]))
-    current = ai.score_all(ai.CURRENT, coarse=False, step=0.003)
+    current = ai.score_all(ag.CURRENT, coarse=False, step=0.003)
     header = " ".join(["rk", f"{'geometry':<28}", "  total "] + [f"{n[:9]:>9}" for n in
                       ai.CHEAP + ai.CLOSED_LOOP])  # fmt: skip
     print(f"\nranked finalists, full checks (* = passed) ({time.time() - t0:.0f} s)")
     print(header)
-    print(_row(0, ai.CURRENT, current) + "   <- current default")
+    print(_row(0, ag.CURRENT, current) + "   <- current default")
     for rank, (_, geometry, scores) in enumerate(full, 1):
         print(_row(rank, geometry, scores))
     print("\ncoarse closed-loop ranking")
@@ -217,14 +218,14 @@ def main(argv=None) -> int:
     if args.json:
         args.json.write_text(json.dumps(_dump(full + stage4), indent=1))
     if args.urdf and full:
-        args.urdf.write_text(ai.geometry_urdf(full[0][1], name="rns_7dof_arm_identified"))
+        args.urdf.write_text(ag.geometry_urdf(full[0][1], name="rns_7dof_arm_identified"))
         print(f"wrote {args.urdf}")
     print(f"wall time {time.time() - t0:.0f} s")
     return 0
 
 
-def _x_of(geometry: ai.Geometry) -> np.ndarray:
-    scales = np.log(np.array(geometry.lengths) / ai.uniform_lengths())
+def _x_of(geometry: ag.Geometry) -> np.ndarray:
+    scales = np.log(np.array(geometry.lengths) / ag.uniform_lengths())
     return np.concatenate((scales, geometry.shoulder, geometry.elbow, geometry.wrist))
 
 

@@ -130,13 +130,7 @@ def run_scenario(
         settle: extra time after the command ends, zero command [s].
         on_period: called with a :class:`PeriodSample` after every period (time series).
     """
-    period = 1.0 / positive(rate, "rate", "Hz")
-    substeps = round(period / positive(simulation_step, "simulation_step", "s"))
-    if substeps < 1 or abs(substeps * simulation_step - period) > 1e-9 * period:
-        raise ConfigError(
-            f"the control period 1/rate = {period} s must be a multiple of simulation_step "
-            f"{simulation_step} s"
-        )
+    period, substeps = _period_and_substeps(rate, simulation_step)
     settings = ControllerSettings(
         method=scenario.method() if method is None else method,
         gains=scenario.gains(gains),
@@ -170,12 +164,7 @@ def run_scenario(
         else:
             simulator.set_reference(step.reference_positions, step.joint_velocity)
         camera_before = state.camera.rotation
-        for _ in range(substeps):
-            simulator.step()
-            figures.servo_error = max(
-                figures.servo_error,
-                float(np.abs(simulator.reference.positions - simulator.q[7:]).max()),
-            )
+        _hold(simulator, substeps, figures)
         state = FreeFloatingState.compute(robot, simulator.q)
         achieved = pin.log3(state.camera.rotation @ camera_before.T)
         figures.record_step(out, step.joint_velocity, omega, achieved, period, t)
@@ -186,29 +175,31 @@ def run_scenario(
             figures.wrist = max(figures.wrist, float(np.linalg.norm(wrist_offset(state) - wrist_0)))
 
     target = scenario.target_rotation(camera_0, base_0, scenario.duration)
-    return ClosedLoopResult(
-        max_base_deviation_deg=float(np.rad2deg(figures.base)),
-        final_orientation_error_deg=float(
-            np.rad2deg(attitude_deviation(target, state.camera.rotation))
-        ),
-        max_axis_error_deg=float(np.rad2deg(figures.axis)),
-        rms_tracking_error=float(np.sqrt(figures.squared_error / max(steps, 1))),
-        achieved_angle_deg=float(np.rad2deg(figures.angle)),
-        max_wrist_drift=figures.wrist,
-        max_joint_speed=figures.joint_speed,
-        min_sigma=figures.sigma,
-        max_damping=figures.damping,
-        min_speed_scale=figures.min_scale,
-        max_speed_scale=figures.max_scale,
-        min_algorithmic_determinant=figures.det_algorithmic,
-        min_algorithmic_determinant_time=figures.det_algorithmic_time,
-        min_kinematic_determinant=figures.det_kinematic,
-        min_coupling_determinant=figures.det_coupling,
-        max_coupling_momentum=figures.coupling,
-        momentum_drift=float(np.linalg.norm(simulator.centroidal_momentum() - momentum_0)),
-        max_servo_error=figures.servo_error,
-        steps=steps,
-    )
+    momentum_drift = float(np.linalg.norm(simulator.centroidal_momentum() - momentum_0))
+    return figures.result(target, state, momentum_drift, steps)
+
+
+def _period_and_substeps(rate: float, simulation_step: float) -> tuple[float, int]:
+    """(control period [s], simulator steps per period); ConfigError unless 1 / rate is a
+    multiple of ``simulation_step`` [s]."""
+    period = 1.0 / positive(rate, "rate", "Hz")
+    substeps = round(period / positive(simulation_step, "simulation_step", "s"))
+    if substeps < 1 or abs(substeps * simulation_step - period) > 1e-9 * period:
+        raise ConfigError(
+            f"the control period 1/rate = {period} s must be a multiple of simulation_step "
+            f"{simulation_step} s"
+        )
+    return period, substeps
+
+
+def _hold(simulator: FreeFloatingSimulator, substeps: int, figures: _Figures) -> None:
+    """Integrate one control period with the reference held; track the servo error."""
+    for _ in range(substeps):
+        simulator.step()
+        figures.servo_error = max(
+            figures.servo_error,
+            float(np.abs(simulator.reference.positions - simulator.q[7:]).max()),
+        )
 
 
 class _Figures:
@@ -243,3 +234,31 @@ class _Figures:
             self.det_algorithmic, self.det_algorithmic_time = det.algorithmic, t
         self.det_kinematic = min(self.det_kinematic, det.kinematic)
         self.det_coupling = min(self.det_coupling, det.coupling)
+
+    def result(
+        self, target: np.ndarray, state: FreeFloatingState, momentum_drift: float, steps: int
+    ) -> ClosedLoopResult:
+        """The :class:`ClosedLoopResult` of the run, ``state`` its end."""
+        return ClosedLoopResult(
+            max_base_deviation_deg=float(np.rad2deg(self.base)),
+            final_orientation_error_deg=float(
+                np.rad2deg(attitude_deviation(target, state.camera.rotation))
+            ),
+            max_axis_error_deg=float(np.rad2deg(self.axis)),
+            rms_tracking_error=float(np.sqrt(self.squared_error / max(steps, 1))),
+            achieved_angle_deg=float(np.rad2deg(self.angle)),
+            max_wrist_drift=self.wrist,
+            max_joint_speed=self.joint_speed,
+            min_sigma=self.sigma,
+            max_damping=self.damping,
+            min_speed_scale=self.min_scale,
+            max_speed_scale=self.max_scale,
+            min_algorithmic_determinant=self.det_algorithmic,
+            min_algorithmic_determinant_time=self.det_algorithmic_time,
+            min_kinematic_determinant=self.det_kinematic,
+            min_coupling_determinant=self.det_coupling,
+            max_coupling_momentum=self.coupling,
+            momentum_drift=momentum_drift,
+            max_servo_error=self.servo_error,
+            steps=steps,
+        )

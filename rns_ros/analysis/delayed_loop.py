@@ -162,6 +162,31 @@ def _command_at(
     return scenario.angular_velocity(k * timing.command_period) if k >= 0 else np.zeros(3)
 
 
+def _command_arrivals(duration: float, timing: LoopTiming, rng) -> np.ndarray:
+    """Arrival times [s] of the operator's twists at the controller (empty without them)."""
+    if timing.command_period is None:
+        return np.zeros(0)
+    sent = timing.command_period * np.arange(int(duration / timing.command_period) + 1)
+    return sent + rng.uniform(*timing.command_latency, size=sent.size)
+
+
+def _known_state(
+    robot: FreeFloatingModel,
+    samples: list,
+    outputs: list[PublishedOutput],
+    tick: float,
+    timing: LoopTiming,
+) -> FreeFloatingState:
+    """The robot as the controller knows it at ``tick`` [s]: the newest joint state received by
+    then, predicted forward to ``tick`` from its stamp."""
+    known = [s for s in samples[-3:] if s[0] <= tick] or samples[:1]
+    _, stamp, q_s, v_s = known[-1]
+    q = q_s.copy()
+    if tick > stamp:
+        q[7:] = predict_joint_angles(q_s[7:], v_s, stamp, tick, outputs, timing.predicted).theta
+    return FreeFloatingState.compute(robot, q)
+
+
 def run_delayed_loop(
     robot: FreeFloatingModel,
     scenario: Scenario,
@@ -200,10 +225,7 @@ def run_delayed_loop(
     controller.reset(state0)
     base_0 = state0.base_rotation
 
-    arrivals = np.zeros(0)
-    if timing.command_period is not None:
-        sent = timing.command_period * np.arange(int(duration / timing.command_period) + 1)
-        arrivals = sent + rng.uniform(*timing.command_latency, size=sent.size)
+    arrivals = _command_arrivals(duration, timing, rng)
     ticks = _tick_times(duration, period, timing, arrivals, rng)
     state_steps = round(timing.state_period / SIMULATION_STEP)
     phase_steps = round(timing.state_phase / SIMULATION_STEP)
@@ -227,14 +249,7 @@ def run_delayed_loop(
                 controller.end_hold(tick - last_tick)
                 holds.append(tick - last_tick)
             last_tick = tick
-            known = [s for s in samples[-3:] if s[0] <= tick] or samples[:1]
-            _, stamp, q_s, v_s = known[-1]
-            q = q_s.copy()
-            if tick > stamp:
-                q[7:] = predict_joint_angles(
-                    q_s[7:], v_s, stamp, tick, outputs, timing.predicted
-                ).theta
-            state = FreeFloatingState.compute(robot, q)
+            state = _known_state(robot, samples, outputs, tick, timing)
             omega = _command_at(scenario, tick, period, timing, arrivals)
             step = controller.step(state, angular_velocity_in_world(state, omega, scenario.frame))
             outputs.append(PublishedOutput(tick, step.joint_velocity))

@@ -1,35 +1,10 @@
 r"""Energy of the camera inspection: reactionless motion vs conventional control plus reaction
 wheels (thesis §5.2.1-5.2.2, Figs. 5.4-5.5).
 
-Two ways to turn the camera without turning the base:
-
-(i) the reactionless inspection controller (DLS, eq. 4.5): the arm moves in the reaction null
-    space, M~_omega_m theta_dot ~ 0, so the wheels have nothing to absorb and the cost is the arm's
-    own kinetic energy 1/2 theta_dot^T M~_m theta_dot;
-(ii) the conventional wrist-only inverse Jacobian (eqs. 4.7-4.8) with three reaction wheels that
-    absorb the coupling momentum and so hold the base (eq. 5.2: phi_dot = -M~_omega_m theta_dot /
-    I_r); its cost is the full 1/2 theta_dot^T Lambda theta_dot of eq. (5.3), arm plus wheels.
-
-For each run this module samples, once per control period, the kinetic energy split into its arm
-part (Lambda_m) and wheel part (Lambda_r) (:class:`EnergySeries`), the running costs C_max (5.12)
-and C_sum (5.13) (:func:`running_costs`), and the wheel torque that (ii) needs, eq. (5.14)
-tau_r = -d/dt (M~_omega_m theta_dot) (:func:`wheel_torque`). :func:`random_conditions` draws the
-thesis' "randomly chosen" initial configurations and rotation axes (thesis_rest A-3.6).
-
-Energy bookkeeping of the conventional run. The in-process closed loop is a kinematic
-free-floating simulation, so in run (ii) the base does turn (nothing holds it). The thesis costs
-the joint motion of the controller assuming the wheels hold the base; we do the same: every
-energy is evaluated from the run's joint rates theta_dot and joint angles theta only, at a
-configuration with the base at the origin and identity attitude (the run's initial base pose).
-Lambda_m and Lambda_r do not depend on the base pose (the tilde terms fold the base translation in,
-and Lambda_r = M~^T M~ / I_r is invariant to a rotation of the world axes), so this only fixes
-the axes of M~_omega_m theta_dot and of the torque (world axes = the held base's axes).
-
-Sampling. The controller holds theta_dot over each period T; in kinematic mode the joints move
-exactly theta(t) = theta_k + (t - t_k) theta_dot, so we evaluate each period at its middle,
-theta_mid = theta_k + T/2 theta_dot, where the midpoint-hold controller makes M~_omega_m
-theta_dot vanish to O(T^2) (docs/controller.md); at the start of a period the residual would be
-O(T) and the reactionless run's (tiny) wheel energy would be dominated by sampling.
+Per control period: the kinetic energy split into arm (Lambda_m) and wheel (Lambda_r) parts
+(:class:`EnergySeries`), the running costs C_max (5.12) and C_sum (5.13), the wheel torque (5.14);
+:func:`random_conditions` draws the thesis' random start configurations and axes (A-3.6).
+Bookkeeping and sampling: docs/chapter5_inspection.md.
 """
 
 from __future__ import annotations
@@ -57,6 +32,9 @@ CONDITION_SEED = 5
 #: Rotation of every inspection condition: pi rad over 20 s, quintic (thesis_rest A-3.7).
 CONDITION_ANGLE = np.pi
 CONDITION_DURATION = 20.0
+#: Default controller rate [Hz] and RK4 step [s] of the inspection runs.
+CONTROL_RATE = 100.0
+SIMULATION_STEP = 1e-3
 
 
 # --------------------------------------------------------------------------- costs and torque
@@ -264,8 +242,8 @@ def energy_run(
     scenario: Scenario,
     method: str,
     *,
-    rate: float = 100.0,
-    simulation_step: float = 1e-3,
+    rate: float = CONTROL_RATE,
+    simulation_step: float = SIMULATION_STEP,
     wheel_inertia: float = WHEEL_INERTIA,
 ) -> EnergyRun:
     """Run ``scenario`` with ``method`` in the kinematic closed loop
@@ -405,8 +383,8 @@ def compare(
     robot: FreeFloatingModel,
     condition: InspectionCondition,
     *,
-    rate: float = 100.0,
-    simulation_step: float = 1e-3,
+    rate: float = CONTROL_RATE,
+    simulation_step: float = SIMULATION_STEP,
     wheel_inertia: float = WHEEL_INERTIA,
 ) -> ConditionComparison:
     """Run ``condition`` with both controllers and form the cost ratios (total Lambda each)."""

@@ -1,39 +1,9 @@
 """Chapter 3: the reactionless vector field of the planar two-DoF free-floating arm (Fig. 3.1).
 
-The model is the one of thesis Fig. 3.1 / §3.2.1: a base (m_b, I_b) and two links (m_i, I_i,
-length l_i, CoM at l_ci from joint i), joint 1 attached at ``r [cos ψ, sin ψ]`` from the base CoM
-(eq. 3.6). Angles follow choice A-1.1: θ1 from the base x axis, θ2 relative to link 1, both
-counter-clockwise, so θ = 0 is the arm stretched along +x.
-
-Closed form. Writing the 2-D equations of ``thesis_rest`` §1.2 (M~_ωm of eq. 3.2 with the base
-linear motion folded in, about the base CoM) out in angles gives, with
-``m_C = m_b + m_1 + m_2``, ``k = m_b / m_C``, ``P = m_1 l_c1 + m_2 l_1``, ``Q = m_2 l_c2``,
-``β = Q (l_1 − P/m_C)``, ``φ = θ1 − ψ``::
-
-    M~_m   = [[A_1(θ2), A_2(θ2)], [A_2(θ2), α_2]]            (depends on θ2 only)
-    A_1    = α_1 + 2β cos θ2,   A_2 = α_2 + β cos θ2
-    α_1    = I_1 + I_2 + m_1 l_c1² + m_2 (l_1² + l_c2²) − (P² + Q²)/m_C
-    α_2    = I_2 + m_2 l_c2² − Q²/m_C
-    M~_ωm  = [A_1 + k r (P cos φ + Q cos(φ+θ2)),  A_2 + k r Q cos(φ+θ2)]
-    M~_ω   = I_b + A_1 + k (m_1+m_2) r² + 2 k r (P cos φ + Q cos(φ+θ2))
-
-i.e. M~_ωm is the first row of M~_m (the arm's own coupling about joint 1) plus k·a·q_j, the
-moment of the attachment offset a against the links' first mass moments. ψ only shifts θ1,
-which is why the thesis may set ψ = 0 (§3.2.2). The tests check all of it against Pinocchio.
-
-Field (eq. 3.5): θ̇ = b n(θ), with n the co-factor vector ``[−M~_2, M~_1]/|M~_ωm|`` (A-1.2: the
-sign of b, i.e. of the arrows, is arbitrary; this one gives θ̇2 > 0 where M~_1 > 0). Fixed points
-are the zeros of M~_ωm (A-1.3: of the un-normalized co-factor field ``f = [−M~_2, M~_1]``).
-
-Fixed points, exactly. M~_1 − M~_2 = 0 and M~_2 = 0 are linear in ``(x, y) = r (cos φ, sin φ)``
-for a given θ2 = s, so every s ∈ (0, π) ∪ (−π, 0) carries exactly one fixed point, at distance
-
-    ρ(s) = sqrt(u² + w²),  u = −(α_1 − α_2 + β cos s)/(k P),  w = (u cos s − v)/sin s,
-    v = −(α_2 + β cos s)/(k Q),  θ1 = ψ + atan2(w, u),
-
-so the fixed points at attachment distance r are the roots of ρ(s) = r (one per monotone piece of
-ρ), and fixed points first appear at ``r* = min_s ρ(s)``, a saddle-node pair (one mirror copy
-at ±s*), found by a root finder on dρ²/ds = 0. Numpy/scipy only.
+:class:`PlanarArm` holds M~_m and M~_ωm of thesis Fig. 3.1 / §3.2.1 in closed form (angles as in
+choice A-1.1); the field is θ̇ = b n(θ), n the co-factor vector of M~_ωm (eq. 3.5), and its fixed
+points are found exactly. Formulas and derivation: docs/chapter3.md, "The planar field in closed
+form". Numpy/scipy only.
 """
 
 from __future__ import annotations

@@ -1,34 +1,9 @@
 r"""Thesis chapter 7: the virtual-link mass of RNS-C and the velocity-level null-space term.
 
-The planar 3-DoF arm of section 7.1.1 (``config/planar_3dof.yaml``: links 1 m / 10 kg, plane x-y
-for the thesis' x-z) moves its end effector (EE) along a circular arc, **without contact** ("no
-interaction ... without losing generality"). With computed torque on a free arm the joint
-acceleration equals the controller's theta_ddot_ref, so a run integrates
-
-    q_dot = theta_dot,   theta_dot_dot = theta_ddot_ref(t, q, theta_dot)
-
-with classical RK4 (thesis_rest 4.7: RK4 at 1 ms). The controller is evaluated at each of the four
-RK4 stages (a continuous-time controller, no sample-and-hold), so the damper's null-space mode
-has the eigenvalue -k_d that sets RK4's stability limit h k_d ~ 2.785.
-
-Variants (:class:`Variant`), all with the motion loop (6.33) nu_dot_ref = a_des + k_d (v_des - v)
-+ k_p (p_des - p) on the REAL EE (k_d = 10 1/s, k_p = 100 1/s^2):
-
-* ``rns``: RNS-C in closed form, theta_ddot = W^T (J W^T)^-1 (nu_dot_ref - J_dot theta_dot)
-  (:func:`rns_ros.control.motion_force.rns_control`), W = M_hat_Al of the control model with
-  virtual mass m_hat and I_hat = m_hat / 12 ([A-4.9]); theta_ddot_a = 0 (section 7.1.3).
-* ``resolved``: resolved acceleration (7.2), theta_ddot = J^+ (nu_dot_ref - J_dot theta_dot).
-* ``damper``: (7.3)-type RNS-C plus theta_ddot_a = -k_d theta_dot (section 7.2.2, k_d = 2770 1/s
-  at 1 ms; rescale as 2.77 / step).
-* ``velocity``: RNS-C plus the velocity-level term (7.13)
-  (:func:`rns_ros.control.motion_force.velocity_level_term`, ``velocity`` form by default).
-
-Each run records t, q, theta_dot, the EE and its reference, and the null-space velocities
-||P_hat_RNS theta_dot|| and ||P_J theta_dot|| of (7.14) ([A-4.14]) at every step
-(:class:`ArmRun`). :func:`rms_difference` is RMS[Delta theta] of (7.7)-(7.8) between two runs on
-the same time grid; :func:`mass_sweep` runs RNS-C for several m_hat against one J^+ run.
-
-No rclpy, no rerun: numpy, Pinocchio and rns_ros.core / rns_ros.control only.
+The planar 3-DoF arm of section 7.1.1 follows a circular arc without contact, integrated with RK4
+(thesis_rest 4.7) under one of the :class:`Variant` joint-acceleration solutions; :class:`ArmRun`
+records it, :func:`rms_difference` is RMS[Delta theta] of (7.7)-(7.8) and :func:`mass_sweep` runs
+RNS-C for several m_hat. Variants and integration: docs/part2_chapter7.md, "The runs".
 """
 
 from __future__ import annotations
@@ -38,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rns_ros.analysis.arrays import read_only
 from rns_ros.control.motion_force.null_space import (
     DEFAULT_DAMPER_GAIN,
     VelocityTermForm,
@@ -52,6 +28,7 @@ from rns_ros.control.motion_force.rnsc import rns_control
 from rns_ros.control.motion_force.task_space import PLANAR_ROWS, TaskSpace
 from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState
+from rns_ros.core.timing import quintic_shape
 from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Arc of section 7.1.1 / 6.2.1: centre [m] and radius [m] (thesis_rest 4.4, 4.6).
@@ -80,15 +57,6 @@ class Variant(Choice):
     RESOLVED = "resolved"
     DAMPER = "damper"
     VELOCITY = "velocity"
-
-
-def _quintic(tau: float) -> tuple[float, float, float]:
-    """Rest-to-rest quintic s(tau), ds/dtau, d2s/dtau2 for tau clamped to [0, 1]."""
-    tau = min(max(tau, 0.0), 1.0)
-    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    ds = 30.0 * tau**2 * (1.0 - tau) ** 2
-    dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
-    return s, ds, dds
 
 
 @dataclass(frozen=True)
@@ -133,7 +101,7 @@ class ArcPath:
     def angle(self, t: float) -> tuple[float, float, float]:
         """phi [rad], phi_dot [rad/s], phi_ddot [rad/s^2] at time t [s]."""
         index = min(int(max(t, 0.0) // self.half_period), self.halves - 1)
-        s, ds, dds = _quintic((t - index * self.half_period) / self.half_period)
+        s, ds, dds = quintic_shape((t - index * self.half_period) / self.half_period)
         sign = 1.0 if index % 2 == 0 else -1.0
         sigma = s if sign > 0 else 1.0 - s
         scale = self.sweep / self.half_period
@@ -190,12 +158,6 @@ class RunSettings:
     def damper(self) -> float:
         """The damper gain in use [1/s]."""
         return self.damper_gain if self.damper_gain is not None else DAMPER_GAIN_STEP / self.step
-
-
-def _frozen(array) -> np.ndarray:
-    out = np.array(array, dtype=float)
-    out.setflags(write=False)
-    return out
 
 
 @dataclass(frozen=True)
@@ -393,13 +355,13 @@ def simulate(
         virtual_mass,
         h,
         settings.damper if variant is Variant.DAMPER else None,
-        _frozen(t_all),
-        _frozen(qs),
-        _frozen(vs),
-        _frozen(ee),
-        _frozen(ref),
-        _frozen(ns_rns),
-        _frozen(ns_jac),
+        read_only(t_all),
+        read_only(qs),
+        read_only(vs),
+        read_only(ee),
+        read_only(ref),
+        read_only(ns_rns),
+        read_only(ns_jac),
         path,
     )
 
@@ -470,8 +432,8 @@ def mass_sweep(
         if run is None:
             run = simulate(robot, Variant.RNS, virtual_mass=mass, path=path, settings=settings)
         out.append(run)
-    rms = _frozen([rms_difference(run, reference) for run in out])
-    return MassSweep(_frozen(masses), tuple(out), reference, rms)
+    rms = read_only([rms_difference(run, reference) for run in out])
+    return MassSweep(read_only(masses), tuple(out), reference, rms)
 
 
 __all__ = [

@@ -48,11 +48,8 @@ from rns_ros.core.errors import ConfigError, InputError, ModelError
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.momentum import generalized_jacobian
 from rns_ros.core.state import FreeFloatingState
-from rns_ros.core.timing import quintic
+from rns_ros.core.timing import QUINTIC_PEAK_RATE, quintic
 from rns_ros.core.validation import Choice, as_vector, positive
-
-#: Peak of the quintic's s_dot times T (thesis_rest section 0) [-].
-QUINTIC_PEAK = 1.875
 
 
 class PtpMethod(Choice):
@@ -483,13 +480,13 @@ def _limits(robot: FreeFloatingModel) -> np.ndarray:
 
 def _line_duration(robot: FreeFloatingModel, delta: np.ndarray, nominal: float) -> float:
     """Shortest quintic duration >= nominal [s] keeping 1.875 |delta_i| / T <= limit_i."""
-    return max(nominal, float(np.max(QUINTIC_PEAK * np.abs(delta) / _limits(robot))))
+    return max(nominal, float(np.max(QUINTIC_PEAK_RATE * np.abs(delta) / _limits(robot))))
 
 
 def _path_duration(robot: FreeFloatingModel, path: ReactionlessPath, nominal: float) -> float:
     """Shortest duration >= nominal [s] with 1.875 L |n_i| / T <= limit_i on every node."""
     worst = float(np.max(np.abs(path.tangent) / _limits(robot))) if path.length > 0 else 0.0
-    return max(nominal, QUINTIC_PEAK * path.length * worst)
+    return max(nominal, QUINTIC_PEAK_RATE * path.length * worst)
 
 
 def _stretch_note(name: str, nominal: float, duration: float) -> list[str]:

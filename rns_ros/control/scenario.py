@@ -37,7 +37,7 @@ from rns_ros.control.controller import TwistFrame
 from rns_ros.control.inspection import ControlGains, Method
 from rns_ros.core.config import check_keys, read_yaml_mapping
 from rns_ros.core.errors import ConfigError, InputError
-from rns_ros.core.timing import quintic
+from rns_ros.core.timing import QUINTIC_PEAK_RATE, quintic
 from rns_ros.core.validation import Choice, as_vector, positive
 
 _KEYS = {
@@ -64,8 +64,6 @@ CONTROLLER_OVERRIDES = {
 }
 #: Overrides that are controller-node settings rather than :class:`ControlGains` fields.
 _NOT_GAINS = {"method", "max_angular_speed"}
-#: Peak of the quintic's s_dot times its duration: max s_dot = 15 / (8 T) at t = T / 2 [-].
-QUINTIC_PEAK_RATE = 15.0 / 8.0
 
 
 class TimeScaling(Choice):

@@ -2,7 +2,7 @@
 
 RNS-C or OS-C on a fixed-base arm whose end effector (EE) touches a rigid surface: motion along
 the surface from the operator twist, force along its normal from the force setpoint. The law is
-:class:`rns_ros.control.force_teleop.ForceTeleopController`; this node converts messages and
+:class:`rns_ros.control.force.controller.ForceTeleopController`; this node converts messages and
 runs one step per received ``joint_states`` (event-driven). Contract: docs/part2_ros.md.
 
 Subscribes:

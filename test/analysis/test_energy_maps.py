@@ -1,4 +1,4 @@
-"""The chapter-5 C_ratio maps (eq. 5.5) against the Pinocchio reference and their identities."""
+"""The chapter-5 C_ratio maps (eq. 5.5): the batched ratio, the planar maps and their identities."""
 
 from __future__ import annotations
 
@@ -10,108 +10,10 @@ import pytest
 
 from rns_ros.analysis import energy_maps as em
 from rns_ros.analysis.planar_field import fixed_points
-from rns_ros.core.energy import c_ratio, energy_metric
+from rns_ros.core.energy import c_ratio
 from rns_ros.core.planar import planar_2dof_model
-from rns_ros.core.state import FreeFloatingState
 
 EPS = np.finfo(float).eps
-
-
-@pytest.fixture(scope="module")
-def heavy(robot):
-    return em.wheeled_model(robot)
-
-
-@pytest.fixture(scope="module")
-def chain(robot):
-    return em.positioning_chain(robot)
-
-
-def _reference(model, theta, joints=None):
-    """(C_ratio of core.energy, cond(Lambda), an independent accurate C_ratio) at theta."""
-    state = FreeFloatingState.compute(model, model.configuration(theta))
-    joints = np.arange(model.n) if joints is None else joints
-    metric = energy_metric(state, em.WHEEL_INERTIA, joints)
-    coupling = state.coupling_angular_momentum_matrix[:, joints]
-    eigenvalues = np.linalg.eigvalsh(metric.total)
-    # sigma_min(Lambda) as the squared smallest singular value of [chol(M~_m)^T; G / sqrt(I_r)]:
-    # no assembled Lambda, so accurate to ~eps sqrt(cond) instead of eps cond
-    stacked = np.vstack(
-        (np.linalg.cholesky(metric.manipulator).T, coupling / math.sqrt(em.WHEEL_INERTIA))
-    )
-    t_min = np.linalg.svd(stacked, compute_uv=False)[-1] ** 2
-    kernel = np.linalg.svd(coupling)[2][-1]
-    accurate = kernel @ metric.manipulator @ kernel / t_min
-    return c_ratio(metric, coupling), eigenvalues[-1] / eigenvalues[0], accurate
-
-
-def test_wheeled_model_adds_30_kg_at_the_base_com_only(robot, heavy):
-    assert heavy.total_mass == pytest.approx(robot.total_mass + 30.0)
-    base, heavier = robot.model.inertias[1], heavy.model.inertias[1]
-    assert np.allclose(heavier.lever, base.lever)
-    assert np.allclose(heavier.inertia, base.inertia)
-    assert robot.total_mass == 2760.0  # the original model is untouched
-
-
-def test_4dof_kernel_matches_pinocchio_at_1000_random_configurations(heavy, chain):
-    """Against core.energy.c_ratio on the Pinocchio state of the 30-kg-heavier model.
-
-    c_ratio takes sigma_min from LAPACK on the assembled Lambda, accurate to ~eps cond(Lambda)
-    (cond up to ~2e7 here, i.e. ~1e-9); our value is compared to it within 1e-9 or that bound,
-    and to an independent accurate evaluation of the same Pinocchio matrices within 1e-9."""
-    rng = np.random.default_rng(20261201)
-    joints = heavy.subchains.positioning
-    worst_reference, worst_accurate = 0.0, 0.0
-    for _ in range(1000):
-        theta = np.zeros(7)
-        theta[:4] = rng.uniform(-math.pi, math.pi, 4)
-        theta[1] *= 0.5  # the map's theta_2 range
-        reference, condition, accurate = _reference(heavy, theta, joints)
-        ours = em.chain_c_ratio_chunk(chain, [theta[0]], theta[1], [[theta[2]], [theta[3]]])
-        ours = float(ours.item())
-        error = abs(ours / reference - 1.0)
-        assert error <= max(1e-9, 4.0 * EPS * condition), (theta, ours, reference, condition)
-        worst_reference = max(worst_reference, error)
-        worst_accurate = max(worst_accurate, abs(ours / accurate - 1.0))
-        assert ours >= 1.0 - 1e-9
-    assert worst_accurate < 1e-9
-    assert worst_reference < 1e-8
-
-
-def test_wrist_held_at_other_angles_is_a_different_rigid_payload(robot):
-    """The held joints are folded in at their given angles (checked at theta_5..7 != 0)."""
-    model = em.wheeled_model(robot)
-    held = np.array([0.0, 0.0, 0.0, 0.0, 0.7, -1.1, 0.4])
-    chain = em.SerialChain.from_model(model, robot.subchains.positioning, held)
-    rng = np.random.default_rng(3)
-    for _ in range(20):
-        theta = held.copy()
-        theta[:4] = rng.uniform(-math.pi, math.pi, 4)
-        _, _, accurate = _reference(model, theta, robot.subchains.positioning)
-        ours = em.chain_c_ratio_chunk(chain, [theta[0]], theta[1], [[theta[2]], [theta[3]]])
-        assert ours.item() == pytest.approx(accurate, rel=1e-9)
-
-
-def test_grid_map_equals_pointwise_chunks_and_is_at_least_one(chain):
-    grids = em.positioning_grids(6)
-    grid_map = em.chain_c_ratio_map(chain, grids, workers=1)
-    assert grid_map.shape == (6, 6, 6, 6)
-    assert np.all(np.isfinite(grid_map))
-    assert grid_map.min() >= 1.0 - 1e-9
-    i, j, k, m = 1, 4, 2, 5
-    point = em.chain_c_ratio_chunk(
-        chain, [grids[0][i]], grids[1][j], [[grids[2][k]], [grids[3][m]]]
-    )
-    assert grid_map[i, j, k, m] == pytest.approx(point.item(), rel=1e-12)
-
-
-def test_local_processes_give_the_same_numbers(chain):
-    grids = [em.periodic_grid(4), em.periodic_grid(3, -0.5 * math.pi, math.pi)] + [
-        em.periodic_grid(5)
-    ] * 2
-    inline = em.chain_c_ratio_map(chain, grids, workers=1)
-    pooled = em.chain_c_ratio_map(chain, grids, workers=2)
-    assert np.array_equal(inline, pooled)
 
 
 def test_c_ratio_is_one_where_the_coupling_vanishes():
@@ -158,7 +60,7 @@ def test_rank_two_coupling_uses_the_plane_of_reactionless_motions():
     assert em.c_ratio_batch(tilde, coupling) == pytest.approx(expected, rel=1e-12)
 
 
-def test_planar_map_matches_pinocchio_and_has_the_thesis_mean():
+def test_planar_map_matches_pinocchio_and_has_the_thesis_mean(reference_c_ratio):
     """Fig. 5.1: the section-5.2 arm (r = 0.945 m, 1010 kg base, I_i = 8.3 kg m^2)."""
     model = planar_2dof_model(0.945, 0.0, base_mass=1010.0, link_inertia=8.3)
     grid, ratio = em.planar_c_ratio_map(count=100)
@@ -166,14 +68,14 @@ def test_planar_map_matches_pinocchio_and_has_the_thesis_mean():
     assert grid[0] == -math.pi
     assert grid[-1] < math.pi
     for i, j in [(0, 0), (10, 73), (55, 20), (99, 42)]:
-        reference, _, _ = _reference(model, [grid[j], grid[i]])
+        reference, _, _ = reference_c_ratio(model, [grid[j], grid[i]])
         assert ratio[i, j] == pytest.approx(reference, rel=1e-9)
     assert ratio.min() >= 1.0 - 1e-12
     assert ratio.mean() == pytest.approx(1.0015, abs=1e-4)  # thesis: 1.002
     assert np.median(ratio) < 1.0001
 
 
-def test_parameter_variation_scales_masses_inertias_and_com_distances():
+def test_parameter_variation_scales_masses_inertias_and_com_distances(reference_c_ratio):
     """alpha, beta of eqs. (5.6)-(5.7) against a Pinocchio model edited the same way."""
     alpha, beta = 0.7, 1.3
     arm = em.planar_arm(alpha, beta)
@@ -186,29 +88,8 @@ def test_parameter_variation_scales_masses_inertias_and_com_distances():
         )
     edited = type(base)(model, base.spec, name="planar_scaled")
     for theta in ([0.3, -1.2], [2.5, 0.4], [-3.0, 2.9]):
-        reference, _, _ = _reference(edited, theta)
+        reference, _, _ = reference_c_ratio(edited, theta)
         assert em.planar_c_ratio(arm, theta) == pytest.approx(reference, rel=1e-9)
     means = em.parameter_variation_map([0.5, 1.5], [1.0], count=40)
     assert means.shape == (2, 1)
     assert means[1, 0] < means[0, 0]  # heavier links: closer to minimum energy (Fig. 5.2)
-
-
-def test_dask_local_cluster_gives_the_same_numbers(chain):
-    distributed = pytest.importorskip("distributed")
-    grids = [em.periodic_grid(3), em.periodic_grid(2, -0.5 * math.pi, math.pi)] + [
-        em.periodic_grid(4)
-    ] * 2
-    local = em.chain_c_ratio_map(chain, grids, workers=1)
-    with distributed.LocalCluster(
-        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-    ) as cluster:
-        remote = em.chain_c_ratio_map(chain, grids, dask_scheduler=cluster.scheduler_address)
-    assert np.array_equal(local, remote)
-
-
-def test_unreachable_dask_scheduler_is_a_config_error(chain):
-    pytest.importorskip("distributed")
-    from rns_ros.core.errors import ConfigError
-
-    with pytest.raises(ConfigError, match="dask scheduler"):
-        em._dask_client("tcp://127.0.0.1:1", timeout=1.0)

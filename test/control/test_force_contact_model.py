@@ -84,7 +84,7 @@ def test_predicted_force_matches_the_simulator_on_the_arc(q, v, angle, taus):
 
 def test_centripetal_feed_forward_is_minus_the_arc_curvature():
     """a_n = curvature |v_t|^2 with curvature = 1/R equals -ArcConstraint.curvature (the term
-    part2_runs commands as [-constraint.curvature(p, p_dot)])."""
+    motion_force_runs commands as [-constraint.curvature(p, p_dot)])."""
     arc = ArcConstraint([1.91, 1.91, 0.0], 0.707)
     rng = np.random.default_rng(3)
     for angle in rng.uniform(0, 2 * math.pi, 10):

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from rns_ros.analysis.arm_identification import IDENTIFIED
+from rns_ros.analysis.arm_geometry import IDENTIFIED
 from rns_ros.core import ConfigError, FreeFloatingModel, InputError, ModelError, ModelSpec
 from rns_ros.core.config import load_model, load_model_config
 from rns_ros.resources import default_model_config

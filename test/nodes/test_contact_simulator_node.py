@@ -19,7 +19,7 @@ from rns_testing import Recorder
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 
-from rns_ros.analysis.part2_runs import ArcScenario
+from rns_ros.analysis.contact_tasks import ArcScenario
 from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model

@@ -10,7 +10,7 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
-from rns_ros.analysis.part2_scenarios import load_motion_force_scenario, operator_sample
+from rns_ros.analysis.contact_scenarios import load_motion_force_scenario, operator_sample
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
@@ -343,7 +343,7 @@ def test_motion_force_waits_for_both_subscribers(ros, tmp_path):
     assert ros.spin_until(lambda: operator.started, timeout=5.0)
 
 
-def test_shipped_part2_scenarios_are_motion_force(ros):
+def test_shipped_contact_scenarios_are_motion_force(ros):
     operator = ros.add(OperatorNode, {"scenario": "wall_contact", "wait_for_subscriber": False,
                                       "start_delay": 60.0})  # fmt: skip
     assert operator.motion_force

@@ -22,6 +22,7 @@ import time
 
 import numpy as np
 
+from rns_ros.analysis import chain_energy_maps as cem
 from rns_ros.analysis import energy_maps as em
 from rns_ros.analysis.planar_field import fixed_points
 from rns_ros.analysis.reproduce.registry import (
@@ -250,16 +251,16 @@ def compute_fig5_3(quick: bool) -> Outcome:
     slice_count = 24 if quick else 100
     scheduler = os.environ.get(DASK_SCHEDULER_ENV) or None
     workers = 1 if quick else None
-    chain = em.positioning_chain()
-    grids = em.positioning_grids(count)
+    chain = cem.positioning_chain()
+    grids = cem.positioning_grids(count)
     start = time.perf_counter()
-    ratio = em.chain_c_ratio_map(
+    ratio = cem.chain_c_ratio_map(
         chain, grids, workers=workers, dask_scheduler=scheduler, progress=not quick
     )
     summary = em.MapSummary.of(ratio, time.perf_counter() - start)
     slice_grid = em.periodic_grid(slice_count)
     slices = [
-        em.chain_c_ratio_map(chain, [[t1], [t2], slice_grid, slice_grid], workers=1)[0, 0]
+        cem.chain_c_ratio_map(chain, [[t1], [t2], slice_grid, slice_grid], workers=1)[0, 0]
         for t1, t2 in SLICES
     ]
     where = f"{os.cpu_count()} local processes" if workers is None else "this process"

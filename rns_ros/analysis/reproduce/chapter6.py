@@ -8,7 +8,7 @@
 * ``fig6.7`` / ``fig6.8``: the 7-DoF LWR4-class arm against a wall (§6.2.2): task errors and joint
   velocities (the thesis prints no numbers).
 
-The runs come from :mod:`rns_ros.analysis.part2_runs` (torque-level closed loop on the rigid
+The runs come from :mod:`rns_ros.analysis.motion_force_runs` (torque-level closed loop on the rigid
 contact simulator, RK4 at the control period, torque held over each step). Each scenario runs once
 per controller and process (cached), so ``fig6.3`` and ``fig6.4`` share their runs, as do
 ``fig6.7`` and ``fig6.8``. Every id reports the same JSON keys: ``peak_joint_speed_rad_s``,
@@ -22,23 +22,25 @@ import functools
 
 import numpy as np
 
-from rns_ros.analysis.part2_runs import (
-    CONTROL_PERIOD,
-    CONTROLLERS,
+from rns_ros.analysis.contact_tasks import (
     FORCE,
     FORCE_RAMP,
     PLANAR_HALF_CYCLE,
+    WALL_STROKE,
+    WALL_STROKES,
+    ArcScenario,
+    WallScenario,
+)
+from rns_ros.analysis.motion_force_runs import (
+    CONTROL_PERIOD,
+    CONTROLLERS,
     QUICK_PERIOD,
     THESIS_FORCE_GAINS,
     THESIS_MOTION_GAINS,
     VIRTUAL_MASS,
-    WALL_STROKE,
-    WALL_STROKES,
-    ArcScenario,
     ClosedLoopRun,
     Controller,
     ForceMeasurement,
-    WallScenario,
     run_closed_loop,
 )
 from rns_ros.analysis.reproduce.registry import (

@@ -1,29 +1,9 @@
-r"""Part II scenario files (``config/scenarios/*.yaml`` with ``kind: motion_force``).
+r"""Motion/force scenario files (``config/scenarios/*.yaml`` with ``kind: motion_force``).
 
-A Part II scenario file is one of the two chapter-6 tasks of :mod:`rns_ros.analysis.part2_runs`
-(the tasks ``rns_reproduce`` runs for ``fig6.3``/``fig6.4`` and ``fig6.7``/``fig6.8``) written as
-YAML, so that the DDS stack (``rns_operator`` -> ``rns_force_controller`` -> ``rns_simulator``)
-and the in-process reproduction play the same task. Keys (all validated; unknown keys are
-rejected by name, bad values raise :class:`ConfigError` naming the value and its range):
-
-    kind: motion_force                  (required here; Part I files have no kind:
-                                         camera_rotation, :mod:`rns_ros.control.scenario`)
-    task: wall | arc                    (required)
-    name: text                          (default: file stem)
-    description: text
-    ... the fields of :class:`~rns_ros.analysis.part2_runs.WallScenario` (task wall: initial_deg,
-        normal, direction, length, stroke, strokes, force, force_ramp, model) or of
-        :class:`~rns_ros.analysis.part2_runs.ArcScenario` (task arc: center, radius,
-        start_angle_deg, end_angle_deg, half_cycle, half_cycles, seed_deg, force, force_ramp,
-        centripetal, model); omitted fields take the dataclass defaults (the thesis task), a
-        null ``normal``/``direction``/``length`` the dataclass' derived value.
-
-What the operator publishes at profile time t (:func:`operator_sample`): the EE reference
-velocity p_dot_des(t) (world, the feed-forward of the motion loop (6.33)), a zero angular
-velocity (the wall task holds its start orientation, the planar arc leaves it free), the desired
-force f_des(t) of the force loop (6.34) (a quintic from 0 to ``force`` over ``force_ramp``) and
-the contact normal n at the REFERENCE point, ``Setup.constraint.gradient(p_des(t))`` (world, into
-the environment: the wrench the EE exerts is f_des n, thesis sign [A-4.1]).
+One file holds one chapter-6 task of :mod:`rns_ros.analysis.contact_tasks` as YAML, so that the
+DDS stack (``rns_operator`` -> ``rns_force_controller`` -> ``rns_simulator``) and the in-process
+reproduction play the same task. Keys, and what the operator publishes (:func:`operator_sample`):
+docs/part2_ros.md.
 """
 
 from __future__ import annotations
@@ -36,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 import yaml
 
-from rns_ros.analysis.part2_runs import ArcScenario, Setup, WallScenario
+from rns_ros.analysis.contact_tasks import ArcScenario, Setup, WallScenario
 from rns_ros.control.scenario import Scenario, load_scenario
 from rns_ros.core.config import check_keys
 from rns_ros.core.errors import ConfigError, InputError
@@ -200,7 +180,7 @@ def load_motion_force_scenario(path: str | Path) -> MotionForceScenario:
 
 def load_contact_scenario(path: str | Path) -> ArcScenario | WallScenario:
     """The task of a ``kind: motion_force`` file as its analysis dataclass (``.setup()``,
-    ``.duration``, :func:`~rns_ros.analysis.part2_runs.run_closed_loop` take it as it is).
+    ``.duration``, :func:`~rns_ros.analysis.motion_force_runs.run_closed_loop` take it as it is).
 
     Raises:
         ConfigError: as :func:`load_motion_force_scenario`.

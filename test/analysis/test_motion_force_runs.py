@@ -1,22 +1,22 @@
-"""Chapter 6 closed loops (rns_ros.analysis.part2_runs): physics of the quick runs (one planar
-half cycle, one wall stroke, 2 ms period) and the scenario checks."""
+"""Chapter 6 closed loops (rns_ros.analysis.motion_force_runs): physics of the quick runs (one
+planar half cycle, one wall stroke, 2 ms period) and the run checks."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from rns_ros.analysis.part2_runs import (
-    CONTROLLERS,
+from rns_ros.analysis.contact_tasks import (
     FORCE,
-    QUICK_PERIOD,
     ArcScenario,
+    WallScenario,
+    quick_scenarios,
+)
+from rns_ros.analysis.motion_force_runs import (
+    CONTROLLERS,
+    QUICK_PERIOD,
     ClosedLoopRun,
     Controller,
-    WallScenario,
-    back_and_forth,
-    force_profile,
-    quick_scenarios,
     run_closed_loop,
 )
 from rns_ros.core.errors import ConfigError, RnsError, SimulationDivergedError
@@ -125,42 +125,6 @@ def test_wall_geometry_is_the_documented_choice(runs):
     assert description["stroke_length_m"] == pytest.approx(0.514814 - 0.24, abs=1e-6)
 
 
-def test_profiles():
-    assert back_and_forth(0.0, 1.0, 2) == (0.0, 0.0, 0.0)
-    assert back_and_forth(1.0, 1.0, 2)[0] == pytest.approx(1.0)
-    assert back_and_forth(1.5, 1.0, 2)[0] == pytest.approx(0.5)
-    assert back_and_forth(1.5, 1.0, 2)[1] < 0.0  # on the way back
-    assert back_and_forth(5.0, 1.0, 2) == pytest.approx((0.0, 0.0, 0.0))  # held at the end
-    assert back_and_forth(5.0, 1.0, 3)[0] == pytest.approx(1.0)
-    assert force_profile(0.5, 10.0, 1.0) == pytest.approx(5.0)
-    assert force_profile(3.0, 10.0, 1.0) == 10.0
-
-
-@pytest.mark.parametrize(
-    "make",
-    [
-        lambda: ArcScenario(radius=0.0),
-        lambda: ArcScenario(radius=float("nan")),
-        lambda: ArcScenario(half_cycle=-1.0),
-        lambda: ArcScenario(half_cycles=0),
-        lambda: ArcScenario(half_cycles=1.5),
-        lambda: ArcScenario(start_angle_deg=200.0, end_angle_deg=200.0),
-        lambda: ArcScenario(seed_deg=(1.0, 2.0)),
-        lambda: ArcScenario(force=-1.0),
-        lambda: ArcScenario(center=(0.0, "a")),
-        lambda: WallScenario(initial_deg=(0.0,) * 6),
-        lambda: WallScenario(normal=(0.0, 0.0, 0.0)),
-        lambda: WallScenario(stroke=0.0),
-        lambda: WallScenario(strokes=0),
-        lambda: WallScenario(length=-0.1),
-        lambda: WallScenario(force_ramp=0.0),
-    ],
-)
-def test_bad_scenario_parameters_raise_config_error(make):
-    with pytest.raises(ConfigError):
-        make()
-
-
 def test_bad_run_parameters_raise_typed_errors():
     arc = ArcScenario(half_cycles=1)
     with pytest.raises(ConfigError, match="controller"):
@@ -192,7 +156,8 @@ def test_a_force_sensor_one_period_late_diverges_with_the_thesis_gain():
 def test_force_and_motion_are_decoupled_on_the_wall(controller):
     """A 10 N force step (0.02 s ramp) with the arm holding still does not move the end
     effector in the wall plane; a stroke with zero force keeps the contact force at zero."""
-    from rns_ros.analysis.part2_runs import WallScenario, run_closed_loop
+    from rns_ros.analysis.contact_tasks import WallScenario
+    from rns_ros.analysis.motion_force_runs import run_closed_loop
 
     hold = WallScenario(stroke=1e6, strokes=1, force=10.0, force_ramp=0.02)
     run = run_closed_loop(hold, controller, dt=2e-3, duration=0.5)

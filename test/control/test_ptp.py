@@ -8,13 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from rns_ros.control.ptp import (
-    PtpMethod,
-    PtpSettings,
-    plan_deployment,
-    plan_ptp,
-    reactionless_path,
-)
+from rns_ros.control.ptp import PtpMethod, PtpSettings
+from rns_ros.control.ptp_phases import plan_deployment
+from rns_ros.control.ptp_planner import plan_ptp
+from rns_ros.control.reactionless_path import reactionless_path
 from rns_ros.core.errors import InputError
 from rns_ros.core.state import FreeFloatingState
 

@@ -18,8 +18,22 @@ from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import as_vector, positive
 
 
+def positioning_null_vector(
+    robot: FreeFloatingModel, theta: np.ndarray, data: pin.Data | None = None
+) -> np.ndarray:
+    """Unit n spanning ker M~_P_omega_m (eq. 4.3), shape (p,), sign arbitrary: the last right
+    singular vector of the positioning columns of M~_omega_m (3 x p), on ``data`` (default
+    ``robot.data``)."""
+    if robot.subchains is None:
+        raise ModelError(f"{robot.name}: reactionless paths need positioning/wrist subchains")
+    q = robot.configuration(theta)
+    centroidal = pin.computeCentroidalMap(robot.model, robot.data if data is None else data, q)
+    block = centroidal[3:, 6:][:, robot.subchains.positioning]
+    return np.linalg.svd(block)[2][-1]
+
+
 class NullVector:
-    """n(theta): unit vector of ker M~_P_omega_m (eq. 4.3) on a private ``pin.Data``."""
+    """n(theta) of :func:`positioning_null_vector` on a private ``pin.Data``, sign-continuous."""
 
     def __init__(self, robot: FreeFloatingModel) -> None:
         if robot.subchains is None:
@@ -30,10 +44,7 @@ class NullVector:
 
     def __call__(self, theta: np.ndarray, reference: np.ndarray | None = None) -> np.ndarray:
         """Unit n, shape (p,), signed so that n . reference >= 0 (sign continuity)."""
-        q = self.robot.configuration(theta)
-        centroidal = pin.computeCentroidalMap(self.robot.model, self.data, q)
-        block = centroidal[3:, 6:][:, self.positioning]
-        n = np.linalg.svd(block)[2][-1]
+        n = positioning_null_vector(self.robot, theta, self.data)
         if reference is not None and n @ reference < 0.0:
             n = -n
         return n

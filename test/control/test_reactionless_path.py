@@ -5,8 +5,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
-from rns_ros.control.reactionless_path import reactionless_path
+from rns_ros.control.reactionless_path import positioning_null_vector, reactionless_path
+from rns_ros.core.state import FreeFloatingState
 
 
 def test_path_is_reactionless_through_a_turning_point(robot, relative_coupling):
@@ -27,3 +29,14 @@ def test_path_is_reactionless_through_a_turning_point(robot, relative_coupling):
     for k in range(turn - 5, turn + 6):
         assert relative_coupling(path.theta[k], path.tangent[k]) < 1e-12
     np.testing.assert_allclose(path.theta[:, 4:], np.tile(start[4:], (path.arc.size, 1)))
+
+
+def test_positioning_null_vector_spans_the_kernel_of_the_positioning_coupling(robot):
+    rng = np.random.default_rng(11)
+    for _ in range(10):
+        theta = rng.uniform(robot.lower_limits, robot.upper_limits)
+        n = positioning_null_vector(robot, theta)
+        state = FreeFloatingState.compute(robot, robot.configuration(theta))
+        block = state.coupling_angular_momentum_matrix[:, robot.subchains.positioning]
+        assert np.linalg.norm(n) == pytest.approx(1.0, abs=1e-12)
+        assert np.abs(block @ n).max() < 1e-10 * np.abs(block).max()

@@ -126,9 +126,9 @@ def plan_deployment(
 
     The elbow path runs towards theta_4 = theta_4(0) + deploy_rate * deploy_duration (2.349 rad
     from the stowed -pi with the thesis' 0.183 rad/s x 30 s), or to its first turning point.
-    Timing: a quintic in arc length over ``deploy_duration`` (stretched to the velocity limits)
-    instead of the thesis' constant theta_dot_4 (eq. 4.17 divides by n_4; the quintic starts and
-    ends at rest); the mean theta_dot_4 is noted.
+    Timing: a quintic in arc length over ``deploy_duration`` (stretched to the velocity limits),
+    where the thesis holds theta_dot_4 constant: eq. (4.17) divides by n_4, and the quintic
+    starts and ends at rest. The mean theta_dot_4 is noted.
 
     Raises:
         InputError: bad stowed configuration (names the joint).

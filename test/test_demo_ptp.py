@@ -11,7 +11,8 @@ import pytest
 
 from rns_ros import demo, demo_ptp
 from rns_ros.analysis.ptp_runs import run_plan
-from rns_ros.control.ptp import PtpSettings, plan_ptp
+from rns_ros.control.ptp import PtpSettings
+from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import load_model
 from rns_ros.demo import main
 from rns_ros.demo_ptp import PTP_SCENARIOS, PtpDemoRow, PtpScenario, format_ptp_table

@@ -19,6 +19,7 @@ import pinocchio as pin
 
 from rns_ros.analysis.arm_geometry import Geometry, build_model
 from rns_ros.analysis.closed_loop import PeriodSample, run_scenario
+from rns_ros.control.reactionless_path import positioning_null_vector
 from rns_ros.control.scenario import Scenario, load_scenario
 from rns_ros.core.model import FreeFloatingModel
 
@@ -100,13 +101,6 @@ class FoldPath:
     max_ratio: float
     arc: float
     theta_end: np.ndarray
-
-
-def positioning_null_vector(robot: FreeFloatingModel, theta: np.ndarray) -> np.ndarray:
-    """Unit n in ker M~_P_omega_m (eq. 4.3), shape (4,), sign arbitrary."""
-    q = robot.configuration(theta)
-    tilde = pin.computeCentroidalMap(robot.model, robot.data, q)[3:, 6:10]
-    return np.linalg.svd(tilde)[2][-1]
 
 
 def elbow_path(

@@ -12,8 +12,8 @@ vanish to second order and also centres the camera's angular velocity on the int
 prediction extrapolates the last two held outputs and is checked against the output (repeated
 from the output when they disagree by more than HOLD_CONSISTENCY); the law at the midpoint runs on a
 partial state in closed form (:meth:`FreeFloatingState.arm_kinematics`,
-:func:`~rns_ros.control.inspection.arm_law_rates`). Identified geometry, 20 s satellite
-observation at 100 Hz: 9.9e-4 deg (naive) vs 2.6e-7 deg (midpoint); docs/controller.md.
+:func:`~rns_ros.control.inspection.arm_law_rates`). The base deviations of both corrections
+are compared in docs/controller.md.
 
 The controller also integrates the joint position reference theta_ref += T theta_dot that a
 position servo tracks, and keeps the wrist reference p_w^init of eq. (4.6).
@@ -42,19 +42,18 @@ from rns_ros.core.validation import Choice, as_vector, positive
 
 #: Default control rate [Hz] of the ROS controller.
 DEFAULT_RATE = 100.0
-#: Largest number of midpoint iterations accepted (one already meets 1e-5 deg at 100 Hz).
+#: Largest number of midpoint iterations accepted (one suffices at 100 Hz, docs/controller.md).
 MAX_HOLD_ITERATIONS = 5
 #: A midpoint evaluation is consistent when its output theta_dot and the prediction it was
 #: evaluated at differ by at most HOLD_CONSISTENCY * T * max(max|theta_dot|, HOLD_SPEED_FLOOR)
 #: (inf-norm) [1/s]: the evaluation point is then within 1.5e-2 T^2 max|theta_dot| [rad] of the
-#: held motion's midpoint, about what the law at the sample as predictor leaves typically
-#: (0.017 T^2 max|theta_dot| on satellite observation at 100 Hz; up to 10x more near the
-#: singularity). Kinematic 100 Hz runs of the three scenarios, max base deviation for 1e-2 / 3e-2:
-#: the same to within 20 %, 1.05-1.27 / 1.05-1.12 evaluations per period; without the check
-#: (extrapolation trusted) pinv turned the base 1.4e-5 deg in the algorithmic singularity.
+#: held motion's midpoint, about what the law at the sample leaves as predictor. The check keeps
+#: an extrapolation that misses (near the algorithmic singularity, where the speed limit binds)
+#: from being trusted; a looser or tighter value changes the base deviation little and the
+#: number of evaluations per period more (docs/controller.md).
 HOLD_CONSISTENCY = 3e-2
-#: Speed below which HOLD_CONSISTENCY applies to this speed instead [rad/s] (slow motion turns
-#: the base by little: the error of an evaluation point scales with max|theta_dot|).
+#: Speed floor of HOLD_CONSISTENCY [rad/s]: below it the tolerance stays at this speed's (slow
+#: motion turns the base by little: the error of an evaluation point scales with max|theta_dot|).
 HOLD_SPEED_FLOOR = 0.1
 
 
@@ -200,10 +199,10 @@ class ReactionlessController:
         A plant holds theta_dot until the next output arrives, and outputs do not come exactly T
         apart: a new command is served at once (early), and a busy executor fires its timer late.
         theta_ref then stands where the held theta_dot actually brought the arm:
-        theta_ref = theta_ref,start + elapsed * theta_dot, ``elapsed`` >= 0. (Assuming T instead
-        lost 1.4 % of the motion of a dynamic-mode run with a position-tracking servo; a pause
-        long enough to make theta_ref stray is caught by the node's resync.) Without a hold in
-        progress this does nothing.
+        theta_ref = theta_ref,start + elapsed * theta_dot, ``elapsed`` >= 0, so a
+        position-tracking servo follows the motion the arm actually made; a pause long enough to
+        make theta_ref stray is caught by the node's resync. Without a hold in progress this
+        does nothing.
         """
         if self._hold is None:
             return
@@ -262,15 +261,11 @@ class ReactionlessController:
         previous one alone after one period). It is checked, not trusted: an evaluation whose
         output differs from its prediction by more than HOLD_CONSISTENCY T max|theta_dot| is
         repeated from its own output (fixed-point iteration of the midpoint rule), up to
-        ``hold_iterations`` times. On the thesis scenarios at 100 Hz the extrapolation is ~60x
-        closer to the output than the law at the sample (median 7.6e-9 vs 5.0e-7 rad off the
-        midpoint, satellite observation) and passes at once in 88-100 % of the periods (1.00-1.12
-        evaluations per period; the repeats cluster where the speed limit binds or J-bar nears a
-        singularity). Without
-        history (after reset, resync or configure) the predictor is the law at the sample,
-        followed by ``hold_iterations`` evaluations, as before. (Warm-starting from the previous
-        output alone, not extrapolated and not checked, let SC oscillate on the first geometry:
-        1.4e-2 deg on own_device.)
+        ``hold_iterations`` times. The extrapolation lies much closer to the output than the law
+        at the sample and usually passes at once; repeats cluster where the speed limit binds or
+        J-bar nears a singularity. The check matters: an unchecked warm start can make SC
+        oscillate. Without history (after reset, resync or configure) the predictor is the law
+        at the sample, followed by ``hold_iterations`` evaluations.
         """
         settings = self.settings
         half = 0.5 * period

@@ -11,9 +11,8 @@ ros2_control: every update) acts on it at
 The midpoint hold of :mod:`rns_ros.control.controller` is reactionless to second order only
 when the hold starts where the law assumed; starting at a_k instead of t_k shifts the evaluation
 point by (a_k - t_k) theta_dot and leaves a first-order residue of 2 (a_k - t_k) / T of the naive
-hold's error (T = period). In process on the 20 s satellite observation at 100 Hz, 1 ms of
-unpredicted delay turns the base by 2.0e-4 deg; predicting it restores the 3-6e-7 deg of the
-undelayed loop (:mod:`rns_ros.analysis.delayed_loop`, docs/controller.md).
+hold's error (T = period); predicting a_k removes it (magnitudes:
+:mod:`rns_ros.analysis.delayed_loop`, docs/controller.md).
 
 Between t_s and a_k the plant runs at the rate it had at t_s until the first of the controller's
 own outputs published after t_s takes effect, then at each later output from its acting time on:

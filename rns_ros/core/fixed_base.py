@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from rns_ros.core.config import read_yaml_mapping
 from rns_ros.core.errors import ConfigError, ModelError
-from rns_ros.core.model import _ONE_DOF_JOINTS, check_moving_bodies, check_urdf_inertials
+from rns_ros.core.model import check_moving_bodies, check_one_dof_joints, check_urdf_inertials
 from rns_ros.core.validation import as_vector
 
 #: Standard gravity [m/s^2], along -z of world when ``gravity`` is on.
@@ -55,13 +55,7 @@ class FixedBaseModel:
         )
         if model.njoints < 2:
             raise ModelError(f"{name}: the URDF has no moving joint")
-        for index in range(1, model.njoints):
-            kind = model.joints[index].shortname()
-            if kind not in _ONE_DOF_JOINTS:
-                raise ModelError(
-                    f"{name}: joint '{model.names[index]}' is {kind}; Part II arms need revolute "
-                    "joints with limits"
-                )
+        check_one_dof_joints(model, name, 1, "Part II arms need revolute joints with limits")
         check_moving_bodies(model, name)
         if not model.existFrame(ee_frame):
             names = sorted({f.name for f in model.frames} - {"universe"})

@@ -131,13 +131,12 @@ class FreeFloatingModel:
         model = self.model
         if model.njoints < 3 or model.joints[1].shortname() != "JointModelFreeFlyer":
             raise ModelError(f"{self.name}: expected a free-flyer root and at least one arm joint")
-        for index in range(2, model.njoints):
-            kind = model.joints[index].shortname()
-            if kind not in _ONE_DOF_JOINTS:
-                raise ModelError(
-                    f"{self.name}: joint '{model.names[index]}' is {kind}; rns_ros supports "
-                    "revolute and prismatic joints (continuous joints: give them limits)"
-                )
+        check_one_dof_joints(
+            model,
+            self.name,
+            2,
+            "rns_ros supports revolute and prismatic joints (continuous joints: give them limits)",
+        )
 
     def _check_bodies(self) -> None:
         """Every moving body must be physical (:func:`check_moving_bodies`): a free-flyer's mass
@@ -216,6 +215,20 @@ class FreeFloatingModel:
         points = [data.oMi[j].translation.copy() for j in range(1, self.model.njoints)]
         points.append(data.oMf[self.camera_frame_id].translation.copy())
         return np.array(points)
+
+
+def check_one_dof_joints(model: pin.Model, name: str, first: int, supported: str) -> None:
+    """Every joint from index ``first`` on must have one position and one velocity coordinate
+    (revolute or prismatic, :data:`_ONE_DOF_JOINTS`).
+
+    Raises:
+        ModelError: naming the first other joint, its kind and ``supported`` (what the caller
+            accepts).
+    """
+    for index in range(first, model.njoints):
+        kind = model.joints[index].shortname()
+        if kind not in _ONE_DOF_JOINTS:
+            raise ModelError(f"{name}: joint '{model.names[index]}' is {kind}; {supported}")
 
 
 def check_moving_bodies(model: pin.Model, name: str) -> None:

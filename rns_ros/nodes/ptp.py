@@ -46,7 +46,9 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from rns_ros.control.ptp import PtpMethod, PtpSettings, plan_deployment, plan_ptp
+from rns_ros.control.ptp import PtpMethod, PtpSettings
+from rns_ros.control.ptp_phases import plan_deployment
+from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError, RnsError

@@ -24,7 +24,6 @@ from rns_ros.control.inspection import (
     arm_law_rates,
     control_output,
     law_rates,
-    position_limit_scale,
     reactionless_camera_control,
     wrist_offset,
 )
@@ -33,20 +32,6 @@ from rns_ros.core.integration import attitude_deviation
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
-
-
-def test_position_limit_scale_matches_the_distance_left():
-    lower, upper = np.array([-1.0, -1.0]), np.array([1.0, 1.0])
-    theta = np.array([0.9, 0.0])
-    # joint 0 has 0.1 rad left and would move 0.4 rad: s = 0.25
-    assert position_limit_scale(theta, np.array([4.0, 1.0]), lower, upper, 0.1) == pytest.approx(
-        0.25
-    )
-    # moving away from the limit is never restricted
-    assert position_limit_scale(theta, np.array([-4.0, 1.0]), lower, upper, 0.1) == 1.0
-    # at the limit and pushing into it: halt
-    at_limit = np.array([1.0, 0.0])
-    assert position_limit_scale(at_limit, np.array([0.1, 0.0]), lower, upper, 0.1) == 0.0
 
 
 def test_position_limit_halts_the_whole_motion_reactionlessly(robot):

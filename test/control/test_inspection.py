@@ -12,11 +12,12 @@ from rns_testing import SATELLITE_OBSERVATION_DEG, configurations, vectors
 
 from rns_ros.control.inspection import (
     ControlGains,
+    ConventionalWrist,
     Method,
-    _svd_law,
+    ReactionlessInverse,
     law_rates,
     reactionless_camera_control,
-    uniform_speed_scale,
+    singularity_treatment,
     wrist_offset,
 )
 from rns_ros.core import ConfigError, FreeFloatingState
@@ -141,9 +142,18 @@ def test_uniform_speed_scaling_stays_reactionless_where_clipping_does_not(robot)
     assert np.linalg.norm(disturbance) > 1e-3
 
 
-def test_uniform_speed_scale():
-    assert uniform_speed_scale(np.array([0.5, -0.2]), np.array([1.0, 1.0])) == 1.0
-    assert uniform_speed_scale(np.array([2.0, -4.0]), np.array([1.0, 2.0])) == 0.5
+def test_each_method_has_its_own_treatment():
+    treatments = {method: singularity_treatment(method) for method in Method}
+    assert len({id(treatment) for treatment in treatments.values()}) == len(Method)
+    for method, treatment in treatments.items():
+        assert treatment.method is method
+        assert singularity_treatment(method.value) is treatment
+    # the baseline is the only treatment that does not move in the reaction null space
+    assert isinstance(treatments[Method.CONVENTIONAL], ConventionalWrist)
+    assert all(
+        isinstance(treatments[method], ReactionlessInverse)
+        for method in (Method.DLS, Method.SC, Method.PINV)
+    )
 
 
 def test_bad_gains_and_method_are_rejected(robot):
@@ -207,13 +217,13 @@ def test_closed_form_law_is_the_svd_law(robot, config, omega):
     gains = ControlGains()
     for method in (Method.DLS, Method.SC, Method.PINV):
         rates = law_rates(robot, state, omega, method, gains, reference, None)
-        theta_dot, damping, sc_scale, sigma_min, det = _svd_law(
-            state, state.restricted_jacobian, omega, method, gains, reference
+        svd = singularity_treatment(method).svd_rates(
+            state, state.restricted_jacobian, omega, gains, reference
         )
-        theta_dot = rates.limit_scale * theta_dot
+        theta_dot = rates.limit_scale * svd.joint_velocity
         scale = max(1.0, float(np.abs(theta_dot).max()))
         np.testing.assert_allclose(rates.joint_velocity, theta_dot, atol=1e-10 * scale)
-        assert rates.damping == damping == 0.0
-        assert rates.sc_scale == pytest.approx(sc_scale, rel=1e-10)
-        assert rates.sigma_min == pytest.approx(sigma_min, rel=1e-10)
-        assert rates.algorithmic == pytest.approx(det, rel=1e-10)
+        assert rates.damping == svd.damping == 0.0
+        assert rates.sc_scale == pytest.approx(svd.sc_scale, rel=1e-10)
+        assert rates.sigma_min == pytest.approx(svd.sigma_min, rel=1e-10)
+        assert rates.algorithmic == pytest.approx(svd.algorithmic, rel=1e-10)

@@ -108,3 +108,15 @@ def test_bad_models_and_inputs_fail_clearly(tmp_path):
     arm = load_fixed_base_model(CONFIG / "planar_3dof.yaml")
     with pytest.raises(InputError, match="finite"):
         FixedBaseState.compute(arm, [0.0, math.nan, 0.0], np.zeros(3))
+
+
+def test_continuous_joint_is_rejected_with_the_part_two_requirement():
+    xml = (
+        "<robot name='c'><link name='base'/><link name='l'><inertial><mass value='1'/>"
+        "<inertia ixx='1' iyy='1' izz='1' ixy='0' ixz='0' iyz='0'/></inertial></link>"
+        "<joint name='spin' type='continuous'><parent link='base'/><child link='l'/>"
+        "<axis xyz='0 0 1'/></joint><link name='tool'/><joint name='t' type='fixed'>"
+        "<parent link='l'/><child link='tool'/></joint></robot>"
+    )
+    with pytest.raises(ModelError, match=r"joint 'spin' is .*; Part II arms need revolute joints"):
+        FixedBaseModel(pin.buildModelFromXML(xml), "tool", name="c")

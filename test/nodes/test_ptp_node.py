@@ -19,7 +19,7 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.analysis.ptp_runs import run_plan
-from rns_ros.control.ptp import plan_ptp
+from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.ptp import PtpNode

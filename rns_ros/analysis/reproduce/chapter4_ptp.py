@@ -31,13 +31,9 @@ from rns_ros.analysis.reproduce.registry import (
     Status,
     register,
 )
-from rns_ros.control.ptp import (
-    PtpPlan,
-    PtpSettings,
-    plan_deployment,
-    plan_partial_deployment,
-    plan_ptp,
-)
+from rns_ros.control.ptp import PtpPlan, PtpSettings
+from rns_ros.control.ptp_phases import plan_deployment, plan_partial_deployment
+from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import FreeFloatingModel, load_model
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.resources import default_model_config

@@ -11,15 +11,18 @@ import yaml
 from geometry_msgs.msg import TwistStamped
 from rns_testing import SHORT_ROLL_SCENARIO
 
-from rns_ros import demo
 from rns_ros.analysis.closed_loop import run_scenario
 from rns_ros.analysis.recorded_run import RunFigures
+from rns_ros.apps import demo
+from rns_ros.apps.demo import main
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import RnsError, load_model
-from rns_ros.demo import DemoRow, main, profile_start
 from rns_ros.harness import TopicLog
 from rns_ros.nodes.simulator import stamp_from_seconds
 from rns_ros.resources import default_model_config
+from rns_ros.runs import inspection
+from rns_ros.runs.inspection import DemoRow, profile_start
+from rns_ros.runs.recorded import robot_arrays
 from rns_ros.viz import paths
 from rns_ros.viz.readback import recording_summary
 
@@ -188,11 +191,11 @@ def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():
         if k % 2 == 0:
             twist.header.stamp = stamp
             logs["commands"]._append(twist)
-    data = demo.robot_arrays(logs, until=0.5)
+    data = robot_arrays(logs, until=0.5)
     assert data["times"][-1] == pytest.approx(0.5)
     assert len(data["times"]) == len(data["angular_momentum"]) == 51
     assert data["command_times"].max() <= 0.5
-    assert len(demo.robot_arrays(logs)["times"]) == 100
+    assert len(robot_arrays(logs)["times"]) == 100
 
 
 def test_conventional_with_wheels_costs_orders_of_magnitude_more_energy(tmp_path):
@@ -243,7 +246,7 @@ def test_demo_refuses_a_scenario_faster_than_the_controller_before_any_run(
 ):
     """Such a scenario used to run: the controller rejected every command and the table came
     out with NaN / inf figures, exit code 0."""
-    monkeypatch.setattr(demo, "Harness", _no_dds)
+    monkeypatch.setattr(inspection, "Harness", _no_dds)
     fast = {**SHORT_ROLL_SCENARIO, "name": "quick_roll", "angle_deg": 180.0, "duration": 2.0}
     scenario = tmp_path / "fast.yaml"
     scenario.write_text(yaml.safe_dump(fast))

@@ -204,14 +204,9 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
             ros_args=ros_args,
         )
 
-        def finished() -> bool:
-            if not len(twists) or not len(errors):
-                return False
-            # the operator's first twist is stamped when its profile starts (sim time)
-            end = _seconds(twists.messages[0].header.stamp) + scenario.duration + 2 * SETTLE
-            return _latest_time(errors) >= end
-
-        done = stack.spin_until(finished, timeout=budget)
+        done = stack.spin_until(
+            lambda: _finished(twists, errors, scenario.duration), timeout=budget
+        )
         wall = time.perf_counter() - start
         values = _status_values(status)
         states = {_state(msg) for msg in status.messages}
@@ -220,12 +215,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 f"{label}: the scenario did not finish within {budget:.0f} s (controller state "
                 f"{values.get('state')}){processes.exit_report()}"
             )
-    failed = sorted(states & set(FAILED_STATES) - {"WAITING_FOR_STATE"})
-    if failed:
-        raise RnsError(
-            f"{label}: rns_force_controller reported {failed} during the run "
-            f"(last: {values.get('state')}, {values.get('detail')})"
-        )
+    _check_states(label, states, values)
     figures = _figures(label, errors, joints, twists)
     return ContactDemoRow(
         method=method,
@@ -239,6 +229,27 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         wall_time_s=wall,
         recording=recording,
     )
+
+
+def _finished(twists: TopicLog, errors: TopicLog, duration: float) -> bool:
+    """The controller's errors reached the end of the task: ``duration`` [s] plus twice the
+    settling time after the operator's first twist."""
+    if not len(twists) or not len(errors):
+        return False
+    # the operator's first twist is stamped when its profile starts (sim time)
+    end = _seconds(twists.messages[0].header.stamp) + duration + 2 * SETTLE
+    return _latest_time(errors) >= end
+
+
+def _check_states(label: str, states: set[str], values: dict[str, str]) -> None:
+    """Raises RnsError when rns_force_controller reported a failed state during the run
+    (``states``; ``values``: its newest status)."""
+    failed = sorted(states & set(FAILED_STATES) - {"WAITING_FOR_STATE"})
+    if failed:
+        raise RnsError(
+            f"{label}: rns_force_controller reported {failed} during the run "
+            f"(last: {values.get('state')}, {values.get('detail')})"
+        )
 
 
 def _start_plant(

@@ -50,7 +50,6 @@ class ToolParser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-# --- shared ROS session ---------------------------------------------------------------------------
 class ToolSession:
     """A private rclpy Context with one hidden node and an executor, torn down in :meth:`close`.
 

@@ -115,7 +115,7 @@ from rns_ros.core import (
 )
 from rns_ros.core.fastmath import has_fast_solve
 from rns_ros.harness import Harness, ProcessStack
-from rns_ros.resources import config_dir, default_model_config
+from rns_ros.resources import config_dir, default_model_config, scenario_path
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 #: Control period = contact simulator step of the force-controller benchmark [s].
@@ -596,7 +596,7 @@ def lockstep(runs: int, domain_id: int) -> None:
     from rns_ros.runs import inspection as demo
 
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    scenario_file = demo.scenario_path("satellite_observation")
+    scenario_file = scenario_path("satellite_observation")
     scenario = load_scenario(scenario_file)
     robot = load_model(default_model_config())
     settle = demo.OPERATOR_ZERO_DURATION + demo.SETTLE

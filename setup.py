@@ -9,7 +9,7 @@ PACKAGE_NAME = "rns_ros"
 # Executables installed into lib/rns_ros/ (so `ros2 run rns_ros <name>` finds them) and, by
 # pip, into the virtualenv's bin/. Add simulator / controller nodes here.
 CONSOLE_SCRIPTS = [
-    "rns_demo = rns_ros.demo:main",
+    "rns_demo = rns_ros.apps.demo:main",
     "rns_simulator = rns_ros.nodes.simulator:main",
     "rns_controller = rns_ros.nodes.controller:main",
     "rns_force_controller = rns_ros.nodes.force_controller:main",
@@ -18,10 +18,10 @@ CONSOLE_SCRIPTS = [
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",
     "rns_operator = rns_ros.nodes.operator:main",
     "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",
-    "rns_observer = rns_ros.observer:main",
-    "rns_param = rns_ros.rostools:param_main",
-    "rns_topic = rns_ros.rostools:topic_main",
-    "rns_reproduce = rns_ros.reproduce:main",
+    "rns_observer = rns_ros.apps.observer:main",
+    "rns_param = rns_ros.apps.param:param_main",
+    "rns_topic = rns_ros.apps.topic:topic_main",
+    "rns_reproduce = rns_ros.apps.reproduce:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

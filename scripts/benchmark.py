@@ -115,7 +115,7 @@ from rns_ros.core import (
 )
 from rns_ros.core.fastmath import has_fast_solve
 from rns_ros.harness import Harness, ProcessStack
-from rns_ros.resources import config_dir, default_model_config
+from rns_ros.resources import config_dir, default_model_config, scenario_path
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 #: Control period = contact simulator step of the force-controller benchmark [s].
@@ -592,10 +592,11 @@ def cratio(workers: int | None) -> None:
 
 def lockstep(runs: int, domain_id: int) -> None:
     """See the module docstring (lockstep)."""
-    from rns_ros import demo  # the demo's own run, as `rns_demo` makes it
+    from rns_ros.apps.demo import parse_args  # the demo's own run, as `rns_demo` makes it
+    from rns_ros.runs import inspection as demo
 
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    scenario_file = demo.scenario_path("satellite_observation")
+    scenario_file = scenario_path("satellite_observation")
     scenario = load_scenario(scenario_file)
     robot = load_model(default_model_config())
     settle = demo.OPERATOR_ZERO_DURATION + demo.SETTLE
@@ -619,7 +620,7 @@ def lockstep(runs: int, domain_id: int) -> None:
         reference = time.perf_counter() - start
         line, deviations = f"{k + 1:>4}{reference:>16.2f}", []
         for name, flag in modes.items():
-            args = demo.parse_args([*common, flag, "--domain-id", str(domain_id)])
+            args = parse_args([*common, flag, "--domain-id", str(domain_id)])
             row = demo.run_method("dls", args, scenario_file)
             factors[name].append(simulated / row.task_wall_s)
             deviations.append(row.figures.max_base_deviation_deg)

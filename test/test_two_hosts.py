@@ -1,7 +1,7 @@
 """Two hosts, simulated with two network namespaces joined by a veth pair (needs root and `ip`).
 
 Namespace A is the robot computer (rns_simulator); namespace B is the operator's computer
-(rns_controller, rns_operator and the link check ``rns_ros.observer``). The only way
+(rns_controller, rns_operator and the link check ``rns_ros.apps.observer``). The only way
 between them is the veth pair. Every process runs the documented two-computer recipe: discovery
 range LOCALHOST (no multicast: discovery goes to 127.0.0.1 and the static peers only) with the
 other namespace's address in ROS_STATIC_PEERS. A control run without the peers shows that
@@ -29,7 +29,7 @@ import pytest
 import yaml
 from rns_testing import SHORT_ROLL_SCENARIO
 
-from rns_ros.observer import static_peer_environment
+from rns_ros.apps.observer import static_peer_environment
 
 DOMAIN = int(os.environ.get("ROS_DOMAIN_ID", "43"))
 #: Private /24 only ever assigned inside our own namespaces (the third octet varies per run).
@@ -184,7 +184,7 @@ def _run(hosts: TwoHosts, scenario: Path, report_file: Path) -> dict:
         _start_robot(hosts, processes, [hosts.addr_b])
         env_b = _environment([hosts.addr_a])
         observer = processes.start(
-            "observer", hosts.b, env_b, "rns_ros.observer", "--scenario", str(scenario),
+            "observer", hosts.b, env_b, "rns_ros.apps.observer", "--scenario", str(scenario),
             "--json", str(report_file), "--wait", "8", "--timeout", "35",
         )  # fmt: skip
         processes.start(
@@ -275,7 +275,7 @@ def test_without_static_peers_nothing_crosses(hosts):
         before = hosts.counters()
         _start_robot(hosts, processes, [])
         observer = processes.start(
-            "observer", hosts.b, _environment([]), "rns_ros.observer", "--wait", "5",
+            "observer", hosts.b, _environment([]), "rns_ros.apps.observer", "--wait", "5",
         )  # fmt: skip
         observer.wait(timeout=30)
         after = hosts.counters()

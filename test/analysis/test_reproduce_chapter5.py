@@ -10,9 +10,9 @@ import math
 import pytest
 from rns_testing import json_finite
 
-from rns_ros import reproduce
 from rns_ros.analysis.reproduce import chapter5, registry
 from rns_ros.analysis.reproduce.registry import Status, run_one
+from rns_ros.apps import reproduce
 
 IDS = ("fig5.1", "fig5.2", "fig5.3")
 KEYS = {

@@ -8,18 +8,17 @@ import os
 
 import pytest
 import yaml
-from geometry_msgs.msg import TwistStamped
 from rns_testing import SHORT_ROLL_SCENARIO
 
-from rns_ros import demo
 from rns_ros.analysis.closed_loop import run_scenario
 from rns_ros.analysis.recorded_run import RunFigures
+from rns_ros.apps import demo
+from rns_ros.apps.demo import main
 from rns_ros.control.scenario import load_scenario
-from rns_ros.core import RnsError, load_model
-from rns_ros.demo import DemoRow, main, profile_start
-from rns_ros.harness import TopicLog
-from rns_ros.nodes.sim_clock import stamp_from_seconds
+from rns_ros.core import load_model
 from rns_ros.resources import default_model_config
+from rns_ros.runs import inspection
+from rns_ros.runs.inspection import DemoRow
 from rns_ros.viz import paths
 from rns_ros.viz.readback import recording_summary
 
@@ -133,68 +132,6 @@ def test_demo_as_fast_as_possible_runs_in_lockstep(tmp_path, turns):
         assert row["final_camera_error_deg"] < 0.15
 
 
-def _twists(samples) -> TopicLog:
-    log = TopicLog("cmd_twist")
-    for stamp, omega in samples:
-        msg = TwistStamped()
-        msg.header.stamp = stamp_from_seconds(stamp)
-        msg.twist.angular.x = omega
-        log.messages.append(msg)
-    return log
-
-
-@pytest.mark.parametrize(
-    ("samples", "start"),
-    [
-        ([(10.78, 0.0), (10.80, 0.01), (10.82, 0.02)], 10.78),  # a profile from rest
-        # the operator waited for a core after its first sample (a rest): the profile moved on
-        # 1.45 s later (rns_operator lead), so the twist of 10.78 is not its start
-        ([(10.78, 0.0), (12.25, 0.01), (12.27, 0.02)], 12.23),
-    ],
-)
-def test_the_profile_starts_a_sample_before_its_first_motion(samples, start):
-    scenario = load_scenario(demo.scenario_path("satellite_observation"))  # quintic: 0 at t = 0
-    assert profile_start(_twists(samples), scenario, 50.0) == pytest.approx(start, abs=1e-9)
-
-
-def test_a_profile_that_starts_moving_starts_at_its_first_twist(tmp_path):
-    path = tmp_path / "step.yaml"
-    path.write_text(yaml.safe_dump({**SHORT_ROLL_SCENARIO, "time_scaling": "constant"}))
-    log = _twists([(3.0, 0.1), (3.02, 0.1)])
-    assert profile_start(log, load_scenario(path), 50.0) == pytest.approx(3.0, abs=1e-9)
-    with pytest.raises(RnsError, match="asks for motion"):
-        profile_start(_twists([(3.0, 0.0)]), load_scenario(path), 50.0)
-
-
-def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():
-    """The run ends SETTLE after the operator on the stamps' clock: samples stamped later (a
-    lockstep run goes on at its own pace while the stack stops) are not part of the figures."""
-    from geometry_msgs.msg import TwistStamped, WrenchStamped
-    from nav_msgs.msg import Odometry
-    from sensor_msgs.msg import JointState
-
-    from rns_ros.harness import TopicLog
-    from rns_ros.nodes.sim_clock import stamp_from_seconds
-
-    logs = {name: TopicLog(name) for name in ("joints", "odom", "momentum", "commands")}
-    for k in range(100):
-        stamp = stamp_from_seconds(0.01 * k)
-        joints = JointState(position=[0.0] * 7, velocity=[0.0] * 7)
-        odom, momentum, twist = Odometry(), WrenchStamped(), TwistStamped()
-        odom.pose.pose.orientation.w = 1.0
-        for msg, name in ((joints, "joints"), (odom, "odom"), (momentum, "momentum")):
-            msg.header.stamp = stamp
-            logs[name]._append(msg)
-        if k % 2 == 0:
-            twist.header.stamp = stamp
-            logs["commands"]._append(twist)
-    data = demo.robot_arrays(logs, until=0.5)
-    assert data["times"][-1] == pytest.approx(0.5)
-    assert len(data["times"]) == len(data["angular_momentum"]) == 51
-    assert data["command_times"].max() <= 0.5
-    assert len(demo.robot_arrays(logs)["times"]) == 100
-
-
 def test_conventional_with_wheels_costs_orders_of_magnitude_more_energy(tmp_path):
     """Thesis chapter 5 over DDS: the conventional controller with rns_attitude_control and
     reaction wheels against reactionless DLS. The Lambda cost (5.12) of the conventional motion
@@ -243,7 +180,7 @@ def test_demo_refuses_a_scenario_faster_than_the_controller_before_any_run(
 ):
     """Such a scenario used to run: the controller rejected every command and the table came
     out with NaN / inf figures, exit code 0."""
-    monkeypatch.setattr(demo, "Harness", _no_dds)
+    monkeypatch.setattr(inspection, "Harness", _no_dds)
     fast = {**SHORT_ROLL_SCENARIO, "name": "quick_roll", "angle_deg": 180.0, "duration": 2.0}
     scenario = tmp_path / "fast.yaml"
     scenario.write_text(yaml.safe_dump(fast))

@@ -1,4 +1,4 @@
-"""rns_demo --scenario wall_contact: the thesis' 7-DoF wall task over DDS, RNS-C against OS-C.
+"""One run of a motion/force scenario over DDS (``rns_demo --scenario wall_contact``): RNS-C, OS-C.
 
 Section 6.2.2 (Figs. 6.7-6.8; docs/part2.md, "Chapter 6 runs"): the LWR4-class arm pushes 10 N
 into a wall through its start flange point and strokes back and forth along it. For each
@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import subprocess
 import time
 from dataclasses import dataclass
 
@@ -42,6 +41,7 @@ from rns_ros.analysis.recorded_contact import ContactRunFigures, contact_run_fig
 from rns_ros.core import ConfigError, RnsError
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
+from rns_ros.runs.logger import start_logger
 from rns_ros.sim.contact import ArcConstraint
 
 #: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
@@ -106,6 +106,14 @@ class ContactDemoRow:
     wall_time_s: float
     recording: str | None
 
+    def checked_figures(self) -> dict[str, float]:
+        """Every figure that must be finite, by name: the recorded run's and the loop's."""
+        return {
+            **{name: getattr(self.figures, name) for name in self.figures.__dataclass_fields__},
+            "core_peak_joint_speed": self.core_peak_joint_speed,
+            "loop_rate_hz": self.loop_rate_hz,
+        }
+
 
 def _status_values(log: TopicLog) -> dict[str, str]:
     latest = log.latest()
@@ -157,12 +165,10 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
     Raises:
         RnsError: bad scenario, the controller stopped the task, or the run did not finish.
     """
-    controller, variant, label = CONTACT_METHODS[method]
+    label = CONTACT_METHODS[method][2]
     path = scenario_path(scenario_name)
     scenario = load_motion_force_scenario(path)
-    setup = scenario.setup
-    core = run_closed_loop(setup, label, dt=CONTACT_STEP)
-    simulator_file, controller_file = (config_dir() / name for name in TASK_PARAMS[scenario.task])
+    core = run_closed_loop(scenario.setup, label, dt=CONTACT_STEP)
     model_config = str(config_dir() / scenario.spec.model)
     timing = {"use_sim_time": True}
     ros_args = list(args.ros_args[1:]) if args.ros_args else []
@@ -178,36 +184,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         recording, _ = start_logger(
             processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
         )
-        # the controller first: it is listening when the first state comes
-        processes.start(
-            "rns_force_controller",
-            {
-                "model_config": model_config,
-                "method": controller,
-                "os_variant": variant,
-                # lockstep: the simulator waits for each torque, so a state can come late when
-                # the 2 cores are busy; the 0.1 s default is for a free-running plant
-                "state_timeout": 1.0,
-                **timing,
-            },
-            params_file=controller_file,
-            ros_args=ros_args,
-        )
-        processes.start(
-            "rns_simulator",
-            {
-                "model_config": model_config,
-                **_environment(setup.constraint),
-                "initial_joint_positions": setup.initial_q.tolist(),
-                "step_size": CONTACT_STEP,
-                "publish_rate": 1.0 / CONTACT_STEP,
-                "real_time_factor": args.real_time_factor,
-                "publish_clock": True,
-                "lockstep_period": CONTACT_STEP,
-            },
-            params_file=simulator_file,
-            ros_args=ros_args,
-        )
+        _start_plant(processes, method, scenario, model_config, args, ros_args)
         budget = 60.0 + 20.0 * scenario.duration
         # the operator only once this process records the running loop: a recorder matched
         # seconds late (discovery on a busy machine) would miss the start of the task
@@ -227,14 +204,9 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
             ros_args=ros_args,
         )
 
-        def finished() -> bool:
-            if not len(twists) or not len(errors):
-                return False
-            # the operator's first twist is stamped when its profile starts (sim time)
-            end = _seconds(twists.messages[0].header.stamp) + scenario.duration + 2 * SETTLE
-            return _latest_time(errors) >= end
-
-        done = stack.spin_until(finished, timeout=budget)
+        done = stack.spin_until(
+            lambda: _finished(twists, errors, scenario.duration), timeout=budget
+        )
         wall = time.perf_counter() - start
         values = _status_values(status)
         states = {_state(msg) for msg in status.messages}
@@ -243,22 +215,8 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 f"{label}: the scenario did not finish within {budget:.0f} s (controller state "
                 f"{values.get('state')}){processes.exit_report()}"
             )
-    failed = sorted(states & set(FAILED_STATES) - {"WAITING_FOR_STATE"})
-    if failed:
-        raise RnsError(
-            f"{label}: rns_force_controller reported {failed} during the run "
-            f"(last: {values.get('state')}, {values.get('detail')})"
-        )
-    columns = _error_columns(errors)
-    task_start = _seconds(twists.messages[0].header.stamp)
-    if columns["time"][0] > task_start:
-        raise RnsError(
-            f"{label}: the recording starts {columns['time'][0] - task_start:.3f} s after the "
-            "task; its figures would miss the start"
-        )
-    figures = contact_run_figures(
-        columns, joints.stamps(), joints.array(lambda m: m.velocity), tail=SETTLE
-    )
+    _check_states(label, states, values)
+    figures = _figures(label, errors, joints, twists)
     return ContactDemoRow(
         method=method,
         label=label,
@@ -270,6 +228,91 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         final_state=values.get("state", "unknown"),
         wall_time_s=wall,
         recording=recording,
+    )
+
+
+def _finished(twists: TopicLog, errors: TopicLog, duration: float) -> bool:
+    """The controller's errors reached the end of the task: ``duration`` [s] plus twice the
+    settling time after the operator's first twist."""
+    if not len(twists) or not len(errors):
+        return False
+    # the operator's first twist is stamped when its profile starts (sim time)
+    end = _seconds(twists.messages[0].header.stamp) + duration + 2 * SETTLE
+    return _latest_time(errors) >= end
+
+
+def _check_states(label: str, states: set[str], values: dict[str, str]) -> None:
+    """Raises RnsError when rns_force_controller reported a failed state during the run
+    (``states``; ``values``: its newest status)."""
+    failed = sorted(states & set(FAILED_STATES) - {"WAITING_FOR_STATE"})
+    if failed:
+        raise RnsError(
+            f"{label}: rns_force_controller reported {failed} during the run "
+            f"(last: {values.get('state')}, {values.get('detail')})"
+        )
+
+
+def _start_plant(
+    processes: ProcessStack,
+    method: str,
+    scenario,
+    model_config: str,
+    args: argparse.Namespace,
+    ros_args: list[str],
+) -> None:
+    """Start rns_force_controller with ``method`` and rns_simulator in contact mode, in lockstep
+    on sim time, with the params files of ``scenario``'s task."""
+    controller, variant, _ = CONTACT_METHODS[method]
+    setup = scenario.setup
+    simulator_file, controller_file = (config_dir() / name for name in TASK_PARAMS[scenario.task])
+    # the controller first: it is listening when the first state comes
+    processes.start(
+        "rns_force_controller",
+        {
+            "model_config": model_config,
+            "method": controller,
+            "os_variant": variant,
+            # lockstep: the simulator waits for each torque, so a state can come late when
+            # the 2 cores are busy; the 0.1 s default is for a free-running plant
+            "state_timeout": 1.0,
+            "use_sim_time": True,
+        },
+        params_file=controller_file,
+        ros_args=ros_args,
+    )
+    processes.start(
+        "rns_simulator",
+        {
+            "model_config": model_config,
+            **_environment(setup.constraint),
+            "initial_joint_positions": setup.initial_q.tolist(),
+            "step_size": CONTACT_STEP,
+            "publish_rate": 1.0 / CONTACT_STEP,
+            "real_time_factor": args.real_time_factor,
+            "publish_clock": True,
+            "lockstep_period": CONTACT_STEP,
+        },
+        params_file=simulator_file,
+        ros_args=ros_args,
+    )
+
+
+def _figures(label: str, errors: TopicLog, joints: TopicLog, twists: TopicLog) -> ContactRunFigures:
+    """The run's figures from the recorded topics, from the task's start (the operator's first
+    twist) on.
+
+    Raises:
+        RnsError: the recording starts after the task.
+    """
+    columns = _error_columns(errors)
+    task_start = _seconds(twists.messages[0].header.stamp)
+    if columns["time"][0] > task_start:
+        raise RnsError(
+            f"{label}: the recording starts {columns['time'][0] - task_start:.3f} s after the "
+            "task; its figures would miss the start"
+        )
+    return contact_run_figures(
+        columns, joints.stamps(), joints.array(lambda m: m.velocity), tail=SETTLE
     )
 
 
@@ -302,87 +345,6 @@ def _state(msg: DiagnosticArray) -> str:
     return next((kv.value for kv in msg.status[0].values if kv.key == "state"), "unknown")
 
 
-def start_logger(
-    processes: ProcessStack,
-    name: str,
-    args: argparse.Namespace,
-    model_config: str | None = None,
-    *,
-    sim_time: bool = True,
-    ros_args: list[str] | None = None,
-) -> tuple[str | None, subprocess.Popen | None]:
-    """``rns_rerun_logger`` as a process writing ``<output>/<name>.rrd``, or a live viewer:
-    (the .rrd path or None for the viewer, the process); (None, None) with ``--no-record``.
-    ``model_config``: None for the default model; ``ros_args``: the run's ROS arguments
-    (remaps of the whole stack)."""
-    if args.no_record:
-        return None, None
-    args.output.mkdir(parents=True, exist_ok=True)
-    path = (args.output / f"{name}.rrd").resolve()
-    sink = "spawn" if args.viewer else "save"
-    process = processes.start(
-        "rns_rerun_logger",
-        {
-            "sink": sink,
-            "rrd_path": str(path),
-            "recording_name": name,
-            **({"model_config": model_config} if model_config else {}),
-            "use_sim_time": sim_time,
-        },
-        ros_args=ros_args or [],
-    )
-    return (str(path) if sink == "save" else None), process
-
-
 def _latest_time(errors: TopicLog) -> float:
     latest = errors.latest()
     return latest.data[0] if latest is not None and latest.data else -math.inf
-
-
-def format_contact_table(rows: list[ContactDemoRow]) -> str:
-    """One line per controller: errors, joint speeds (DDS and in-process), loop timing."""
-    header = (
-        f"{'controller':<16}{'max pos err [mm]':>18}{'max |f err| [N]':>17}{'held [N]':>10}"
-        f"{'peak |θ̇| [rad/s]':>18}{'in-process':>12}{'final |θ̇|':>11}{'loop [Hz]':>11}"
-        f"{'step med/p99 [µs]':>19}{'wall [s]':>10}"
-    )
-    lines = [header, "-" * len(header)]
-    for row in rows:
-        f = row.figures
-        lines.append(
-            f"{row.label:<16}{1e3 * f.max_position_error_m:>18.4f}{f.max_force_error_n:>17.3g}"
-            f"{f.held_force_error_n:>10.3g}{f.peak_joint_speed:>18.3f}"
-            f"{row.core_peak_joint_speed:>12.3f}{f.final_joint_speed:>11.2g}"
-            f"{row.loop_rate_hz:>11.0f}"
-            f"{f'{row.step_time_median_us:.0f}/{row.step_time_p99_us:.0f}':>19}"
-            f"{row.wall_time_s:>10.1f}"
-        )
-    return "\n".join(lines)
-
-
-def non_finite_contact_figures(rows: list[ContactDemoRow]) -> list[str]:
-    """One text per run with a NaN or infinite figure; empty when all are finite."""
-    problems = []
-    for row in rows:
-        values = {
-            **{name: getattr(row.figures, name) for name in row.figures.__dataclass_fields__},
-            "core_peak_joint_speed": row.core_peak_joint_speed,
-            "loop_rate_hz": row.loop_rate_hz,
-        }
-        bad = [f"{name} = {value}" for name, value in values.items() if not math.isfinite(value)]
-        if bad:
-            problems.append(f"{row.label}: " + ", ".join(bad))
-    return problems
-
-
-__all__ = [
-    "CONTACT_METHODS",
-    "CONTACT_SCENARIOS",
-    "DEFAULT_CONTACT_METHODS",
-    "ContactDemoRow",
-    "contact_epilogue",
-    "format_contact_table",
-    "is_contact_scenario",
-    "non_finite_contact_figures",
-    "run_contact_method",
-]

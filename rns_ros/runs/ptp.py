@@ -1,4 +1,4 @@
-"""rns_demo --scenario ptp_three_phase: the thesis' point-to-point motion over DDS, four planners.
+"""One run of the thesis' point-to-point motion over DDS (``rns_demo --scenario ptp_three_phase``).
 
 The §4.4 task (Table 4.2): the arm moves from [-20 -40 0 -60 180 180 0] deg to
 [-120 50 0 -60 180 180 0] deg. For each planner of ``rns_ptp`` (``three_phase``, ``joint_space``
@@ -9,7 +9,8 @@ goal as a ghost arm and the phases plotted). The goal is published once on ``ptp
 ends when ``rns_ptp`` reports DONE. The table gives, per method, the largest base attitude
 deviation from ``base_odom`` (geodesic angle of R_b(0)^T R_b(t), A-0.1), its ratio to the 3-phase
 method, the thesis' values (its arm geometry differs: compare the ranking, not the degrees), the
-final joint error, the planned duration and the folds the reactionless phases reached.
+final joint error, the planned duration and the folds the reactionless phases reached
+(:func:`rns_ros.runs.report.format_ptp_table`).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
-from rns_ros.analysis.reproduce.chapter4_ptp import FINAL_DEG, INITIAL_DEG, THESIS_TABLE
+from rns_ros.analysis.reproduce.chapter4_ptp import FINAL_DEG, INITIAL_DEG
 from rns_ros.core import RnsError
 from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.integration import attitude_deviation
@@ -32,6 +33,7 @@ from rns_ros.core.state import FreeFloatingState
 from rns_ros.harness import Harness, TopicLog
 from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.runs.logger import add_logger
 
 #: rns_ptp methods in Table 4.2 order, with the thesis' labels.
 PTP_METHODS = {
@@ -96,16 +98,24 @@ class PtpDemoRow:
     wall_time_s: float
     recording: str | None
 
+    def checked_figures(self) -> dict[str, float]:
+        """Every figure that must be finite, by name (no camera error: 0)."""
+        return {
+            "max_base_deviation_deg": self.max_base_deviation_deg,
+            "final_joint_error_deg": self.final_joint_error_deg,
+            "max_joint_speed": self.max_joint_speed,
+            "duration_s": self.duration_s,
+            "final_camera_error_m": self.final_camera_error_m or 0.0,
+        }
+
 
 def _values(msg: DiagnosticArray) -> dict[str, str]:
     return {kv.key: kv.value for kv in msg.status[0].values} if msg.status else {}
 
 
-def run_ptp_method(
-    method: str, scenario: PtpScenario, args: argparse.Namespace, add_logger
-) -> PtpDemoRow:
+def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace) -> PtpDemoRow:
     """One DDS run: simulator at ``scenario.start``, rns_ptp with ``method``, goal once, until
-    DONE. ``add_logger(stack, name, timing)`` adds the rerun logger and returns its file or None.
+    DONE; with the rerun logger unless ``--no-record``.
 
     Raises:
         RnsError: rns_ptp rejected the goal, lost the state, or did not finish in time.
@@ -117,7 +127,7 @@ def run_ptp_method(
         joints = stack.record(JointState, "joint_states")
         odom = stack.record(Odometry, "base_odom")
         status = stack.record(DiagnosticArray, "rns_ptp/status")
-        recording = None if args.no_record else add_logger(stack, method, timing)
+        recording = None if args.no_record else add_logger(stack, method, args, timing)
         stack.add(
             SimulatorNode,
             {
@@ -159,16 +169,9 @@ def run_ptp_method(
         stack.spin_for(SETTLE)
         robot = ptp.robot
     deviation, error, speed = _figures(joints, odom, np.array(scenario.goal))
-    camera_error = None
-    if target is not None:
-        pose = odom.latest().pose.pose
-        q = robot.configuration(
-            joints.latest().position,
-            [pose.position.x, pose.position.y, pose.position.z],
-            [pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w],
-        )
-        camera = FreeFloatingState.compute(robot, q).camera.position
-        camera_error = float(np.linalg.norm(camera - np.asarray(target)))
+    camera_error = (
+        None if target is None else _camera_error(robot, joints, odom, np.asarray(target))
+    )
     return PtpDemoRow(
         method=method,
         label=PTP_METHODS[method],
@@ -198,44 +201,13 @@ def _figures(joints: TopicLog, odom: TopicLog, goal: np.ndarray) -> tuple[float,
     return math.degrees(deviation), error, float(np.abs(velocities).max())
 
 
-def format_ptp_table(rows: list[PtpDemoRow]) -> str:
-    """Table 4.2 style: deviation and ratio to the 3-phase run, next to the thesis'."""
-    reference = next((r.max_base_deviation_deg for r in rows if r.method == "three_phase"), None)
-    thesis_reference = THESIS_TABLE["3-phase"]
-    header = (
-        f"{'method':<10}{'max base dev [deg]':>20}{'ratio':>8}{'thesis [deg]':>14}"
-        f"{'thesis ratio':>14}{'end error':>16}{'max |θ̇| [rad/s]':>18}{'T [s]':>8}"
-        f"{'wall [s]':>10}  folds reached (θ4)"
+def _camera_error(robot, joints: TopicLog, odom: TopicLog, target: np.ndarray) -> float:
+    """Distance of the camera at the end (last joint angles and base pose) from ``target`` [m]."""
+    pose = odom.latest().pose.pose
+    q = robot.configuration(
+        joints.latest().position,
+        [pose.position.x, pose.position.y, pose.position.z],
+        [pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w],
     )
-    lines = [header, "-" * len(header)]
-    for row in rows:
-        ratio = row.max_base_deviation_deg / reference if reference else math.nan
-        thesis = THESIS_TABLE[row.label]
-        if row.final_camera_error_m is None:
-            end = f"{row.final_joint_error_deg:.2g} deg"
-        else:
-            end = f"{1e3 * row.final_camera_error_m:.3g} mm cam"
-        lines.append(
-            f"{row.label:<10}{row.max_base_deviation_deg:>20.4f}{ratio:>8.2f}{thesis:>14.2f}"
-            f"{thesis / thesis_reference:>14.2f}{end:>16}"
-            f"{row.max_joint_speed:>18.3f}{row.duration_s:>8.2f}{row.wall_time_s:>10.1f}"
-            f"  {row.fold_reached}"
-        )
-    return "\n".join(lines)
-
-
-def non_finite_ptp_figures(rows: list[PtpDemoRow]) -> list[str]:
-    """One text per run with a NaN or infinite figure; empty when all are finite."""
-    problems = []
-    for row in rows:
-        values = {
-            "max_base_deviation_deg": row.max_base_deviation_deg,
-            "final_joint_error_deg": row.final_joint_error_deg,
-            "max_joint_speed": row.max_joint_speed,
-            "duration_s": row.duration_s,
-            "final_camera_error_m": row.final_camera_error_m or 0.0,
-        }
-        bad = [f"{name} = {value}" for name, value in values.items() if not math.isfinite(value)]
-        if bad:
-            problems.append(f"{row.label}: " + ", ".join(bad))
-    return problems
+    camera = FreeFloatingState.compute(robot, q).camera.position
+    return float(np.linalg.norm(camera - target))

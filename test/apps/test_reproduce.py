@@ -8,11 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from rns_ros import reproduce
 from rns_ros.analysis.reproduce import registry
 from rns_ros.analysis.reproduce.registry import Comparison, Outcome, Reproduction, Status
+from rns_ros.apps import reproduce
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 EXECUTABLE = REPO / ".venv" / "bin" / "rns_reproduce"
 
 

@@ -17,9 +17,10 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
 from rns_ros.control.contact_topics import CONTACT_LABELS
-from rns_ros.demo_contact import format_contact_table, run_contact_method
 from rns_ros.harness import Harness, ProcessStack
 from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE
+from rns_ros.runs.contact import run_contact_method
+from rns_ros.runs.report import format_contact_table
 
 DOMAIN = 47
 #: One stroke of the wall task (2.5 s, 10 N): the shipped file with strokes = 1.

@@ -1,8 +1,8 @@
 """Link check for a split set-up: watch the robot over DDS from the operator's computer.
 
 ``rns_observer [--scenario NAME|FILE] [--json report.json] [--ros-args -r FROM:=TO]`` (also
-``python -m rns_ros.observer``, or ``ros2 run rns_ros rns_observer`` on a ROS install) joins the
-ROS domain of its environment (``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE``,
+``python -m rns_ros.apps.observer``, or ``ros2 run rns_ros rns_observer`` on a ROS install) joins
+the ROS domain of its environment (``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE``,
 ``ROS_STATIC_PEERS`` are used as given, unlike :class:`rns_ros.harness.Harness`, which forces
 localhost), records what the robot side publishes (``joint_states``, ``base_odom``,
 ``momentum``) and what the operator side sends (``cmd_twist``, ``joint_references``), and writes
@@ -49,9 +49,9 @@ from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_ar
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError, RnsError, load_model
 from rns_ros.core.state import FreeFloatingState
-from rns_ros.demo import robot_arrays
 from rns_ros.harness import RECORD_QOS, TopicLog, ros_environment
 from rns_ros.resources import default_model_config, scenario_path
+from rns_ros.runs.recorded import robot_arrays
 
 #: Topics recorded: report key -> (message type, topic name).
 TOPICS = {

@@ -1,5 +1,5 @@
-"""rns_ros.observer: argument errors are reported before any waiting (the DDS part is covered by
-test_two_hosts.py)."""
+"""rns_ros.apps.observer: argument errors are reported before any waiting (the DDS part is
+covered by test_two_hosts.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import sys
 import pytest
 from sensor_msgs.msg import JointState
 
-from rns_ros import observer
+from rns_ros.apps import observer
 from rns_ros.harness import Harness, TopicLog, ros_environment
 from rns_ros.nodes.simulator import SimulatorNode
 
@@ -34,7 +34,7 @@ def test_remapped_robot_topics_are_watched(tmp_path):
     operator's computer."""
     report_file = tmp_path / "report.json"
     command = [
-        sys.executable, "-m", "rns_ros.observer", "--wait", "15", "--duration", "1.0",
+        sys.executable, "-m", "rns_ros.apps.observer", "--wait", "15", "--duration", "1.0",
         "--json", str(report_file),
         "--ros-args", "-r", "joint_states:=arm/joint_states", "-r", "base_odom:=arm/base_odom",
     ]  # fmt: skip

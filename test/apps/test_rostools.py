@@ -1,4 +1,4 @@
-"""rns_param / rns_topic (rns_ros.rostools): ros2 param / ros2 topic without ros2cli.
+"""rns_param / rns_topic (rns_ros.apps.param, .topic): ros2 param / ros2 topic without ros2cli.
 
 The controller runs in this process in a Harness spun by a background thread; the tools' main()
 is called in the main thread (their own Context, joining the domain of the environment, as the
@@ -20,7 +20,7 @@ from types import SimpleNamespace
 import pytest
 
 DOMAIN_ID = 72
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 BIN = Path(sys.executable).parent
 ENV = {
     "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
@@ -90,7 +90,7 @@ def _run(capsys, main, *argv: str) -> tuple[int, str, str]:
 
 # --- rns_param -----------------------------------------------------------------------------------
 def test_set_changes_the_controller_method_and_get_round_trips(stack, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     code, out, err = _run(capsys, param_main, "set", "/rns_controller", "method", "sc")
     assert (code, out.strip(), err) == (0, "Set parameter successful", "")
@@ -108,7 +108,7 @@ def test_set_changes_the_controller_method_and_get_round_trips(stack, capsys):
 
 
 def test_set_refuses_an_invalid_value_with_the_controllers_reason(stack, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     before = stack.node.get_parameter("method").value
     code, out, _ = _run(capsys, param_main, "set", "/rns_controller", "method", "foo")
@@ -125,7 +125,7 @@ def test_set_refuses_an_invalid_value_with_the_controllers_reason(stack, capsys)
 
 
 def test_set_types_values_like_ros2_param(stack, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     # an integer for a double parameter is sent as a double (ros2 param would be refused)
     code, out, _ = _run(capsys, param_main, "set", "/rns_controller", "epsilon", "1")
@@ -141,7 +141,7 @@ def test_set_types_values_like_ros2_param(stack, capsys):
 def test_parse_parameter_value():
     from rcl_interfaces.msg import ParameterType as T
 
-    from rns_ros.rostools import parse_parameter_value as parse
+    from rns_ros.apps.param import parse_parameter_value as parse
 
     assert parse("true").type == T.PARAMETER_BOOL
     assert parse("3").integer_value == 3
@@ -158,7 +158,7 @@ def test_parse_parameter_value():
 
 
 def test_describe_shows_range_constraints_and_read_only(stack, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     code, out, err = _run(capsys, param_main, "describe", "/rns_controller", "epsilon", "method")
     assert code == 0, err
@@ -179,7 +179,7 @@ def test_describe_shows_range_constraints_and_read_only(stack, capsys):
 
 
 def test_list_names_the_parameters(stack, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     code, out, _ = _run(capsys, param_main, "list", "/rns_controller")
     assert code == 0
@@ -197,7 +197,7 @@ def test_list_names_the_parameters(stack, capsys):
 
 
 def test_missing_node_and_parameter_are_one_line_exit_1(stack, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     start = time.monotonic()
     code, out, err = _run(capsys, param_main, "get", "/nobody", "x", "--timeout", "0.5")
@@ -225,7 +225,7 @@ def test_missing_node_and_parameter_are_one_line_exit_1(stack, capsys):
     ],
 )
 def test_bad_usage_is_one_line_exit_2(argv, capsys):
-    from rns_ros.rostools import param_main
+    from rns_ros.apps.param import param_main
 
     code, out, err = _run(capsys, param_main, *argv)
     assert code == 2
@@ -236,7 +236,7 @@ def test_bad_usage_is_one_line_exit_2(argv, capsys):
 
 # --- rns_topic -----------------------------------------------------------------------------------
 def test_topic_list_shows_names_and_types(stack, capsys):
-    from rns_ros.rostools import topic_main
+    from rns_ros.apps.topic import topic_main
 
     code, out, _ = _run(capsys, topic_main, "list")
     assert code == 0
@@ -246,7 +246,7 @@ def test_topic_list_shows_names_and_types(stack, capsys):
 def test_echo_once_prints_the_controller_status_as_yaml(stack, capsys):
     import yaml
 
-    from rns_ros.rostools import topic_main
+    from rns_ros.apps.topic import topic_main
 
     code, out, err = _run(capsys, topic_main, "echo", "/rns_controller/status", "--once")
     assert code == 0, err
@@ -260,7 +260,7 @@ def test_echo_once_prints_the_controller_status_as_yaml(stack, capsys):
 
 
 def test_echo_count(stack, capsys):
-    from rns_ros.rostools import topic_main
+    from rns_ros.apps.topic import topic_main
 
     code, out, _ = _run(capsys, topic_main, "echo", "rns_rostools_test", "--count", "3")
     assert code == 0
@@ -272,7 +272,7 @@ def test_echo_gets_a_latched_message_published_before_it_started(stack, capsys):
     from rclpy.qos import DurabilityPolicy, QoSProfile
     from std_msgs.msg import String
 
-    from rns_ros.rostools import topic_main
+    from rns_ros.apps.topic import topic_main
 
     latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
     publisher = stack.probe.create_publisher(String, "rns_rostools_latched", latched)
@@ -285,7 +285,7 @@ def test_echo_gets_a_latched_message_published_before_it_started(stack, capsys):
 def test_message_to_dict_truncates_like_ros2():
     from sensor_msgs.msg import JointState
 
-    from rns_ros.rostools import message_to_dict
+    from rns_ros.apps.topic import message_to_dict
 
     msg = JointState(name=["a"] * 200, position=[0.5] * 3)
     full = message_to_dict(msg, truncate=None)
@@ -297,7 +297,7 @@ def test_message_to_dict_truncates_like_ros2():
 
 
 def test_hz_measures_a_50_hz_publisher(stack, capsys):
-    from rns_ros.rostools import topic_main
+    from rns_ros.apps.topic import topic_main
 
     code, out, err = _run(
         capsys, topic_main, "hz", "/rns_rostools_test", "--duration", "3.2", "--window", "100"
@@ -310,7 +310,7 @@ def test_hz_measures_a_50_hz_publisher(stack, capsys):
 
 
 def test_missing_topic_is_one_line_exit_1(stack, capsys):
-    from rns_ros.rostools import topic_main
+    from rns_ros.apps.topic import topic_main
 
     code, out, err = _run(capsys, topic_main, "echo", "/no_such_topic", "--timeout", "0.3")
     assert code == 1
@@ -320,7 +320,7 @@ def test_missing_topic_is_one_line_exit_1(stack, capsys):
 
 
 def test_rate_stats():
-    from rns_ros.rostools import RateStats
+    from rns_ros.apps.topic import RateStats
 
     stats = RateStats(window=3)
     assert stats.summary() is None

@@ -9,14 +9,16 @@ import os
 import numpy as np
 import pytest
 
-from rns_ros import demo, demo_ptp
 from rns_ros.analysis.ptp_runs import run_plan
+from rns_ros.apps import demo
+from rns_ros.apps.demo import main
 from rns_ros.control.ptp import PtpSettings
 from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import load_model
-from rns_ros.demo import main
-from rns_ros.demo_ptp import PTP_SCENARIOS, PtpDemoRow, PtpScenario, format_ptp_table
 from rns_ros.resources import default_model_config
+from rns_ros.runs import ptp
+from rns_ros.runs.ptp import PTP_SCENARIOS, PtpDemoRow, PtpScenario
+from rns_ros.runs.report import format_ptp_table
 
 DOMAIN = os.environ.setdefault("ROS_DOMAIN_ID", "43")
 #: A short JS-C / 3-phase task: theta_4 starts near -180 deg so the reactionless folds are short.
@@ -31,7 +33,7 @@ SHORT = PtpScenario(
 def _row(method: str, deviation: float, **changes) -> PtpDemoRow:
     values = {
         "method": method,
-        "label": demo_ptp.PTP_METHODS[method],
+        "label": ptp.PTP_METHODS[method],
         "max_base_deviation_deg": deviation,
         "final_joint_error_deg": 0.01,
         "final_camera_error_m": None,
@@ -81,7 +83,7 @@ def test_methods_are_checked_against_the_scenario(argv, message, capsys):
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf])
 def test_non_finite_figures_fail_the_run(monkeypatch, capsys, tmp_path, bad):
-    def fake(method, _scenario, _args, _add_logger):
+    def fake(method, _scenario, _args):
         return _row(method, bad if method == "joint_space" else 1.0)
 
     monkeypatch.setattr(demo, "run_ptp_method", fake)

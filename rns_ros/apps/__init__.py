@@ -1,0 +1,2 @@
+"""The programs of rns_ros (rns_demo, rns_observer, rns_reproduce, rns_param, rns_topic): argument
+parsing and output around the libraries. The ROS 2 node executables live in :mod:`rns_ros.nodes`."""

@@ -1,0 +1,292 @@
+"""rns_demo: the thesis' scenarios over real DDS, each method on a fresh stack, in one table.
+
+An inspection scenario (default ``satellite_observation``: reactionless ``dls`` and ``sc``
+against ``conventional``; :mod:`rns_ros.runs.inspection`), the point-to-point task
+(``--scenario ptp_three_phase``: rns_ptp's 3-phase method against JS-C / IJ-C / TJ-C;
+:mod:`rns_ros.runs.ptp`) or a motion/force scenario (``--scenario wall_contact``: RNS-C against
+OS-C; :mod:`rns_ros.runs.contact`). The table of the recorded figures
+(:mod:`rns_ros.runs.report`) is printed; ``--summary PATH`` writes it as JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+
+from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
+from rns_ros.core import RnsError
+from rns_ros.resources import default_model_config, scenario_path
+from rns_ros.runs.contact import (
+    CONTACT_METHODS,
+    CONTACT_SCENARIOS,
+    DEFAULT_CONTACT_METHODS,
+    contact_epilogue,
+    is_contact_scenario,
+    run_contact_method,
+)
+from rns_ros.runs.inspection import (
+    DEFAULT_METHODS,
+    MAX_SIM_STEP,
+    METHODS,
+    MIN_SIM_STEP,
+    check_scenarios,
+    run_method,
+)
+from rns_ros.runs.ptp import PTP_METHODS, PTP_SCENARIOS, PtpScenario, run_ptp_method
+from rns_ros.runs.report import (
+    contact_summary,
+    format_contact_table,
+    format_ptp_table,
+    format_spread,
+    format_table,
+    inspection_summary,
+    non_finite_figures,
+)
+
+ETS_VII_ALLOWED_DEVIATION_DEG = 0.05  # thesis chapter 4, footnote 1
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    argv, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
+    parser = _parser()
+    args = parser.parse_args(argv)
+    args.ros_args = ros_args
+    _check(parser, args)
+    return args
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rns_demo",
+        usage="%(prog)s [options] [--ros-args -p NAME:=VALUE --params-file FILE -r FROM:=TO]",
+        epilog="--ros-args apply to every node of every run (e.g. -p wrist_gain:=10.0, "
+        "-r joint_states:=arm/joint_states); the demo's own settings (method, rate, scenario "
+        "angles) win where they overlap.",
+        description="Thesis satellite-observation scenario over DDS (simulator + controller + "
+        "scripted operator + rerun recording): reactionless DLS and SC vs the conventional "
+        "baseline, compared in one table.",
+    )
+    parser.add_argument(
+        "--scenario",
+        default="satellite_observation",
+        help="inspection scenario name or YAML file, a point-to-point scenario "
+        f"({', '.join(PTP_SCENARIOS)}: rns_ptp instead of rns_controller), or a motion/force "
+        f"scenario ({', '.join(CONTACT_SCENARIOS)}: contact simulator + rns_force_controller)",
+    )
+    parser.add_argument(
+        "--methods",
+        default=None,
+        help=f"comma-separated; inspection: from {list(METHODS)} (default "
+        f"{','.join(DEFAULT_METHODS)}); point-to-point: from {list(PTP_METHODS)} (default all); "
+        f"motion/force: from {list(CONTACT_METHODS)} (default "
+        f"{','.join(DEFAULT_CONTACT_METHODS)})",
+    )
+    parser.add_argument("--mode", choices=("kinematic", "dynamic"), default="kinematic")
+    parser.add_argument("--rate", type=float, default=100.0, help="controller rate [Hz]")
+    parser.add_argument(
+        "--real-time-factor",
+        type=float,
+        default=1.0,
+        help="simulated s per wall s; other than 1 runs on sim time (/clock); 0 = as fast as "
+        "possible",
+    )
+    parser.add_argument(
+        "--output-lead",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="off real time: the controller stamps each output one period after its tick, so "
+        "simulator and controller compute side by side on two cores (default; about 1.6x "
+        "faster than in turn; a twist acts one period later); --no-output-lead: in turn",
+    )
+    parser.add_argument(
+        "--sim-step",
+        type=float,
+        default=None,
+        help="inspection: rns_simulator's RK4 step [s], a divisor of the control period in "
+        f"[{MIN_SIM_STEP:g}, {MAX_SIM_STEP:g}]; default 1 ms, but one control period off real "
+        "time in kinematic mode without wheels (the joint rate is held over the period, so one "
+        "RK4 step gives the same figures, ten times cheaper)",
+    )
+    parser.add_argument(
+        "--output", type=Path, default=Path("rns_demo_recordings"), help="folder for .rrd files"
+    )
+    parser.add_argument("--no-record", action="store_true", help="no rerun recording")
+    parser.add_argument("--viewer", action="store_true", help="live rerun viewer (needs display)")
+    parser.add_argument("--summary", type=Path, default=None, help="also write the table as JSON")
+    parser.add_argument(
+        "--runs",
+        type=int,
+        default=1,
+        help="inspection scenarios: run every method this many times and add the min / median "
+        "/ max of the base deviation (in --summary too); [1, 100]",
+    )
+    add_domain_id_argument(parser, 42, "of the runs")
+    return parser
+
+
+def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``--methods`` as a list of the scenario's methods; every option within its range, else a
+    usage error (exit code 2)."""
+    if args.scenario in PTP_SCENARIOS:
+        allowed, default = list(PTP_METHODS), list(PTP_METHODS)
+    elif is_contact_scenario(args.scenario):
+        allowed, default = list(CONTACT_METHODS), list(DEFAULT_CONTACT_METHODS)
+    else:
+        allowed, default = METHODS, DEFAULT_METHODS
+    text = ",".join(default) if args.methods is None else args.methods
+    args.methods = [m.strip() for m in text.split(",") if m.strip()]
+    unknown = [m for m in args.methods if m not in allowed]
+    if unknown or not args.methods:
+        parser.error(f"--methods for {args.scenario} must be a comma-separated subset of {allowed}")
+    if not 1.0 <= args.rate <= 1000.0:
+        parser.error(f"--rate must be in [1, 1000] Hz, got {args.rate}")
+    if not 0.0 <= args.real_time_factor <= 1000.0:
+        parser.error(f"--real-time-factor must be in [0, 1000], got {args.real_time_factor}")
+    if not 1 <= args.runs <= 100:
+        parser.error(f"--runs must be in [1, 100], got {args.runs}")
+    if args.sim_step is not None:
+        substeps = 1.0 / (args.rate * args.sim_step)
+        if (
+            not MIN_SIM_STEP <= args.sim_step <= MAX_SIM_STEP
+            or abs(substeps - round(substeps)) > 1e-6
+        ):
+            parser.error(
+                f"--sim-step must divide the control period 1/rate = {1.0 / args.rate:g} s and lie "
+                f"in [{MIN_SIM_STEP:g}, {MAX_SIM_STEP:g}] s, got {args.sim_step:g}"
+            )
+    if args.runs > 1 and (args.scenario in PTP_SCENARIOS or is_contact_scenario(args.scenario)):
+        parser.error("--runs is for the inspection scenarios")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Exit code 2 with one line on stderr for bad options or configuration; 0 after Ctrl-C."""
+    return run_main("rns_demo", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
+    args = parse_args(argv)
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if args.scenario in PTP_SCENARIOS:
+        return _main_ptp(args, PTP_SCENARIOS[args.scenario])
+    if is_contact_scenario(args.scenario):
+        return _main_contact(args)
+    return _main_inspection(args)
+
+
+def _main_inspection(args: argparse.Namespace) -> int:
+    try:
+        scenario_file = scenario_path(args.scenario)
+        (scenario,) = check_scenarios([scenario_file])
+    except RnsError as exc:
+        print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
+        return 2
+    print(f"scenario: {scenario_file} ({scenario.description})")
+    print(
+        f"model: {default_model_config()}; {args.mode} simulation, controller at "
+        f"{args.rate:g} Hz, real-time factor {args.real_time_factor:g}, "
+        f"ROS domain {args.domain_id} (localhost only)\n",
+        flush=True,
+    )
+    runs = []
+    for run in range(args.runs):
+        label = f" (run {run + 1} of {args.runs})" if args.runs > 1 else ""
+        rows = _run_methods(args, lambda method: run_method(method, args, scenario_file), label)
+        if rows is None:
+            return 2
+        runs.append(rows)
+    table = format_table(runs[-1])
+    if args.runs > 1:
+        table += "\n\n" + format_spread(runs)
+    return _report(
+        args,
+        runs[-1],
+        table,
+        [problem for rows in runs for problem in non_finite_figures(rows)],
+        f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
+        inspection_summary(runs),
+    )
+
+
+def _run_methods(args: argparse.Namespace, run: Callable, label: str = "") -> list | None:
+    """``run(method)`` for each of ``--methods`` in turn, announced (``label`` after the method);
+    None, the error on stderr, when one fails."""
+    rows = []
+    try:
+        for method in args.methods:
+            print(f"running {method}{label} ...", flush=True)
+            rows.append(run(method))
+    except RnsError as exc:
+        print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
+        return None
+    return rows
+
+
+def _report(args, rows, table: str, problems: list[str], epilogue: str, summary: list) -> int:
+    """The end of every demo: the table; exit 1 on non-finite figures (a run that produced NaN
+    / inf failed, whatever the table shows); else the epilogue, the recordings and the JSON
+    ``summary`` to ``--summary``."""
+    print()
+    print(table)
+    if problems:
+        print(f"rns_demo: non-finite figures: {'; '.join(problems)}", file=sys.stderr)
+        return 1
+    print(f"\n{epilogue}")
+    recordings = [row.recording for row in rows if row.recording]
+    if recordings:
+        print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
+    if args.summary:
+        args.summary.write_text(json.dumps(summary, indent=2) + "\n")
+        print(f"summary written to {args.summary}")
+    return 0
+
+
+def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
+    print(f"scenario: {scenario.name} ({scenario.description})")
+    print(
+        f"model: {default_model_config()}; {args.mode} simulation, rns_ptp at {args.rate:g} Hz, "
+        f"real-time factor {args.real_time_factor:g}, ROS domain {args.domain_id} "
+        "(localhost only)\n",
+        flush=True,
+    )
+    rows = _run_methods(args, lambda method: run_ptp_method(method, scenario, args))
+    if rows is None:
+        return 2
+    return _report(
+        args,
+        rows,
+        format_ptp_table(rows),
+        non_finite_figures(rows),
+        "ratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
+        "not printed (ours is identified, docs/arm_identification.md): compare the ranking.",
+        [asdict(row) for row in rows],
+    )
+
+
+def _main_contact(args: argparse.Namespace) -> int:
+    print(f"scenario: {scenario_path(args.scenario)} (thesis Part II, chapter 6)")
+    print(
+        "contact simulation at 1 kHz in lockstep with "
+        f"rns_force_controller, real-time factor {args.real_time_factor:g}, ROS domain "
+        f"{args.domain_id} (localhost only)\n",
+        flush=True,
+    )
+    rows = _run_methods(args, lambda method: run_contact_method(method, args.scenario, args))
+    if rows is None:
+        return 2
+    return _report(
+        args,
+        rows,
+        format_contact_table(rows),
+        non_finite_figures(rows),
+        contact_epilogue(args.scenario),
+        contact_summary(rows),
+    )
+
+
+if __name__ == "__main__":
+    sys.exit(main())

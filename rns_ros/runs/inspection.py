@@ -1,0 +1,382 @@
+"""One run of an inspection scenario over DDS: a method on a fresh stack of node processes.
+
+For each method (reactionless ``dls``, ``sc``, ``pinv``, ``conventional``, or
+``conventional+wheels``) a launch-free stack runs on its own domain, localhost only, each node
+as its own process (:class:`rns_ros.harness.ProcessStack`, as ``ros2 run`` starts them):
+``rns_simulator`` starting from the scenario's joint angles, ``rns_controller`` with that
+method, ``rns_operator`` playing the scenario file, and ``rns_rerun_logger`` recording one
+``.rrd`` per run (or a live viewer); this process records the topics
+(:class:`rns_ros.harness.Harness`), from which :mod:`rns_ros.analysis.recorded_run` computes
+the figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from rns_ros.analysis.recorded_run import RunFigures, run_figures
+from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
+from rns_ros.core import RnsError, load_model
+from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
+from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
+from rns_ros.resources import default_model_config
+from rns_ros.runs.logger import start_logger
+from rns_ros.runs.recorded import EnergyFigures, energy_figures, robot_arrays
+
+#: ``conventional+wheels``: the conventional controller with rns_attitude_control holding the
+#: base with reaction wheels (thesis chapter 5's comparison); the simulator gets wheels.
+WHEELS_SUFFIX = "+wheels"
+METHODS = ("dls", "sc", "pinv", "conventional", "conventional+wheels")
+DEFAULT_METHODS = ("dls", "sc", "conventional")
+#: Settling time after the operator's zeros before the run ends [s], on the run's clock (sim
+#: time off real time): the figures cover the same stretch of the run at any speed.
+SETTLE = 0.3
+
+
+@dataclass(frozen=True)
+class DemoRow:
+    """One run of the comparison table.
+
+    Attributes:
+        wall_time_s: the whole run, node start-up included [s].
+        task_wall_s: wall time from the operator's first command until every state stream
+            reached the end of the task [s] (None: not measured).
+        task_sim_s: simulated time of that stretch: duration + zero twists + settle [s].
+    """
+
+    method: str
+    figures: RunFigures
+    wall_time_s: float
+    recording: str | None
+    energy: EnergyFigures | None = None
+    task_wall_s: float | None = None
+    task_sim_s: float | None = None
+
+    @property
+    def real_time_factor(self) -> float | None:
+        """Simulated task seconds per wall second (None when not measured)."""
+        if self.task_wall_s is None or self.task_sim_s is None or self.task_wall_s <= 0.0:
+            return None
+        return self.task_sim_s / self.task_wall_s
+
+    @property
+    def label(self) -> str:
+        """The row's name in messages: its method."""
+        return self.method
+
+    def checked_figures(self) -> dict[str, float]:
+        """Every figure that must be finite, by name: the run's, its wall time, its energy."""
+        values = {**asdict(self.figures), "wall_time_s": self.wall_time_s}
+        if self.energy is not None:
+            values |= {k: v for k, v in asdict(self.energy).items() if v is not None}
+        return values
+
+
+def check_scenarios(files: list[Path]) -> list[Scenario]:
+    """Load every scenario file and check it against the controller's ``max_angular_speed``
+    (its default, or the scenario's own override) before any node starts.
+
+    Raises:
+        ConfigError: a file is invalid, or a scenario's peak angular speed exceeds the limit
+            (names the scenario, its peak speed [rad/s] and the limit [rad/s]).
+    """
+    default_limit = CONTROLLER_SPECS["max_angular_speed"].default
+    scenarios = [load_scenario(file) for file in files]
+    for scenario in scenarios:
+        check_speed_limit(scenario, default_limit)
+    return scenarios
+
+
+def run_method(
+    method: str,
+    args: argparse.Namespace,
+    scenario_file: Path,
+) -> DemoRow:
+    """One full DDS run of the scenario with ``method``; returns its figures.
+
+    The nodes run as their own processes (:class:`~rns_ros.harness.ProcessStack`: the installed
+    ``rns_simulator``, ``rns_controller``, ``rns_operator``, ``rns_rerun_logger`` and, with
+    wheels, ``rns_attitude_control``, each on its own executor, as ``ros2 run`` starts them);
+    this process only records the topics. In one process the simulation thread and every
+    node shared one GIL: outputs came 15-40 ms apart instead of 10 (timer ticks waiting for
+    the lock) and reached the simulator 0.4-8 ms after they were published, which turned the
+    base by 0.6-1.9e-4 deg (dls) where separate processes give 2.6-2.8e-5 deg.
+
+    Raises:
+        RnsError: a node did not start, or the run did not finish in time.
+    """
+    scenario = load_scenario(scenario_file)
+    robot = load_model(default_model_config())
+    sim_time = args.real_time_factor != 1.0
+    wheels = method.endswith(WHEELS_SUFFIX)
+    ros_args = list(args.ros_args[1:]) if args.ros_args else []
+    start = time.perf_counter()
+    with (
+        ProcessStack(args.domain_id) as processes,
+        Harness(args.domain_id, args.ros_args, executor="events") as stack,
+    ):
+        # serialized, read after the run: this process then costs the stack little CPU
+        streams = {
+            "joints": stack.record(JointState, "joint_states", raw=True),
+            "odom": stack.record(Odometry, "base_odom", raw=True),
+            "momentum": stack.record(WrenchStamped, "momentum", raw=True),
+            "energy": stack.record(Float64MultiArray, "energy", raw=True),
+            "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status", raw=True),
+        }
+        recording, logger = start_logger(
+            processes, method, args, sim_time=sim_time, ros_args=ros_args
+        )
+        listeners = _start_nodes(
+            processes, method, args, scenario, scenario_file, logger is not None, ros_args
+        )
+        # the task only once the robot runs and this process and the logger record it (a
+        # recorder matched late would miss the start of the task): the operator counts this
+        # subscription among its min_subscribers
+        _wait_for_start(stack, processes, streams, listeners, method)
+        task, end, task_wall = _run_task(stack, processes, streams, scenario, args, method)
+        # stopped before the recorded messages are read: off real time the stack would go on
+        # stepping as fast as it can meanwhile, competing with this process for the cores
+        processes.stop()  # the logger writes its summary line as it closes the recording
+        # from just before the task: the robot is at rest until the first command, and a
+        # recorder (the logger) matched a moment after the first state then has all of it
+        data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
+        if data["times"][0] > task:  # the deviations count from the first recorded state
+            raise RnsError(
+                f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
+                f"the operator's profile started at {task:.3f} s"
+            )
+        energy = energy_figures(
+            streams["energy"], streams["attitude"] if wheels else None, until=end
+        )
+        for line in processes.problems():  # a watchdog that stopped the arm, a rejection
+            print(f"  {line}", flush=True)
+        if logger is not None:
+            closed = [line for line in processes.output(logger).splitlines() if CLOSED in line]
+            print("\n".join(closed[-1:]), flush=True)
+    figures = run_figures(robot, scenario, **data)
+    return DemoRow(
+        method,
+        figures,
+        time.perf_counter() - start,
+        recording,
+        energy,
+        task_wall_s=task_wall,
+        task_sim_s=end - task,
+    )
+
+
+def _controller_parameters(
+    method: str, args: argparse.Namespace, scenario: Scenario
+) -> dict[str, object]:
+    """rns_controller's parameters for ``method`` (its control law, without ``+wheels``) at
+    ``--rate``; off real time on sim time, waiting for the lockstep simulator; the scenario's
+    own controller settings (its method aside) last."""
+    sim_time = args.real_time_factor != 1.0
+    parameters = {
+        "method": method.removesuffix(WHEELS_SUFFIX),
+        "rate": args.rate,
+        **({"use_sim_time": True} if sim_time else {}),
+    }
+    if sim_time:
+        # lockstep pauses wait for the controller: a state can come later than the 0.1 s
+        # wall-time default while the 2 cores are busy
+        parameters["state_timeout"] = 1.0
+        if args.output_lead:
+            # each output acts one period after its tick: the simulator computes that period
+            # while the controller computes the next output (two cores side by side)
+            parameters["output_lead"] = 1.0 / args.rate
+            # and serves each tick with the operator's sample in force then, published ahead
+            # (OPERATOR_LEAD): a run's figures do not depend on when the operator got a core
+            parameters["await_commands"] = True
+    parameters.update({key: value for key, value in scenario.controller.items() if key != "method"})
+    return parameters
+
+
+def _start_nodes(
+    processes: ProcessStack,
+    method: str,
+    args: argparse.Namespace,
+    scenario: Scenario,
+    scenario_file: Path,
+    logger: bool,
+    ros_args: list[str],
+) -> list[str]:
+    """Start rns_controller, rns_operator, (with wheels) rns_attitude_control and rns_simulator
+    for ``scenario`` (read from ``scenario_file``); return the nodes whose subscriptions the task
+    waits for (``logger``: one is running)."""
+    sim_time = args.real_time_factor != 1.0
+    timing = {"use_sim_time": True} if sim_time else {}
+    wheels = method.endswith(WHEELS_SUFFIX)
+    processes.start(
+        "rns_controller", _controller_parameters(method, args, scenario), ros_args=ros_args
+    )
+    # the operator imports while the others do (started after the robot ran, its start-up
+    # competed for the cores with a lockstep run stepping the idle robot as fast as it can:
+    # ~2 s of each run's wall time); its profile still waits for this process's cmd_twist
+    # subscription, made once the robot state is recorded
+    listeners = [NODE_NAMES["controller"]]
+    if logger:
+        listeners.append(NODE_NAMES["logger"])
+    operator_timing = dict(timing)
+    if sim_time and args.output_lead:
+        operator_timing.update(lead=OPERATOR_LEAD, start_delay=OPERATOR_LEAD)
+    processes.start(
+        "rns_operator",
+        {
+            "scenario": str(scenario_file),
+            "rate": OPERATOR_RATE,
+            "start_delay": 0.5,
+            "zero_duration": OPERATOR_ZERO_DURATION,
+            # the controller, this process and the logger: the first to be matched no
+            # longer starts the profile while the controller still misses it
+            "min_subscribers": len(listeners) + 1,
+            **operator_timing,
+        },
+        ros_args=ros_args,
+    )
+    if wheels:
+        processes.start("rns_attitude_control", {"rate": args.rate, **timing}, ros_args=ros_args)
+    processes.start(
+        "rns_simulator",
+        {
+            "initial_joint_positions": scenario.initial_theta.tolist(),
+            "mode": args.mode,
+            "step_size": simulation_step(args, wheels),
+            "real_time_factor": args.real_time_factor,
+            "publish_clock": sim_time,
+            # off real time, the simulator waits for each control period's output, so the
+            # figures do not depend on how fast this machine is
+            "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
+            "reaction_wheels": wheels,
+        },
+        ros_args=ros_args,
+    )
+    return listeners
+
+
+def _run_task(
+    stack: Harness,
+    processes: ProcessStack,
+    streams: dict[str, TopicLog],
+    scenario: Scenario,
+    args: argparse.Namespace,
+    method: str,
+) -> tuple[float, float, float]:
+    """Record ``cmd_twist`` (into ``streams``) until every state stream reached the task's end;
+    return the task's start and end [s] (stamps' clock) and its wall time [s]."""
+    commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
+    budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
+    if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
+        raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
+    # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
+    # so a wall-time settle would let figures depend on this machine's speed
+    task = profile_start(commands, scenario, OPERATOR_RATE)
+    task_started = time.perf_counter()
+    end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
+    states = [streams[name] for name in ("joints", "odom", "momentum")]
+    if not stack.spin_until(
+        lambda: all(len(log) and log.latest_stamp() >= end for log in states),
+        timeout=budget,
+        check_every=0.005,  # not after each of the ~4 messages a period brings
+    ):
+        raise RnsError(
+            f"{method}: the scenario did not finish within {budget:.0f} s{processes.exit_report()}"
+        )
+    return task, end, time.perf_counter() - task_started
+
+
+#: rns_simulator's default RK4 step [s] and the range --sim-step accepts (its step_size's).
+SIM_STEP = 1e-3
+MIN_SIM_STEP, MAX_SIM_STEP = 1e-5, 0.1
+
+
+def simulation_step(args: argparse.Namespace, wheels: bool) -> float:
+    """rns_simulator's step [s] for an inspection run: ``--sim-step`` when given; off real time
+    in kinematic mode without wheels one control period, since the joint rate is held over the
+    period and only the base is integrated (one 10 ms RK4 step gives the 1 ms figures to nine
+    digits, dls and conventional: ``test_closed_loop``); else ``SIM_STEP``. Wheels keep 1 ms:
+    their torque changes within a period with the attitude loop's."""
+    if args.sim_step is not None:
+        return args.sim_step
+    lockstep = args.real_time_factor != 1.0 and args.mode == "kinematic" and not wheels
+    if not lockstep:
+        return SIM_STEP
+    period = 1.0 / args.rate
+    return period / math.ceil(period / MAX_SIM_STEP - 1e-9)
+
+
+#: What rns_rerun_logger's summary line on closing its recording contains.
+CLOSED = "recording closed"
+#: Robot states before the first command that the figures include [s].
+TASK_MARGIN = 0.2
+#: Zero twists the operator sends after the profile [s] (its default).
+OPERATOR_ZERO_DURATION = 1.0
+#: The operator's rate [Hz] (its default) and, in lockstep side by side, how far ahead [s] it
+#: publishes each sample (two samples), the first at the start condition (its start_delay).
+OPERATOR_RATE = 50.0
+OPERATOR_LEAD = 0.04
+
+
+def _moving(twist: TwistStamped | None) -> bool:
+    if twist is None:
+        return False
+    w = twist.twist.angular
+    return (w.x, w.y, w.z) != (0.0, 0.0, 0.0)
+
+
+def profile_start(commands: TopicLog, scenario: Scenario, rate: float) -> float:
+    """When the operator's profile started [s], on the stamps' clock: the first moving twist's
+    stamp less its time in the profile, which rns_operator samples every 1/``rate`` s from its
+    start. The first twist recorded is not always the start: an operator that waited for a
+    core before its first motion (lockstep, ``lead``) starts its profile that much later.
+
+    Raises:
+        RnsError: no twist asked for motion, or the scenario never moves on that grid.
+    """
+    first = next((msg for msg in commands.messages if _moving(msg)), None)
+    if first is None:
+        raise RnsError("no recorded cmd_twist asks for motion")
+    steps = math.floor(scenario.duration * rate) + 1
+    for k in range(steps):
+        if np.any(scenario.angular_velocity(k / rate) != 0.0):
+            return header_seconds(first) - k / rate
+    raise RnsError(f"scenario {scenario.name!r} never moves at {rate:g} Hz")
+
+
+#: Node names of the processes whose subscriptions the demo waits for.
+NODE_NAMES = {"controller": "rns_controller", "logger": "rns_rerun_logger"}
+
+
+def _wait_for_start(
+    stack: Harness,
+    processes: ProcessStack,
+    streams: dict[str, TopicLog],
+    listeners: list[str],
+    method: str,
+    timeout: float = 60.0,
+) -> None:
+    """Until this process records the robot state and ``listeners`` subscribe to it."""
+    probe = stack.probe()
+
+    def ready() -> bool:
+        if not all(len(streams[name]) for name in ("joints", "odom", "momentum")):
+            return False
+        nodes = {info.node_name for info in probe.get_subscriptions_info_by_topic("/base_odom")}
+        return all(name in nodes for name in listeners)
+
+    if not stack.spin_until(ready, timeout=timeout):
+        raise RnsError(
+            f"{method}: the robot state or its listeners ({', '.join(listeners)}) did not come "
+            f"up within {timeout:.0f} s{processes.exit_report()}"
+        )

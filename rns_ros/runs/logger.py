@@ -1,0 +1,61 @@
+"""The rerun logger of a run: ``rns_rerun_logger`` writing ``<output>/<name>.rrd`` or a live
+viewer (``--viewer``), as its own process or in the run's own process."""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+from pathlib import Path
+
+from rns_ros.harness import Harness, ProcessStack
+
+
+def _recording(args: argparse.Namespace, name: str) -> tuple[Path, str]:
+    """``<output>/<name>.rrd`` (its folder made) and the logger's sink: ``spawn`` (a live viewer)
+    with ``--viewer``, else ``save``."""
+    args.output.mkdir(parents=True, exist_ok=True)
+    return args.output / f"{name}.rrd", "spawn" if args.viewer else "save"
+
+
+def start_logger(
+    processes: ProcessStack,
+    name: str,
+    args: argparse.Namespace,
+    model_config: str | None = None,
+    *,
+    sim_time: bool = True,
+    ros_args: list[str] | None = None,
+) -> tuple[str | None, subprocess.Popen | None]:
+    """``rns_rerun_logger`` as a process writing ``<output>/<name>.rrd``, or a live viewer:
+    (the .rrd path or None for the viewer, the process); (None, None) with ``--no-record``.
+    ``model_config``: None for the default model; ``ros_args``: the run's ROS arguments
+    (remaps of the whole stack)."""
+    if args.no_record:
+        return None, None
+    path, sink = _recording(args, name)
+    path = path.resolve()
+    process = processes.start(
+        "rns_rerun_logger",
+        {
+            "sink": sink,
+            "rrd_path": str(path),
+            "recording_name": name,
+            **({"model_config": model_config} if model_config else {}),
+            "use_sim_time": sim_time,
+        },
+        ros_args=ros_args or [],
+    )
+    return (str(path) if sink == "save" else None), process
+
+
+def add_logger(stack: Harness, name: str, args: argparse.Namespace, timing: dict) -> str | None:
+    """``rns_rerun_logger`` as a node of ``stack`` (``timing``: its ``use_sim_time``) writing
+    ``<output>/<name>.rrd``, or a live viewer; returns the .rrd path, None for the viewer."""
+    from rns_ros.nodes.rerun_logger import RerunLoggerNode
+
+    path, sink = _recording(args, name)
+    stack.add(
+        RerunLoggerNode,
+        {"sink": sink, "rrd_path": str(path), "recording_name": name, **timing},
+    )
+    return str(path) if sink == "save" else None

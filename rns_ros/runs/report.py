@@ -1,0 +1,227 @@
+"""What the rows of rns_demo's runs show: the tables, the JSON summary, the spread over runs, the
+non-finite figures that fail a run."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import asdict
+from typing import NamedTuple, Protocol
+
+import numpy as np
+
+from rns_ros.analysis.reproduce.chapter4_ptp import THESIS_TABLE
+from rns_ros.runs.contact import ContactDemoRow
+from rns_ros.runs.inspection import DemoRow
+from rns_ros.runs.ptp import PtpDemoRow
+from rns_ros.runs.recorded import EnergyFigures
+
+
+class CheckedRow(Protocol):
+    """A row whose figures :func:`non_finite_figures` checks."""
+
+    @property
+    def label(self) -> str: ...
+
+    def checked_figures(self) -> dict[str, float]: ...
+
+
+def non_finite_figures(rows: Iterable[CheckedRow]) -> list[str]:
+    """One text per run with a NaN or infinite figure ("sc: final_camera_error_deg = nan, ...");
+    empty when every figure is finite."""
+    problems = []
+    for row in rows:
+        values = row.checked_figures()
+        bad = [f"{name} = {value}" for name, value in values.items() if not math.isfinite(value)]
+        if bad:
+            problems.append(f"{row.label}: " + ", ".join(bad))
+    return problems
+
+
+def format_table(rows: list[DemoRow]) -> str:
+    columns = (
+        ("method", max(14, 2 + max((len(row.method) for row in rows), default=0))),
+        ("max base dev [deg]", 20),
+        ("camera err [deg]", 18),
+        ("RMS ω err [rad/s]", 19),
+        ("wrist drift [m]", 17),
+        ("max |θ̇| [rad/s]", 17),
+        ("Δl [kg m²/s]", 14),
+        ("C_max [J]", 11),
+        ("C_sum [J s]", 13),
+        ("wheel KE [J]", 14),
+        ("wheel sat [s]", 15),
+        ("wall [s]", 10),
+        ("task [s]", 10),
+        ("× real time", 13),
+    )
+    header = "".join(
+        f"{title:<{width}}" if i == 0 else f"{title:>{width}}"
+        for i, (title, width) in enumerate(columns)
+    )
+    lines = [header, "-" * len(header)]
+    for row in rows:
+        f = row.figures
+        lines.append(
+            f"{row.method:<{columns[0][1]}}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
+            f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
+            f"{f.angular_momentum_drift:>14.2e}{_energy_columns(row.energy)}"
+            f"{row.wall_time_s:>10.1f}{_task_columns(row)}"
+        )
+    return "\n".join(lines)
+
+
+def _task_columns(row: DemoRow) -> str:
+    """Wall time of the task [s] and its real-time factor, or dashes."""
+    factor = row.real_time_factor
+    if factor is None:
+        return f"{'-':>10}{'-':>13}"
+    return f"{row.task_wall_s:>10.2f}{factor:>13.2f}"
+
+
+def _energy_columns(energy: EnergyFigures | None) -> str:
+    if energy is None:
+        return f"{'-':>11}{'-':>13}{'-':>14}{'-':>15}"
+    saturation = "-" if energy.wheel_saturation_s is None else f"{energy.wheel_saturation_s:.2f}"
+    return (
+        f"{energy.c_max:>11.3g}{energy.c_sum:>13.3g}{energy.peak_wheel_energy:>14.3g}"
+        f"{saturation:>15}"
+    )
+
+
+class Spread(NamedTuple):
+    """One figure of one method over the runs: min, median, max, and each run."""
+
+    min: float
+    median: float
+    max: float
+    values: list[float]
+
+
+def _base_deviation(row: DemoRow) -> float:
+    return row.figures.max_base_deviation_deg
+
+
+def spread(
+    runs: list[list[DemoRow]],
+    method: str,
+    figure: Callable[[DemoRow], float | None] = _base_deviation,
+) -> Spread:
+    """:class:`Spread` of ``figure(row)`` (default: the max base deviation [deg]) of
+    ``method``'s rows over ``runs`` (rows per run); runs without the figure are left out."""
+    values = [
+        value
+        for rows in runs
+        for row in rows
+        if row.method == method and (value := figure(row)) is not None
+    ]
+    if not values:
+        return Spread(np.nan, np.nan, np.nan, [])
+    return Spread(min(values), float(np.median(values)), max(values), values)
+
+
+def _task_wall(row: DemoRow) -> float | None:
+    return row.task_wall_s
+
+
+def format_spread(runs: list[list[DemoRow]]) -> str:
+    """The max base deviation and the task's wall time of each method over the runs (the table
+    above is the last run)."""
+    lines = [
+        f"over {len(runs)} runs (the table: the last run)",
+        f"{'method':<22}{'max base dev [deg]: min':>26}{'median':>12}{'max':>12}"
+        f"{'task [s]: min':>16}{'median':>10}{'max':>10}",
+    ]
+    for row in runs[-1]:
+        base, task = spread(runs, row.method), spread(runs, row.method, _task_wall)
+        lines.append(
+            f"{row.method:<22}{base.min:>26.3e}{base.median:>12.3e}{base.max:>12.3e}"
+            f"{task.min:>16.2f}{task.median:>10.2f}{task.max:>10.2f}"
+        )
+    return "\n".join(lines)
+
+
+def format_ptp_table(rows: list[PtpDemoRow]) -> str:
+    """Table 4.2 style: deviation and ratio to the 3-phase run, next to the thesis'."""
+    reference = next((r.max_base_deviation_deg for r in rows if r.method == "three_phase"), None)
+    thesis_reference = THESIS_TABLE["3-phase"]
+    header = (
+        f"{'method':<10}{'max base dev [deg]':>20}{'ratio':>8}{'thesis [deg]':>14}"
+        f"{'thesis ratio':>14}{'end error':>16}{'max |θ̇| [rad/s]':>18}{'T [s]':>8}"
+        f"{'wall [s]':>10}  folds reached (θ4)"
+    )
+    lines = [header, "-" * len(header)]
+    for row in rows:
+        ratio = row.max_base_deviation_deg / reference if reference else math.nan
+        thesis = THESIS_TABLE[row.label]
+        if row.final_camera_error_m is None:
+            end = f"{row.final_joint_error_deg:.2g} deg"
+        else:
+            end = f"{1e3 * row.final_camera_error_m:.3g} mm cam"
+        lines.append(
+            f"{row.label:<10}{row.max_base_deviation_deg:>20.4f}{ratio:>8.2f}{thesis:>14.2f}"
+            f"{thesis / thesis_reference:>14.2f}{end:>16}"
+            f"{row.max_joint_speed:>18.3f}{row.duration_s:>8.2f}{row.wall_time_s:>10.1f}"
+            f"  {row.fold_reached}"
+        )
+    return "\n".join(lines)
+
+
+def format_contact_table(rows: list[ContactDemoRow]) -> str:
+    """One line per controller: errors, joint speeds (DDS and in-process), loop timing."""
+    header = (
+        f"{'controller':<16}{'max pos err [mm]':>18}{'max |f err| [N]':>17}{'held [N]':>10}"
+        f"{'peak |θ̇| [rad/s]':>18}{'in-process':>12}{'final |θ̇|':>11}{'loop [Hz]':>11}"
+        f"{'step med/p99 [µs]':>19}{'wall [s]':>10}"
+    )
+    lines = [header, "-" * len(header)]
+    for row in rows:
+        f = row.figures
+        lines.append(
+            f"{row.label:<16}{1e3 * f.max_position_error_m:>18.4f}{f.max_force_error_n:>17.3g}"
+            f"{f.held_force_error_n:>10.3g}{f.peak_joint_speed:>18.3f}"
+            f"{row.core_peak_joint_speed:>12.3f}{f.final_joint_speed:>11.2g}"
+            f"{row.loop_rate_hz:>11.0f}"
+            f"{f'{row.step_time_median_us:.0f}/{row.step_time_p99_us:.0f}':>19}"
+            f"{row.wall_time_s:>10.1f}"
+        )
+    return "\n".join(lines)
+
+
+def inspection_summary(runs: list[list[DemoRow]]) -> list[dict]:
+    """The JSON summary of the last run's rows; over several ``runs`` (rows per run) with the
+    spread of the base deviation and of the task's wall time."""
+    return [
+        {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
+        | {"task_wall_s": row.task_wall_s, "task_sim_s": row.task_sim_s}
+        | {"recording": row.recording}
+        | {"energy": None if row.energy is None else asdict(row.energy)}
+        | (
+            {
+                "runs": spread(runs, row.method)._asdict(),
+                "task_wall_runs": spread(runs, row.method, _task_wall)._asdict(),
+            }
+            if len(runs) > 1
+            else {}
+        )
+        for row in runs[-1]
+    ]
+
+
+def contact_summary(rows: list[ContactDemoRow]) -> list[dict]:
+    """The JSON summary of motion/force rows."""
+    return [
+        {
+            "method": row.method,
+            "label": row.label,
+            **asdict(row.figures),
+            "core_peak_joint_speed": row.core_peak_joint_speed,
+            "loop_rate_hz": row.loop_rate_hz,
+            "step_time_median_us": row.step_time_median_us,
+            "step_time_p99_us": row.step_time_p99_us,
+            "final_state": row.final_state,
+            "wall_time_s": row.wall_time_s,
+            "recording": row.recording,
+        }
+        for row in rows
+    ]

@@ -1,0 +1,230 @@
+"""What ``rns_param`` and ``rns_topic`` share: a private ROS session and the exit-code contract.
+
+ros2cli is not on PyPI, so whoever installed rns_ros from wheels has no ``ros2`` command; the two
+console scripts (:mod:`rns_ros.apps.param`, :mod:`rns_ros.apps.topic`) cover what operating the
+rns_ros nodes needs, built only on rclpy and the installed message packages. They join the ROS
+domain of the environment like ``ros2`` does (``ROS_DOMAIN_ID``,
+``ROS_AUTOMATIC_DISCOVERY_RANGE``, ``RMW_IMPLEMENTATION``). Exit codes: 0 on success and after
+Ctrl-C; 1 when the node, parameter or topic is not found within ``--timeout`` (one line on
+stderr) or ``set`` is refused (``Setting parameter failed: <the node's reason>`` on stdout, as
+ros2 prints it); 2 for bad usage or a ROS environment rcl rejects (one line on stderr).
+
+Only the standard library is imported at module level: rclpy loads inside :func:`run_tool` after
+its Ctrl-C handler is in place, so an early Ctrl-C is a quiet exit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import NoReturn
+
+#: Seconds to wait for a node's parameter services or a topic to show up in the graph.
+DEFAULT_TIMEOUT = 5.0
+#: Seconds of discovery after the first other node showed up, before listing the graph.
+DEFAULT_SPIN_TIME = 0.5
+
+
+class UsageError(Exception):
+    """The command line is wrong (exit code 2)."""
+
+
+class ToolError(Exception):
+    """The request could not be carried out: node or topic not found, value refused (exit 1)."""
+
+
+class _InterruptError(Exception):
+    """Ctrl-C arrived (exit code 0)."""
+
+
+class ToolParser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one exception instead of usage text + exit."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(message)
+
+
+class ToolSession:
+    """A private rclpy Context with one hidden node and an executor, torn down in :meth:`close`.
+
+    ``stop`` is set by Ctrl-C; every wait below reads it at least every 50 ms.
+    """
+
+    def __init__(self, program: str, stop: threading.Event) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        self.stop = stop
+        self.context = rclpy.Context()
+        # rclpy's own SIGINT handler would tear the Context down under a running wait; ours only
+        # sets `stop`. The domain and discovery range come from the environment, like ros2.
+        rclpy.init(
+            args=[program], context=self.context, signal_handler_options=SignalHandlerOptions.NO
+        )
+        self.executor = SingleThreadedExecutor(context=self.context)
+        # A leading underscore hides the node from `ros2 node list`, like ros2cli's own nodes.
+        self.node = rclpy.create_node(
+            f"_{program}_{os.getpid()}",
+            context=self.context,
+            start_parameter_services=False,
+        )
+        self.executor.add_node(self.node)
+
+    def spin_until(self, done: Callable[[], bool], timeout: float | None) -> bool:
+        """Spin until ``done()`` or ``timeout`` [s] (None: forever); raise on Ctrl-C."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not done():
+            if self.stop.is_set():
+                raise _InterruptError
+            if deadline is not None and time.monotonic() >= deadline:
+                return False
+            self.executor.spin_once(timeout_sec=0.05)
+        return True
+
+    def spin_for(self, duration: float) -> None:
+        """Spin for ``duration`` [s] (discovery); raise on Ctrl-C."""
+        deadline = time.monotonic() + duration
+        self.spin_until(lambda: time.monotonic() >= deadline, None)
+
+    def discover(self, spin_time: float, timeout: float) -> None:
+        """Let discovery fill the graph: spin until another node shows up (at most ``timeout``
+        [s]), then ``spin_time`` [s] more for the rest.
+
+        A fixed spin time alone is not enough: a new DDS participant is usually matched within
+        0.1 s on loopback, but now and then only at the next periodic announcement, ~3 s later.
+        """
+        me = self.node.get_fully_qualified_name()
+
+        def others() -> bool:
+            return any(
+                namespace.rstrip("/") + "/" + name != me
+                for name, namespace in self.node.get_node_names_and_namespaces()
+            )
+
+        self.spin_until(others, timeout)
+        self.spin_for(spin_time)
+
+    def close(self) -> None:
+        import rclpy
+
+        self.executor.remove_node(self.node)
+        self.node.destroy_node()
+        self.executor.shutdown()
+        rclpy.try_shutdown(context=self.context)
+
+
+def absolute_name(name: str) -> str:
+    """``rns_controller`` -> ``/rns_controller`` (the tools' node lives in the root namespace)."""
+    return name if name.startswith("/") else "/" + name
+
+
+def seconds(text: str) -> float:
+    """argparse type: a non-negative finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0, got {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
+
+
+def run_tool(
+    program: str, parser: argparse.ArgumentParser, argv: Sequence[str] | None, body: Callable
+) -> int:
+    """Parse ``argv``, run ``body(args, session)`` under the exit-code contract (module docstring).
+
+    Ctrl-C and SIGTERM set a flag (installed before rclpy is imported) instead of raising inside
+    rclpy's C extension, where a KeyboardInterrupt can surface as a RuntimeError.
+    """
+    stop = threading.Event()
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            previous[signum] = signal.signal(signum, lambda _signum, _frame: stop.set())
+    session = None
+    try:
+        try:
+            args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
+        except UsageError as exc:
+            print(f"{program}: {exc} (see {program} --help)", file=sys.stderr)
+            return 2
+        except SystemExit as exc:  # --help
+            return exc.code if isinstance(exc.code, int) else 0
+        if stop.is_set():
+            return 0
+        from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+
+        try:
+            session = ToolSession(program, stop)
+        except (_rclpy.RCLError, _rclpy.RMWError, _rclpy.RCUtilsError, ValueError) as exc:
+            # e.g. ROS_DOMAIN_ID=abc, or an unknown RMW_IMPLEMENTATION
+            print(f"{program}: cannot join ROS: {rcl_one_line(exc)}", file=sys.stderr)
+            return 2
+        return body(args, session)
+    except UsageError as exc:
+        print(f"{program}: {exc}", file=sys.stderr)
+        return 2
+    except ToolError as exc:
+        print(f"{program}: {exc}", file=sys.stderr)
+        return 1
+    except (_InterruptError, KeyboardInterrupt):
+        return 0
+    except BrokenPipeError:
+        # `rns_topic echo ... | head`: the reader left; no traceback at interpreter exit either
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    finally:
+        if session is not None:
+            session.close()
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def rcl_one_line(error: BaseException) -> str:
+    """rcl's message on one line, without its C source locations."""
+    text = str(error).split(", at /")[0]
+    # rcl's name validation appends a line with a caret under the bad character
+    return " ".join(text.split()).removesuffix(" ^")
+
+
+def _timeout_parser(what: str) -> argparse.ArgumentParser:
+    """The ``--timeout SEC`` option every subcommand shares (a parent parser)."""
+    common = ToolParser(add_help=False)
+    common.add_argument(
+        "--timeout",
+        type=seconds,
+        default=DEFAULT_TIMEOUT,
+        metavar="SEC",
+        help=f"{what} (default {DEFAULT_TIMEOUT:g})",
+    )
+    return common
+
+
+def tool_parser(
+    prog: str, description: str, epilog: str, timeout_help: str
+) -> tuple[argparse.ArgumentParser, argparse._SubParsersAction, argparse.ArgumentParser]:
+    """A tool's parser, its subcommands and the parent parser of their shared ``--timeout SEC``
+    (``timeout_help`` says what it waits for)."""
+    common = _timeout_parser(timeout_help)
+    parser = ToolParser(prog=prog, description=description, epilog=epilog)
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    return parser, commands, common

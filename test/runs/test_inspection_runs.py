@@ -1,0 +1,48 @@
+"""rns_ros.runs.inspection: when the operator's profile started, from the recorded twists."""
+
+from __future__ import annotations
+
+import pytest
+import yaml
+from geometry_msgs.msg import TwistStamped
+from rns_testing import SHORT_ROLL_SCENARIO
+
+from rns_ros.control.scenario import load_scenario
+from rns_ros.core import RnsError
+from rns_ros.harness import TopicLog
+from rns_ros.nodes.sim_clock import stamp_from_seconds
+from rns_ros.resources import scenario_path
+from rns_ros.runs.inspection import profile_start
+
+
+def _twists(samples) -> TopicLog:
+    log = TopicLog("cmd_twist")
+    for stamp, omega in samples:
+        msg = TwistStamped()
+        msg.header.stamp = stamp_from_seconds(stamp)
+        msg.twist.angular.x = omega
+        log.messages.append(msg)
+    return log
+
+
+@pytest.mark.parametrize(
+    ("samples", "start"),
+    [
+        ([(10.78, 0.0), (10.80, 0.01), (10.82, 0.02)], 10.78),  # a profile from rest
+        # the operator waited for a core after its first sample (a rest): the profile moved on
+        # 1.45 s later (rns_operator lead), so the twist of 10.78 is not its start
+        ([(10.78, 0.0), (12.25, 0.01), (12.27, 0.02)], 12.23),
+    ],
+)
+def test_the_profile_starts_a_sample_before_its_first_motion(samples, start):
+    scenario = load_scenario(scenario_path("satellite_observation"))  # quintic: 0 at t = 0
+    assert profile_start(_twists(samples), scenario, 50.0) == pytest.approx(start, abs=1e-9)
+
+
+def test_a_profile_that_starts_moving_starts_at_its_first_twist(tmp_path):
+    path = tmp_path / "step.yaml"
+    path.write_text(yaml.safe_dump({**SHORT_ROLL_SCENARIO, "time_scaling": "constant"}))
+    log = _twists([(3.0, 0.1), (3.02, 0.1)])
+    assert profile_start(log, load_scenario(path), 50.0) == pytest.approx(3.0, abs=1e-9)
+    with pytest.raises(RnsError, match="asks for motion"):
+        profile_start(_twists([(3.0, 0.0)]), load_scenario(path), 50.0)

@@ -392,6 +392,18 @@ def _compute_fig4_6(quick: bool) -> Outcome:
     return _singularity_outcome(rows, values, [run], [t_singular], quick)
 
 
+def _damping_settings_row(epsilon: float, lambda2_max: float) -> Comparison:
+    """The DLS singular region epsilon and maximum damping lambda^2_max of eq. (4.12) [-]."""
+    return Comparison(
+        "epsilon_lambda2_max",
+        [0.2, 2.0],
+        [epsilon, lambda2_max],
+        "",
+        Status.EXACT,
+        "the thesis' singular region and maximum damping, eq. (4.12) with the sigma^4 term.",
+    )
+
+
 def _compute_fig4_7(quick: bool) -> Outcome:
     dls, pinv = recorded_run(SINGULARITY, "dls", quick), recorded_run(SINGULARITY, "pinv", quick)
     trace = dls.trace
@@ -408,14 +420,7 @@ def _compute_fig4_7(quick: bool) -> Outcome:
     error_out = float(trace.omega_error[~inside].max(initial=0.0))
     base_in = float(trace.base_deviation_deg[inside].max(initial=0.0))
     rows = [
-        Comparison(
-            "epsilon_lambda2_max",
-            [0.2, 2.0],
-            [epsilon, lambda2_max],
-            "",
-            Status.EXACT,
-            "the thesis' singular region and maximum damping, eq. (4.12) with the sigma^4 term.",
-        ),
+        _damping_settings_row(epsilon, lambda2_max),
         Comparison(
             "singular_region_s",
             list(THESIS_SINGULAR_REGION_S),

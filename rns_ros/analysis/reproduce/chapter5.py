@@ -300,7 +300,29 @@ def compute_fig5_3(quick: bool) -> Outcome:
             f"{count}^4 grid",
         ),
     )
-    values = {
+    values = _fig5_3_values(summary, slices)
+    settings = {
+        "model": "config/model.yaml (7-DoF arm), base 2550 + 30 kg wheels, wrist held at 0",
+        "base_mass_kg": chain.base_mass,
+        "body_masses_kg": chain.masses.tolist(),
+        "wheel_inertia_kg_m2": em.WHEEL_INERTIA,
+        "grid": [len(g) for g in grids],
+        "slice_grid": [slice_count, slice_count],
+        "computed_on": where,
+    }
+    keys = ("wheels", "spatial_grid", "wrist", "ratio")
+    return Outcome(
+        comparisons,
+        values,
+        settings,
+        tuple(CHOICES[k] for k in keys),
+        {"slice_grid": slice_grid, "slices": slices},
+    )
+
+
+def _fig5_3_values(summary: em.MapSummary, slices: list[np.ndarray]) -> dict:
+    """The JSON values of Fig. 5.3: map statistics, throughput and per-slice statistics."""
+    return {
         "c_ratio_mean": summary.mean,
         "c_ratio_median": summary.median,
         "c_ratio_p99": summary.p99,
@@ -320,23 +342,6 @@ def compute_fig5_3(quick: bool) -> Outcome:
             for (t1, t2), s in zip(SLICES, slices, strict=True)
         ],
     }
-    settings = {
-        "model": "config/model.yaml (7-DoF arm), base 2550 + 30 kg wheels, wrist held at 0",
-        "base_mass_kg": chain.base_mass,
-        "body_masses_kg": chain.masses.tolist(),
-        "wheel_inertia_kg_m2": em.WHEEL_INERTIA,
-        "grid": [len(g) for g in grids],
-        "slice_grid": [slice_count, slice_count],
-        "computed_on": where,
-    }
-    keys = ("wheels", "spatial_grid", "wrist", "ratio")
-    return Outcome(
-        comparisons,
-        values,
-        settings,
-        tuple(CHOICES[k] for k in keys),
-        {"slice_grid": slice_grid, "slices": slices},
-    )
 
 
 def plot_fig5_3(outcome: Outcome, figure) -> None:

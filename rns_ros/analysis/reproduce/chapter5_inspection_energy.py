@@ -249,23 +249,7 @@ def _compute_fig5_4(quick: bool) -> Outcome:
             "controller's residual coupling momentum (midpoint hold, O(T^2)).",
         ),
     ]
-    values = {
-        "peak_energy_J": {
-            REACTIONLESS: rns_values["peak_energy_J"],
-            CONVENTIONAL: conv_values["peak_energy_J"],
-        },
-        "c_max_J": {
-            REACTIONLESS: rns_values["c_max_J"]["total"],
-            CONVENTIONAL: conv_values["c_max_J"]["total"],
-        },
-        "c_sum_Js": {
-            REACTIONLESS: rns_values["c_sum_Js"]["total"],
-            CONVENTIONAL: conv_values["c_sum_Js"]["total"],
-        },
-        "energy_ratio": ratio,
-        "wheel_torque": torque,
-        "runs": {REACTIONLESS: rns_values, CONVENTIONAL: conv_values},
-    }
+    values = _fig5_4_values(rns_values, conv_values, ratio, torque)
     condition = comparison.condition
     settings = {
         **_settings(quick, 1),
@@ -282,6 +266,28 @@ def _compute_fig5_4(quick: bool) -> Outcome:
         (*_CHOICES, _quick_choice(quick)),
         {"comparison": comparison},
     )
+
+
+def _fig5_4_values(rns_values: dict, conv_values: dict, ratio: dict, torque: dict) -> dict:
+    """The JSON values of Fig. 5.4: peak energies and total costs of both motions, their ratio,
+    the wheel torque and every run value."""
+    return {
+        "peak_energy_J": {
+            REACTIONLESS: rns_values["peak_energy_J"],
+            CONVENTIONAL: conv_values["peak_energy_J"],
+        },
+        "c_max_J": {
+            REACTIONLESS: rns_values["c_max_J"]["total"],
+            CONVENTIONAL: conv_values["c_max_J"]["total"],
+        },
+        "c_sum_Js": {
+            REACTIONLESS: rns_values["c_sum_Js"]["total"],
+            CONVENTIONAL: conv_values["c_sum_Js"]["total"],
+        },
+        "energy_ratio": ratio,
+        "wheel_torque": torque,
+        "runs": {REACTIONLESS: rns_values, CONVENTIONAL: conv_values},
+    }
 
 
 def _plot_fig5_4(outcome: Outcome, figure) -> None:

@@ -187,16 +187,35 @@ def _decreasing(values) -> bool:
 # --------------------------------------------------------------------------- Fig. 7.1 / 7.3
 
 
-def _compute_fig7_1(quick: bool) -> Outcome:
-    sweep = _sweep(quick)
-    figure_masses = QUICK_FIGURE_MASSES if quick else FIGURE_MASSES
-    runs = {float(m): _run(Variant.RNS.value, float(m), quick) for m in figure_masses}
+def _per_mass_values(sweep, runs: dict[float, ArmRun]) -> dict:
+    """{m_hat: run values} of the sweep (with RMS vs J^+) and of the figure runs not in it."""
     per_mass = {}
     for mass, run, rms in zip(sweep.masses, sweep.runs, sweep.rms, strict=True):
         per_mass[f"{mass:g}"] = {**_run_values(run), "rms_vs_resolved_rad": float(rms)}
     for mass, run in runs.items():
         if f"{mass:g}" not in per_mass:
             per_mass[f"{mass:g}"] = {**_run_values(run), "rms_vs_resolved_rad": None}
+    return per_mass
+
+
+def _ours_over_spec(per_mass: dict, spec: dict) -> dict:
+    """Our values over the spec [V] table's, per mass in both and per value we have."""
+    return {
+        key: {
+            name: per_mass[key][name] / spec[key][name]
+            for name in _V_KEYS
+            if per_mass[key].get(name) is not None
+        }
+        for key in per_mass
+        if key in spec
+    }
+
+
+def _compute_fig7_1(quick: bool) -> Outcome:
+    sweep = _sweep(quick)
+    figure_masses = QUICK_FIGURE_MASSES if quick else FIGURE_MASSES
+    runs = {float(m): _run(Variant.RNS.value, float(m), quick) for m in figure_masses}
+    per_mass = _per_mass_values(sweep, runs)
     masses = [float(m) for m in sweep.masses]
     rms = [float(r) for r in sweep.rms]
     upper = [m for m in masses if m >= SLOPE_FROM_MASS]
@@ -207,15 +226,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
     nsv = [float(runs[m].null_space_rns.max()) for m in figure_masses]
     nsv_j = [float(runs[m].null_space_jacobian.max()) for m in figure_masses]
     spec = {f"{mass:g}": dict(zip(_V_KEYS, row, strict=True)) for mass, row in SPEC_V_TABLE.items()}
-    ours_over_spec = {
-        key: {
-            name: per_mass[key][name] / spec[key][name]
-            for name in _V_KEYS
-            if per_mass[key].get(name) is not None
-        }
-        for key in per_mass
-        if key in spec
-    }
+    ours_over_spec = _ours_over_spec(per_mass, spec)
     spec_nsv = [SPEC_V_TABLE[m][1] for m in figure_masses]
     spec_rms = [SPEC_V_TABLE[m][0] for m in masses]
     rows = [
@@ -343,6 +354,16 @@ def _divergence(quick: bool) -> dict:
     return {"k_d_1_s": gain, "k_d_step": UNSTABLE_DAMPER_STEP, "diverged": False, "message": ""}
 
 
+_FIG7_4_CHOICES = (
+    f"Damper (§7.2.2): theta_ddot_a = -k_d theta_dot, k_d = {DAMPER_GAIN_STEP:g}/step (2770 "
+    "1/s at 1 ms), entered as P_hat_RNS theta_ddot_a through rns_control's oblique projector "
+    "(the task stays exact).",
+    "Velocity-level term (7.13): the 'velocity' form +P_hat_RNS Wdot^T W^{+T} theta_dot "
+    "(Wdot by a central difference along theta_dot) is the main curve; the printed "
+    "'momentum' form -P_hat_RNS Wdot^T (W W^T)^-1 M_red J theta_dot is a labelled extra.",
+)
+
+
 def _compute_fig7_2(quick: bool) -> Outcome:
     runs = {
         VELOCITY: _run(Variant.VELOCITY.value, FIG7_4_MASS, quick),
@@ -413,16 +434,7 @@ def _compute_fig7_2(quick: bool) -> Outcome:
         "damper_gain_1_s": damper_gain,
         "velocity_term_forms": {VELOCITY: "velocity", MOMENTUM: "momentum"},
     }
-    choices = (
-        *_CHOICES,
-        f"Damper (§7.2.2): theta_ddot_a = -k_d theta_dot, k_d = {DAMPER_GAIN_STEP:g}/step (2770 "
-        "1/s at 1 ms), entered as P_hat_RNS theta_ddot_a through rns_control's oblique projector "
-        "(the task stays exact).",
-        "Velocity-level term (7.13): the 'velocity' form +P_hat_RNS Wdot^T W^{+T} theta_dot "
-        "(Wdot by a central difference along theta_dot) is the main curve; the printed "
-        "'momentum' form -P_hat_RNS Wdot^T (W W^T)^-1 M_red J theta_dot is a labelled extra.",
-        _quick_choice(quick),
-    )
+    choices = (*_CHOICES, *_FIG7_4_CHOICES, _quick_choice(quick))
     return Outcome(tuple(rows), values, settings, choices, {"runs": runs})
 
 

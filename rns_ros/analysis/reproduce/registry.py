@@ -1,6 +1,6 @@
 """The reproduction registry: every thesis figure and table as one :class:`Reproduction`.
 
-A chapter module registers its results at import (``register(Reproduction(...))``);
+A chapter module registers its results at import (``register_all(Reproduction(...), ...)``);
 :func:`load_all` imports the chapter modules listed in :data:`CHAPTER_MODULES`, so a later
 chapter adds itself by adding its module there. Each result has
 
@@ -29,7 +29,7 @@ import numpy as np
 from rns_ros.analysis.reproduce.plotting import save_figure
 from rns_ros.core.errors import ConfigError
 
-#: Modules that register results when imported, in report order (later issues append theirs).
+#: Modules that register results when imported, in report order (a new chapter appends its own).
 CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter3",
     "rns_ros.analysis.reproduce.chapter4",

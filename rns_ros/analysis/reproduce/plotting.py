@@ -12,12 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-#: Log-scale floor for deviations, errors and energies that can be exactly zero.
+#: Floor for deviations, errors and energies that can be exactly zero (log scales, ratios).
 FLOOR = 1e-12
 #: Resolution of the written PNG [dots per inch].
 DPI = 110
 #: Title font size of a panel [pt].
 TITLE_SIZE = 9
+#: Joint velocity label for :func:`joint_lines`, the joint number as subscript.
+THETA_DOT_LABEL = r"$\dot\theta_{}$"
 
 _METHOD_COLORS = {"dls": "C0", "conventional": "C3", "pinv": "C4", "sc": "C1"}
 _AXIS_NAMES = ("x", "y", "z")
@@ -82,10 +84,6 @@ def joint_lines(ax, t: np.ndarray, rates: np.ndarray, label: str = "joint {}", *
     with the joint number i = 1..n."""
     for i in range(rates.shape[1]):
         ax.plot(t, rates[:, i], label=label.format(i + 1), **style)
-
-
-#: Joint velocity labels with the joint number as subscript.
-THETA_DOT_LABEL = r"$\dot\theta_{}$"
 
 
 # --------------------------------------------------------------------------- closed-loop traces

@@ -81,6 +81,32 @@ def quick_documents(identifiers, folder) -> dict:
     return written
 
 
+def quick_result_statuses(document: dict, png, identifier: str) -> set[str]:
+    """Check one quick result (its id, finite JSON, a real PNG) and return its statuses, which
+    must all be :class:`Status` values."""
+    from rns_ros.analysis.reproduce.registry import Status
+
+    assert document["id"] == identifier
+    assert document["quick"] is True
+    assert json_finite(document)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert png.stat().st_size > 10_000
+    statuses = {c["status"] for c in document["comparisons"]}
+    assert statuses <= {status.value for status in Status}
+    return statuses
+
+
+def assert_chapter_order(module: str, earlier: tuple[str, ...], identifiers) -> None:
+    """Chapter ``module`` loads after each of the ``earlier`` chapter modules and registers
+    ``identifiers``."""
+    from rns_ros.analysis.reproduce import registry
+
+    modules = [name.rsplit(".", 1)[1] for name in registry.CHAPTER_MODULES]
+    for name in earlier:
+        assert modules.index(name) < modules.index(module)
+    assert set(identifiers) <= set(registry.load_all())
+
+
 def big_endian_joint_state(names: list[str], position: list[float]) -> bytes:
     """A JointState in big-endian CDR (rclpy writes little-endian only on this machine)."""
     out = bytearray(b"\x00\x00\x00\x00")  # CDR_BE

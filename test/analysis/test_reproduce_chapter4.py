@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
-
 import pytest
+from rns_testing import quick_documents
 
-from rns_ros.analysis.reproduce import chapter4
-from rns_ros.analysis.reproduce.registry import _REGISTRY, Status, run_one
+from rns_ros.analysis.reproduce import chapter4, scenario_runs
+from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig4.4", "fig4.5", "fig4.6", "fig4.7", "fig4.8")
 METHODS = {
@@ -22,13 +21,7 @@ METHODS = {
 @pytest.fixture(scope="module")
 def documents(tmp_path_factory):
     """{id: (json document, png path)}; the singularity runs are shared through the cache."""
-    assert chapter4.SATELLITE  # the module registered its results on import
-    out = tmp_path_factory.mktemp("chapter4")
-    written = {}
-    for identifier in IDS:
-        record = run_one(_REGISTRY[identifier], out, quick=True)
-        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
-    return written
+    return quick_documents(IDS, tmp_path_factory.mktemp("chapter4"))
 
 
 @pytest.mark.parametrize("identifier", IDS)
@@ -44,8 +37,8 @@ def test_each_result_writes_json_and_png(documents, identifier):
     assert statuses <= {status.value for status in Status}
     assert statuses
     settings = document["settings"]
-    assert settings["controller_rate_hz"] == chapter4.QUICK_RATE
-    assert settings["simulation_step_s"] == chapter4.QUICK_STEP
+    assert settings["controller_rate_hz"] == scenario_runs.QUICK_RATE
+    assert settings["simulation_step_s"] == scenario_runs.QUICK_STEP
     assert settings["simulation_mode"] == "kinematic"
     assert settings["hold_correction"] == "midpoint"
     assert len(document["choices"]) >= 5

@@ -3,12 +3,11 @@ each id runs quick into JSON + PNG with the documented keys."""
 
 from __future__ import annotations
 
-import json
-
 import pytest
+from rns_testing import quick_documents
 
 from rns_ros.analysis.reproduce import chapter4_ptp
-from rns_ros.analysis.reproduce.registry import _REGISTRY, CHAPTER_MODULES, Status, run_one
+from rns_ros.analysis.reproduce.registry import CHAPTER_MODULES, Status
 
 IDS = ("table4.2", "fig4.10", "fig4.12", "fig4.13", "partial_deployment")
 METHODS = {"3-phase", "JS-C", "IJ-C", "TJ-C"}
@@ -17,16 +16,11 @@ METHODS = {"3-phase", "JS-C", "IJ-C", "TJ-C"}
 @pytest.fixture(scope="module")
 def documents(tmp_path_factory):
     """{id: (json document, png path)}; table4.2/fig4.10/fig4.12 share their runs (cache)."""
-    assert chapter4_ptp.METHODS  # the module registered its results on import
-    out = tmp_path_factory.mktemp("chapter4_ptp")
-    written = {}
-    for identifier in IDS:
-        record = run_one(_REGISTRY[identifier], out, quick=True)
-        written[identifier] = (json.loads(record.json_path.read_text()), record.png_path)
-    return written
+    return quick_documents(IDS, tmp_path_factory.mktemp("chapter4_ptp"))
 
 
 def test_registered_after_chapter4():
+    assert tuple(chapter4_ptp.REPRODUCTIONS) == IDS
     modules = list(CHAPTER_MODULES)
     assert modules.index("rns_ros.analysis.reproduce.chapter4_ptp") == (
         modules.index("rns_ros.analysis.reproduce.chapter4") + 1

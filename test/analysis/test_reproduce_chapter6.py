@@ -4,10 +4,9 @@ documented keys and a PNG."""
 from __future__ import annotations
 
 import pytest
-from rns_testing import json_finite, quick_documents
+from rns_testing import assert_chapter_order, quick_documents, quick_result_statuses
 
 from rns_ros.analysis.reproduce import chapter6 as ch6
-from rns_ros.analysis.reproduce import registry
 from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig6.3", "fig6.4", "fig6.7", "fig6.8")
@@ -22,31 +21,20 @@ def documents(tmp_path_factory):
 
 
 def test_the_module_comes_after_chapter5_and_registers_four_results():
-    modules = list(registry.CHAPTER_MODULES)
-    ours = modules.index("rns_ros.analysis.reproduce.chapter6")
-    for earlier in ("chapter3", "chapter4", "chapter4_ptp", "chapter5", "chapter5_inspection"):
-        name = f"rns_ros.analysis.reproduce.{earlier}"
-        if name in modules:
-            assert modules.index(name) < ours
-    assert set(IDS) <= set(registry.load_all())
+    earlier = ("chapter3", "chapter4", "chapter4_ptp", "chapter5", "chapter5_inspection_energy")
+    assert_chapter_order("chapter6", earlier, IDS)
 
 
 @pytest.mark.parametrize("identifier", IDS)
 def test_each_result_writes_finite_json_with_the_documented_keys(documents, identifier):
     document, png = documents[identifier]
-    assert document["id"] == identifier
-    assert document["quick"] is True
-    assert json_finite(document)
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert png.stat().st_size > 10_000
+    statuses = quick_result_statuses(document, png, identifier)
     for key in KEYS:
         assert set(document[key]) == CONTROLLERS
         assert all(value >= 0.0 for value in document[key].values())
     assert set(document["peak_ratio_to_rns_c"]) == {"OS-C", "OS-C-kinematic"}
     assert set(document["runs"]) == CONTROLLERS
-    statuses = {c["status"] for c in document["comparisons"]}
     assert statuses
-    assert statuses <= {status.value for status in Status}
     assert Status.EXACT.value not in statuses  # nothing here is an exact reproduction
     settings = document["settings"]
     assert settings["control_period_s"] == ch6.QUICK_PERIOD

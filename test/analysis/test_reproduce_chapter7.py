@@ -4,10 +4,9 @@ keys and a PNG."""
 from __future__ import annotations
 
 import pytest
-from rns_testing import json_finite, quick_documents
+from rns_testing import assert_chapter_order, quick_documents, quick_result_statuses
 
 from rns_ros.analysis.reproduce import chapter7 as ch7
-from rns_ros.analysis.reproduce import registry
 from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig7.1", "fig7.2")
@@ -29,25 +28,21 @@ def documents(tmp_path_factory):
 
 
 def test_the_module_comes_after_the_other_chapters_and_registers_both_results():
-    modules = list(registry.CHAPTER_MODULES)
-    ours = modules.index("rns_ros.analysis.reproduce.chapter7")
-    for earlier in ("chapter3", "chapter4", "chapter4_ptp", "chapter5", "chapter5_inspection"):
-        assert modules.index(f"rns_ros.analysis.reproduce.{earlier}") < ours
-    if "rns_ros.analysis.reproduce.chapter6" in modules:
-        assert modules.index("rns_ros.analysis.reproduce.chapter6") < ours
-    assert set(IDS) <= set(registry.load_all())
+    earlier = (
+        "chapter3",
+        "chapter4",
+        "chapter4_ptp",
+        "chapter5",
+        "chapter5_inspection_energy",
+        "chapter6",
+    )
+    assert_chapter_order("chapter7", earlier, IDS)
 
 
 @pytest.mark.parametrize("identifier", IDS)
 def test_each_result_writes_finite_json_and_a_png(documents, identifier):
     document, png = documents[identifier]
-    assert document["id"] == identifier
-    assert document["quick"] is True
-    assert json_finite(document)
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert png.stat().st_size > 10_000
-    statuses = {c["status"] for c in document["comparisons"]}
-    assert statuses <= {status.value for status in Status}
+    statuses = quick_result_statuses(document, png, identifier)
     assert Status.EXACT.value not in statuses  # the thesis prints no numbers here
     settings = document["settings"]
     assert settings["step_s"] == ch7.QUICK_STEP

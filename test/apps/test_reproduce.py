@@ -11,6 +11,7 @@ import pytest
 from rns_ros.analysis.reproduce import registry
 from rns_ros.analysis.reproduce.registry import Comparison, Outcome, Reproduction, Status
 from rns_ros.apps import reproduce
+from rns_ros.core.errors import ConfigError
 
 REPO = Path(__file__).resolve().parents[2]
 EXECUTABLE = REPO / ".venv" / "bin" / "rns_reproduce"
@@ -120,3 +121,22 @@ def test_the_committed_report_lists_every_registered_result():
         assert f"## {identifier}\n" in report, f"{identifier} is not in docs/reproduction.md"
         assert (REPO / "docs" / "reproduction" / f"{identifier}.png").is_file()
         assert (REPO / "docs" / "reproduction" / f"{identifier}.json").is_file()
+
+
+def test_register_all_keeps_the_order_and_refuses_a_second_id(monkeypatch):
+    monkeypatch.setattr(registry, "_REGISTRY", {})
+    registered = registry.register_all(FAKES["fake.2"], FAKES["fake1"])
+    assert list(registered) == ["fake.2", "fake1"]
+    assert list(registry._REGISTRY) == ["fake.2", "fake1"]
+    with pytest.raises(ConfigError, match="registered twice"):
+        registry.register_all(FAKES["fake1"])
+
+
+def test_a_checked_claim_is_qualitative_when_it_holds():
+    assert Status.claim(True) is Status.QUALITATIVE
+    assert Status.claim(False) is Status.NOT_REPRODUCIBLE
+
+
+def test_the_resolution_choice_names_quick_or_full_runs():
+    assert registry.resolution_choice(True, "coarse.", "fine.") == "Quick run (tests): coarse."
+    assert registry.resolution_choice(False, "coarse.", "fine.") == "Full run: fine."

@@ -23,12 +23,13 @@ from rns_ros.analysis.planar_field import (
     torus_grid,
     torus_segments,
 )
+from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
     Status,
-    register,
+    register_all,
 )
 
 ARM = PlanarArm()  # Fig. 3.1 / §3.2.1 parameters, r = 0, ψ = 0
@@ -114,12 +115,10 @@ def _torus_axes(ax, title: str) -> None:
     ax.set_xlim(-np.pi, np.pi)
     ax.set_ylim(-np.pi, np.pi)
     ax.set_aspect("equal")
-    ax.set_xlabel(THETA1_LABEL)
-    ax.set_ylabel(THETA2_LABEL)
+    plot.label_axes(ax, THETA1_LABEL, THETA2_LABEL, title)
     ticks = [-np.pi, -np.pi / 2, 0.0, np.pi / 2, np.pi]
     ax.set_xticks(ticks, ["−π", "−π/2", "0", "π/2", "π"])
     ax.set_yticks(ticks, ["−π", "−π/2", "0", "π/2", "π"])
-    ax.set_title(title, fontsize=9)
 
 
 def _draw_fixed_points(ax, points) -> None:
@@ -535,43 +534,40 @@ def plot_bifurcation(outcome: Outcome, figure) -> None:
     axes[1].set_title("fixed-point θ2 (dots: tabulated r)", fontsize=9)
 
 
-REPRODUCTIONS: dict[str, Reproduction] = {
-    reproduction.id: register(reproduction)
-    for reproduction in (
-        Reproduction(
-            "fig3.1",
-            "Fig. 3.1",
-            "reactionless vector field of the planar 2-DoF arm attached at the base CoM (r = 0)",
-            compute_fig3_1,
-            plot_fig3_1,
-            (6.5, 6.5),
-        ),
-        Reproduction(
-            "fig3.2",
-            "Fig. 3.2",
-            "vector field and nullclines (red joint 1, blue joint 2) at r = 0.5, 0.945, 1.5 m",
-            compute_fig3_2,
-            plot_fig3_2,
-            (12.0, 8.5),
-        ),
-        Reproduction(
-            "fig3.3",
-            "Fig. 3.3",
-            "det(M~_ωm M~_ωm^T) and manipulator–base CoM distance at r = 1.5 m",
-            compute_fig3_3,
-            plot_fig3_3,
-            (11.0, 5.0),
-        ),
-        Reproduction(
-            "bifurcation",
-            "§3.2.2",
-            "fixed points of the reactionless field versus the attachment distance r",
-            compute_bifurcation,
-            plot_bifurcation,
-            (11.0, 5.0),
-        ),
-    )
-}
+REPRODUCTIONS = register_all(
+    Reproduction(
+        "fig3.1",
+        "Fig. 3.1",
+        "reactionless vector field of the planar 2-DoF arm attached at the base CoM (r = 0)",
+        compute_fig3_1,
+        plot_fig3_1,
+        (6.5, 6.5),
+    ),
+    Reproduction(
+        "fig3.2",
+        "Fig. 3.2",
+        "vector field and nullclines (red joint 1, blue joint 2) at r = 0.5, 0.945, 1.5 m",
+        compute_fig3_2,
+        plot_fig3_2,
+        (12.0, 8.5),
+    ),
+    Reproduction(
+        "fig3.3",
+        "Fig. 3.3",
+        "det(M~_ωm M~_ωm^T) and manipulator–base CoM distance at r = 1.5 m",
+        compute_fig3_3,
+        plot_fig3_3,
+        (11.0, 5.0),
+    ),
+    Reproduction(
+        "bifurcation",
+        "§3.2.2",
+        "fixed points of the reactionless field versus the attachment distance r",
+        compute_bifurcation,
+        plot_bifurcation,
+        (11.0, 5.0),
+    ),
+)
 
 
 def _r_star_row(critical) -> Comparison:

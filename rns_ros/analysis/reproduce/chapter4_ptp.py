@@ -24,19 +24,19 @@ import math
 import numpy as np
 
 from rns_ros.analysis.ptp_runs import PtpRun, run_plan
+from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
     Status,
-    register,
+    register_all,
 )
+from rns_ros.analysis.reproduce.scenario_runs import default_robot
 from rns_ros.control.ptp import PtpPlan, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment, plan_partial_deployment
 from rns_ros.control.ptp_planner import plan_ptp
-from rns_ros.core import FreeFloatingModel, load_model
 from rns_ros.core.state import FreeFloatingState
-from rns_ros.resources import default_model_config
 
 INITIAL_DEG = (-20.0, -40.0, 0.0, -60.0, 180.0, 180.0, 0.0)
 FINAL_DEG = (-120.0, 50.0, 0.0, -60.0, 180.0, 180.0, 0.0)
@@ -76,11 +76,6 @@ CHOICES = (
 )
 
 
-@functools.cache
-def _robot() -> FreeFloatingModel:
-    return load_model(default_model_config())
-
-
 def _step(quick: bool) -> float:
     return QUICK_STEP if quick else STEP
 
@@ -88,7 +83,7 @@ def _step(quick: bool) -> float:
 @functools.cache
 def _table_runs(quick: bool) -> dict[str, PtpRun]:
     """The four Table 4.2 runs (3-phase first: its final camera is the IJ-C/TJ-C target)."""
-    robot = _robot()
+    robot = default_robot()
     start, goal = np.deg2rad(INITIAL_DEG), np.deg2rad(FINAL_DEG)
     runs = {"3-phase": run_plan(robot, plan_ptp(robot, start, goal, "three_phase"), **_loop(quick))}
     settings = PtpSettings(
@@ -112,7 +107,7 @@ def _loop(quick: bool) -> dict:
 def _settings(quick: bool) -> dict:
     defaults = PtpSettings()
     return {
-        "model": f"{_robot().name} (config/urdf/rns_7dof_arm.urdf)",
+        "model": f"{default_robot().name} (config/urdf/rns_7dof_arm.urdf)",
         "simulation_step_s": _step(quick),
         "control_rate_hz": RATE,
         "phase_durations_nominal_s": list(defaults.phase_durations),
@@ -120,7 +115,7 @@ def _settings(quick: bool) -> dict:
         "path_step_rad": defaults.path_step,
         "elbow_gain_per_s": defaults.elbow_gain,
         "fold_angle_deg": math.degrees(defaults.fold_angle),
-        "velocity_limits_rad_s": _robot().velocity_limits.tolist(),
+        "velocity_limits_rad_s": default_robot().velocity_limits.tolist(),
     }
 
 
@@ -139,7 +134,7 @@ def _phases(plan: PtpPlan) -> list[dict]:
 
 def _plan_coupling(plan: PtpPlan, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Times [s], theta_dot (k, n) and M~_omega_m theta_dot (k, 3) of the plan's own reference."""
-    robot = _robot()
+    robot = default_robot()
     times = np.linspace(0.0, plan.duration, count)
     rates, coupling = [], []
     for t in times:
@@ -161,6 +156,27 @@ def _relative_reactionless_coupling(plan: PtpPlan, count: int) -> float:
     return worst
 
 
+def _deviation_rows(deviation: dict, thesis: dict, note: str) -> list[Comparison]:
+    """One max base attitude deviation row [deg] per method named in ``thesis``."""
+    return [
+        Comparison(
+            f"max_base_deviation_{name}_deg",
+            thesis[name],
+            round(deviation[name], 4),
+            "deg",
+            Status.QUALITATIVE,
+            note,
+        )
+        for name in thesis
+    ]
+
+
+def _phase_lines(ax, plan: PtpPlan, last: bool = False) -> None:
+    """Dashed lines at the phase ends of ``plan`` (the last one too when ``last``)."""
+    phases = plan.phases if last else plan.phases[:-1]
+    plot.event_lines(ax, [phase.end for phase in phases], alpha=0.6)
+
+
 # table 4.2 ----------------------------------------------------------------------------------
 def _compute_table4_2(quick: bool) -> Outcome:
     runs = _table_runs(quick)
@@ -168,24 +184,18 @@ def _compute_table4_2(quick: bool) -> Outcome:
     ratio = {name: deviation[name] / deviation["3-phase"] for name in METHODS}
     least = min(deviation, key=deviation.get) == "3-phase"
     plan = runs["3-phase"].plan
-    comparisons = [
-        Comparison(
-            f"max_base_deviation_{name}_deg",
-            THESIS_TABLE[name],
-            round(deviation[name], 4),
-            "deg",
-            Status.QUALITATIVE,
-            "identified geometry, not the thesis'; compare the ordering, not the digits",
-        )
-        for name in METHODS
-    ]
+    comparisons = _deviation_rows(
+        deviation,
+        THESIS_TABLE,
+        "identified geometry, not the thesis'; compare the ordering, not the digits",
+    )
     comparisons += [
         Comparison(
             f"ratio_{name}",
             THESIS_RATIO[name],
             round(ratio[name], 3),
             "",
-            Status.QUALITATIVE if ratio[name] > 1.0 else Status.NOT_REPRODUCIBLE,
+            Status.claim(ratio[name] > 1.0),
             "ratio to the 3-phase deviation; thesis: 'about two times'",
         )
         for name in METHODS[1:]
@@ -197,7 +207,7 @@ def _compute_table4_2(quick: bool) -> Outcome:
             f"3-phase least: {least}; ratios {min(ratio[n] for n in METHODS[1:]):.2f}-"
             f"{max(ratio[n] for n in METHODS[1:]):.2f}",
             "",
-            Status.QUALITATIVE if least else Status.NOT_REPRODUCIBLE,
+            Status.claim(least),
             "our ratios are smaller than the thesis' ~2: Phase II here spans FA-1 -> FA-2 with "
             "the Phase III fold ending at its turning point (theta_4 = "
             f"{math.degrees(plan.phases[2].fold_reached):.1f} deg, not -180 deg)",
@@ -240,11 +250,9 @@ def _plot_deviation(outcome: Outcome, figure) -> None:
     for ax, name in zip(axes, METHODS, strict=True):
         run = runs[name]
         ax.plot(run.t, np.rad2deg(run.base_deviation), color=_COLORS[name])
-        for phase in run.plan.phases[:-1]:
-            ax.axvline(phase.end, color="k", lw=0.8, ls="--", alpha=0.6)
-        ax.set_title(f"{name}: max {run.max_base_deviation_deg:.2f} deg", fontsize=9)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("base attitude deviation [deg]")
+        _phase_lines(ax, run.plan)
+        title = f"{name}: max {run.max_base_deviation_deg:.2f} deg"
+        plot.time_axes(ax, "base attitude deviation [deg]", title)
         ax.grid(alpha=0.3)
 
 
@@ -261,7 +269,7 @@ def _compute_fig4_12(quick: bool) -> Outcome:
             "3-phase deviation grows only in Phase II",
             {"phase_I_max": round(math.degrees(before), 6), "phase_III_change": after_end},
             "deg",
-            Status.QUALITATIVE if math.degrees(before) < 1e-3 else Status.NOT_REPRODUCIBLE,
+            Status.claim(math.degrees(before) < 1e-3),
             "Phase I/III deviation from the mid-period hold of the reactionless reference only",
         ),
         Comparison(
@@ -297,7 +305,7 @@ def _compute_fig4_10(quick: bool) -> Outcome:
             "only Phase II introduces coupling angular momentum",
             {k: f"{v:.3g}" for k, v in per_phase.items()},
             "kg m^2/s",
-            Status.QUALITATIVE if relative < 1e-10 else Status.NOT_REPRODUCIBLE,
+            Status.claim(relative < 1e-10),
             f"plan reference: max |M~ theta_dot| / |theta_dot| in Phases I/III = {relative:.2e} "
             "kg m^2 (machine precision); the played run (mid-period hold) reaches "
             f"{run.max_coupling(True):.3g} kg m^2/s there",
@@ -324,13 +332,12 @@ def _compute_fig4_10(quick: bool) -> Outcome:
 def _plot_fig4_10(outcome: Outcome, figure) -> None:
     data = outcome.figure_data
     axes = figure.subplots(2, 1, sharex=True)
-    for i in range(data["rates"].shape[1]):
-        axes[0].plot(data["times"], data["rates"][:, i], label=f"joint {i + 1}")
+    plot.joint_lines(axes[0], data["times"], data["rates"])
     for i, axis in enumerate("xyz"):
         axes[1].plot(data["times"], data["coupling"][:, i], label=axis)
     for ax in axes:
+        _phase_lines(ax, data["plan"], last=True)
         for phase in data["plan"].phases:
-            ax.axvline(phase.end, color="k", lw=0.8, ls="--", alpha=0.6)
             ax.text(
                 0.5 * (phase.start + phase.end),
                 0.95,
@@ -339,8 +346,7 @@ def _plot_fig4_10(outcome: Outcome, figure) -> None:
                 transform=ax.get_xaxis_transform(),
                 fontsize=9,
             )
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, ncol=4)
+        plot.legend_grid(ax, ncol=4)
     axes[0].set_ylabel("(a) joint velocity [rad/s]")
     axes[1].set_ylabel("(b) M~_wm theta_dot [kg m^2/s]")
     axes[1].set_xlabel("t [s]")
@@ -349,14 +355,14 @@ def _plot_fig4_10(outcome: Outcome, figure) -> None:
 # fig 4.13: deployment -----------------------------------------------------------------------
 @functools.cache
 def _deployment(quick: bool) -> PtpRun:
-    robot = _robot()
+    robot = default_robot()
     return run_plan(robot, plan_deployment(robot, STOWED), **_loop(quick))
 
 
 def _compute_fig4_13(quick: bool) -> Outcome:
     run = _deployment(quick)
     plan = run.plan
-    robot = _robot()
+    robot = default_robot()
     snapshot_times = np.linspace(0.0, plan.duration, 6)
     snapshots = [plan.sample(t).theta for t in snapshot_times]
     reached = math.degrees(plan.phases[0].fold_reached)
@@ -367,7 +373,7 @@ def _compute_fig4_13(quick: bool) -> Outcome:
             0.0,
             float(f"{run.max_base_deviation_deg:.3g}"),
             "deg",
-            Status.QUALITATIVE if run.max_base_deviation_deg < 1e-3 else Status.NOT_REPRODUCIBLE,
+            Status.claim(run.max_base_deviation_deg < 1e-3),
             "reactionless: only the mid-period hold error remains",
         ),
         Comparison(
@@ -375,7 +381,7 @@ def _compute_fig4_13(quick: bool) -> Outcome:
             round(target, 2),
             round(reached, 2),
             "deg",
-            Status.QUALITATIVE if abs(reached - target) < 0.1 else Status.NOT_REPRODUCIBLE,
+            Status.claim(abs(reached - target) < 0.1),
             "thesis: -180 + 0.183 rad/s x 30 s; ours a quintic in arc length (same end, rest to "
             "rest) instead of a constant theta_dot_4",
         ),
@@ -411,15 +417,14 @@ def _plot_fig4_13(outcome: Outcome, figure) -> None:
     axes[0, 0].legend(fontsize=7)
     run = data["run"]
     axes[1, 1].plot(run.t, np.rad2deg(run.base_deviation))
-    axes[1, 1].set_xlabel("t [s]")
-    axes[1, 1].set_ylabel("base attitude deviation [deg]")
+    plot.time_axes(axes[1, 1], "base attitude deviation [deg]")
     axes[1, 1].grid(alpha=0.3)
 
 
 # partial deployment -------------------------------------------------------------------------
 @functools.cache
 def _partial(quick: bool) -> dict[str, PtpRun]:
-    robot = _robot()
+    robot = default_robot()
     goal = np.deg2rad(PARTIAL_FINAL_DEG)
     plan = plan_partial_deployment(robot, STOWED, goal)
     baseline = plan_ptp(robot, STOWED, goal, "joint_space", PtpSettings(duration=plan.duration))
@@ -437,24 +442,14 @@ def _compute_partial(quick: bool) -> Outcome:
     )
     plan = runs["partial_reactionless"].plan
     fold = math.degrees(plan.phases[-1].fold_reached)
-    comparisons = [
-        Comparison(
-            f"max_base_deviation_{name}_deg",
-            THESIS_PARTIAL[name],
-            round(deviation[name], 4),
-            "deg",
-            Status.QUALITATIVE,
-            "identified geometry, not the thesis'",
-        )
-        for name in THESIS_PARTIAL
-    ]
+    comparisons = _deviation_rows(deviation, THESIS_PARTIAL, "identified geometry, not the thesis'")
     comparisons.append(
         Comparison(
             "reduction_percent",
             THESIS_REDUCTION,
             round(reduction, 2),
             "%",
-            Status.QUALITATIVE if reduction > 0.0 else Status.NOT_REPRODUCIBLE,
+            Status.claim(reduction > 0.0),
             f"the Phase III fold turns back at theta_4 = {fold:.1f} deg before -180 deg "
             "(A-2.11 reading), so Phase II still moves theta_4 and the reduction is smaller",
         )
@@ -483,21 +478,16 @@ def _plot_partial(outcome: Outcome, figure) -> None:
     axes = figure.subplots(2, 1)
     for name, run in runs.items():
         axes[0].plot(run.t, np.rad2deg(run.base_deviation), label=name)
-    for phase in runs["partial_reactionless"].plan.phases[:-1]:
-        axes[0].axvline(phase.end, color="k", lw=0.8, ls="--", alpha=0.6)
-    axes[0].set_ylabel("base attitude deviation [deg]")
-    axes[0].legend(fontsize=8)
     run = runs["partial_reactionless"]
-    for i in range(run.theta.shape[1]):
-        axes[1].plot(run.t, np.rad2deg(run.theta[:, i]), label=f"joint {i + 1}")
-    axes[1].set_ylabel("partial: theta [deg]")
-    axes[1].legend(fontsize=7, ncol=4)
-    for ax in axes:
-        ax.set_xlabel("t [s]")
-        ax.grid(alpha=0.3)
+    _phase_lines(axes[0], run.plan)
+    plot.time_axes(axes[0], "base attitude deviation [deg]")
+    plot.legend_grid(axes[0], fontsize=8)
+    plot.joint_lines(axes[1], run.t, np.rad2deg(run.theta))
+    plot.time_axes(axes[1], "partial: theta [deg]")
+    plot.legend_grid(axes[1], ncol=4)
 
 
-register(
+REPRODUCTIONS = register_all(
     Reproduction(
         "table4.2",
         "Table 4.2",
@@ -505,9 +495,7 @@ register(
         _compute_table4_2,
         _plot_deviation,
         (10.0, 7.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig4.10",
         "Fig. 4.10",
@@ -515,9 +503,7 @@ register(
         _compute_fig4_10,
         _plot_fig4_10,
         (10.0, 7.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig4.12",
         "Fig. 4.12",
@@ -525,9 +511,7 @@ register(
         _compute_fig4_12,
         _plot_deviation,
         (10.0, 7.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig4.13",
         "Fig. 4.13",
@@ -535,9 +519,7 @@ register(
         _compute_fig4_13,
         _plot_fig4_13,
         (10.0, 9.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "partial_deployment",
         "§4.5.2",
@@ -545,5 +527,5 @@ register(
         _compute_partial,
         _plot_partial,
         (10.0, 7.0),
-    )
+    ),
 )

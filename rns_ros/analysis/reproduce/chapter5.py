@@ -25,12 +25,13 @@ import numpy as np
 from rns_ros.analysis import chain_energy_maps as cem
 from rns_ros.analysis import energy_maps as em
 from rns_ros.analysis.planar_field import fixed_points
+from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
     Status,
-    register,
+    register_all,
 )
 
 #: Environment variable naming a dask.distributed scheduler for fig5.3 (unset: local cores).
@@ -82,9 +83,7 @@ def _planar_settings(count: int) -> dict:
 def _theta_axes(ax, xlabel: str, ylabel: str, title: str, ylim=(-np.pi, np.pi)) -> None:
     ax.set_xlim(-np.pi, np.pi)
     ax.set_ylim(*ylim)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=9)
+    plot.label_axes(ax, xlabel, ylabel, title)
 
 
 def _colour_map(ax, figure, grid_x, grid_y, values, label: str = "C_ratio [-]"):
@@ -302,26 +301,7 @@ def compute_fig5_3(quick: bool) -> Outcome:
             f"{count}^4 grid",
         ),
     )
-    values = {
-        "c_ratio_mean": summary.mean,
-        "c_ratio_median": summary.median,
-        "c_ratio_p99": summary.p99,
-        "c_ratio_max": summary.maximum,
-        "c_ratio_min": summary.minimum,
-        "points": summary.points,
-        "wall_s": summary.wall_s,
-        "points_per_s": summary.points / summary.wall_s if summary.wall_s > 0 else None,
-        "slices": [
-            {
-                "theta1_rad": t1,
-                "theta2_rad": t2,
-                "c_ratio_mean": float(s.mean()),
-                "c_ratio_median": float(np.median(s)),
-                "c_ratio_max": float(s.max()),
-            }
-            for (t1, t2), s in zip(SLICES, slices, strict=True)
-        ],
-    }
+    values = _fig5_3_values(summary, slices)
     settings = {
         "model": "config/model.yaml (7-DoF arm), base 2550 + 30 kg wheels, wrist held at 0",
         "base_mass_kg": chain.base_mass,
@@ -341,6 +321,30 @@ def compute_fig5_3(quick: bool) -> Outcome:
     )
 
 
+def _fig5_3_values(summary: em.MapSummary, slices: list[np.ndarray]) -> dict:
+    """The JSON values of Fig. 5.3: map statistics, throughput and per-slice statistics."""
+    return {
+        "c_ratio_mean": summary.mean,
+        "c_ratio_median": summary.median,
+        "c_ratio_p99": summary.p99,
+        "c_ratio_max": summary.maximum,
+        "c_ratio_min": summary.minimum,
+        "points": summary.points,
+        "wall_s": summary.wall_s,
+        "points_per_s": summary.points / summary.wall_s if summary.wall_s > 0 else None,
+        "slices": [
+            {
+                "theta1_rad": t1,
+                "theta2_rad": t2,
+                "c_ratio_mean": float(s.mean()),
+                "c_ratio_median": float(np.median(s)),
+                "c_ratio_max": float(s.max()),
+            }
+            for (t1, t2), s in zip(SLICES, slices, strict=True)
+        ],
+    }
+
+
 def plot_fig5_3(outcome: Outcome, figure) -> None:
     data = outcome.figure_data
     axes = figure.subplots(1, 2)
@@ -351,33 +355,29 @@ def plot_fig5_3(outcome: Outcome, figure) -> None:
         _theta_axes(ax, "θ3 [rad]", "θ4 [rad]", f"({label}) θ1 = {t1:.3f}, θ2 = {t2:.3f} rad")
 
 
-REPRODUCTIONS: dict[str, Reproduction] = {
-    reproduction.id: register(reproduction)
-    for reproduction in (
-        Reproduction(
-            "fig5.1",
-            "Fig. 5.1",
-            "C_ratio of the planar 2-DoF arm over (θ1, θ2), r = 0.945 m",
-            compute_fig5_1,
-            plot_fig5_1,
-            (6.5, 5.5),
-        ),
-        Reproduction(
-            "fig5.2",
-            "Fig. 5.2",
-            "mean C_ratio of the planar arm under link mass (α) and CoM distance (β) scaling",
-            compute_fig5_2,
-            plot_fig5_2,
-            (7.5, 6.0),
-        ),
-        Reproduction(
-            "fig5.3",
-            "Fig. 5.3",
-            "C_ratio of the 7-DoF positioning subchain: 50⁴-grid statistics and two (θ3, θ4) "
-            "slices",
-            compute_fig5_3,
-            plot_fig5_3,
-            (11.0, 5.0),
-        ),
-    )
-}
+REPRODUCTIONS = register_all(
+    Reproduction(
+        "fig5.1",
+        "Fig. 5.1",
+        "C_ratio of the planar 2-DoF arm over (θ1, θ2), r = 0.945 m",
+        compute_fig5_1,
+        plot_fig5_1,
+        (6.5, 5.5),
+    ),
+    Reproduction(
+        "fig5.2",
+        "Fig. 5.2",
+        "mean C_ratio of the planar arm under link mass (α) and CoM distance (β) scaling",
+        compute_fig5_2,
+        plot_fig5_2,
+        (7.5, 6.0),
+    ),
+    Reproduction(
+        "fig5.3",
+        "Fig. 5.3",
+        "C_ratio of the 7-DoF positioning subchain: 50⁴-grid statistics and two (θ3, θ4) slices",
+        compute_fig5_3,
+        plot_fig5_3,
+        (11.0, 5.0),
+    ),
+)

@@ -43,12 +43,14 @@ from rns_ros.analysis.motion_force_runs import (
     ForceMeasurement,
     run_closed_loop,
 )
+from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
     Status,
-    register,
+    register_all,
+    resolution_choice,
 )
 
 #: Thesis §6.2.1 peak joint speeds [rad/s] and their ratio [D].
@@ -184,12 +186,11 @@ def _settings(name: str, quick: bool) -> dict:
 
 
 def _quick_choice(name: str, quick: bool) -> str:
-    if not quick:
-        return f"Full run: {CONTROL_PERIOD * 1e3:g} ms control period and RK4 step."
     what = "one half cycle (180 -> 270 deg)" if name == PLANAR else "one stroke"
-    return (
-        f"Quick run (tests): {what} instead of the whole task, {QUICK_PERIOD * 1e3:g} ms control "
-        "period and RK4 step."
+    return resolution_choice(
+        quick,
+        f"{what} instead of the whole task, {QUICK_PERIOD * 1e3:g} ms control period and RK4 step.",
+        f"{CONTROL_PERIOD * 1e3:g} ms control period and RK4 step.",
     )
 
 
@@ -198,6 +199,17 @@ def _choices(name: str, quick: bool) -> tuple[str, ...]:
         *_CHOICES,
         *(_PLANAR_CHOICES if name == PLANAR else _WALL_CHOICES),
         _quick_choice(name, quick),
+    )
+
+
+def _outcome(name: str, quick: bool, rows: list, values: dict, runs) -> Outcome:
+    """The Outcome of one scenario's result: settings with the scenario's, its choices."""
+    return Outcome(
+        tuple(rows),
+        values,
+        {**_settings(name, quick), **values["scenario"]},
+        _choices(name, quick),
+        {"runs": runs, "name": name},
     )
 
 
@@ -223,7 +235,7 @@ def _task_outcome(name: str, quick: bool) -> Outcome:
             "almost identical",
             position_ratio,
             "",
-            Status.QUALITATIVE if same_position else Status.NOT_REPRODUCIBLE,
+            Status.claim(same_position),
             "largest over smallest max in-plane EE position error over the three controllers "
             f"(criterion <= {ALMOST_IDENTICAL_FACTOR:g}); "
             + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in position.items()),
@@ -233,7 +245,7 @@ def _task_outcome(name: str, quick: bool) -> Outcome:
             "almost identical",
             force_ratio,
             "",
-            Status.QUALITATIVE if same_force else Status.NOT_REPRODUCIBLE,
+            Status.claim(same_force),
             "largest over smallest max |f_des - f| (criterion <= "
             f"{ALMOST_IDENTICAL_FACTOR:g}, or all below {FORCE_FLOOR:g} N); "
             + ", ".join(f"{k} {v:.3g} N" for k, v in force.items())
@@ -248,7 +260,7 @@ def _task_outcome(name: str, quick: bool) -> Outcome:
             FORCE,
             {c.value: float(run.contact_force[-1]) for c, run in runs.items()},
             "N",
-            Status.QUALITATIVE if final < 0.1 else Status.NOT_REPRODUCIBLE,
+            Status.claim(final < 0.1),
             "contact force at the end of the run (target 10 N after the 1 s ramp).",
         )
     )
@@ -264,13 +276,7 @@ def _task_outcome(name: str, quick: bool) -> Outcome:
                 "orientation held (thesis: 'fixed'); no number printed.",
             )
         )
-    return Outcome(
-        tuple(rows),
-        values,
-        {**_settings(name, quick), **values["scenario"]},
-        _choices(name, quick),
-        {"runs": runs, "name": name},
-    )
+    return _outcome(name, quick, rows, values, runs)
 
 
 def _plot_task(outcome: Outcome, figure) -> None:
@@ -285,23 +291,20 @@ def _plot_task(outcome: Outcome, figure) -> None:
             axes[0].plot(run.t, run.tangential_error * 1e3, **style)
             axes[1].plot(run.t, np.linalg.norm(run.orientation_error, axis=1) * 1e3, **style)
         axes[-1].plot(run.t, run.force_error, **style)
-    axes[0].set_ylabel(
+    plot.label_axes(
+        axes[0],
+        None,
         "x_E error [mm]" if name == PLANAR else "in-plane |e| [mm]",
-    )
-    axes[0].set_title(
         "EE position error p_des - p in the contact frame"
         + (" (tangential x_E)" if name == PLANAR else " (in the wall plane)"),
-        fontsize=9,
     )
     if name == WALL:
-        axes[1].set_ylabel("|orientation error| [mrad]")
-        axes[1].set_title("orientation error |log(R_des R^T)|", fontsize=9)
-    axes[-1].set_ylabel("f_des - f [N]")
-    axes[-1].set_title("force error along the normal z_E (10 N after a 1 s ramp)", fontsize=9)
-    axes[-1].set_xlabel("t [s]")
+        title = "orientation error |log(R_des R^T)|"
+        plot.label_axes(axes[1], None, "|orientation error| [mrad]", title)
+    title = "force error along the normal z_E (10 N after a 1 s ramp)"
+    plot.time_axes(axes[-1], "f_des - f [N]", title)
     for ax in axes:
-        ax.legend(fontsize=7)
-        ax.grid(alpha=0.3)
+        plot.legend_grid(ax)
 
 
 # --------------------------------------------------------------------------- joint velocities
@@ -312,9 +315,7 @@ def _velocity_outcome(name: str, quick: bool) -> Outcome:
     values = _values(name, runs)
     peaks, ratios = values["peak_joint_speed_rad_s"], values["peak_ratio_to_rns_c"]
     rns = peaks[Controller.RNS_C.value]
-    ratio_status = (
-        Status.QUALITATIVE if min(ratios.values()) > RATIO_THRESHOLD else Status.NOT_REPRODUCIBLE
-    )
+    ratio_status = Status.claim(min(ratios.values()) > RATIO_THRESHOLD)
     rows = []
     if name == PLANAR:
         within = abs(rns - THESIS_PEAK_RNS) <= PEAK_TOLERANCE * THESIS_PEAK_RNS
@@ -324,7 +325,7 @@ def _velocity_outcome(name: str, quick: bool) -> Outcome:
                 THESIS_PEAK_RNS,
                 rns,
                 "rad/s",
-                Status.QUALITATIVE if within else Status.NOT_REPRODUCIBLE,
+                Status.claim(within),
                 f"within +-{PEAK_TOLERANCE:.0%} of 0.73 by construction: T_half = "
                 f"{PLANAR_HALF_CYCLE} s was TUNED to it (A-4.7; the thesis gives no duration)"
                 + ("." if not quick else "; quick run: one half cycle at 2 ms."),
@@ -340,9 +341,7 @@ def _velocity_outcome(name: str, quick: bool) -> Outcome:
                     thesis,
                     peaks[controller.value],
                     "rad/s",
-                    Status.QUALITATIVE
-                    if ratios[controller.value] > RATIO_THRESHOLD
-                    else Status.NOT_REPRODUCIBLE,
+                    Status.claim(ratios[controller.value] > RATIO_THRESHOLD),
                     f"untuned; {ratios[controller.value]:.3g}x RNS-C (acceptance > "
                     f"{RATIO_THRESHOLD:g}); "
                     + (
@@ -386,13 +385,7 @@ def _velocity_outcome(name: str, quick: bool) -> Outcome:
                 "when the EE stops and its peak in stroke 3 nearly reaches OS-C's.",
             )
         )
-    return Outcome(
-        tuple(rows),
-        values,
-        {**_settings(name, quick), **values["scenario"]},
-        _choices(name, quick),
-        {"runs": runs, "name": name},
-    )
+    return _outcome(name, quick, rows, values, runs)
 
 
 def _plot_velocity(outcome: Outcome, figure) -> None:
@@ -400,32 +393,25 @@ def _plot_velocity(outcome: Outcome, figure) -> None:
     axes = figure.subplots(len(runs) + 1, 1, sharex=True)
     limit = max(run.peak_joint_speed for run in runs.values()) * 1.05
     for ax, (controller, run) in zip(axes, runs.items(), strict=False):
-        for j in range(run.v.shape[1]):
-            ax.plot(run.t, run.v[:, j], lw=0.9, label=rf"$\dot\theta_{j + 1}$")
+        plot.joint_lines(ax, run.t, run.v, plot.THETA_DOT_LABEL, lw=0.9)
         ax.set_ylim(-limit, limit)
-        ax.set_ylabel("[rad/s]")
-        ax.set_title(
-            f"{controller.value}: joint velocities, peak {run.peak_joint_speed:.3g} rad/s",
-            fontsize=9,
-        )
-        ax.legend(fontsize=7, ncol=run.v.shape[1], loc="upper right")
-        ax.grid(alpha=0.3)
+        title = f"{controller.value}: joint velocities, peak {run.peak_joint_speed:.3g} rad/s"
+        plot.label_axes(ax, None, "[rad/s]", title)
+        plot.legend_grid(ax, ncol=run.v.shape[1], loc="upper right")
     ax = axes[-1]
     for controller, run in runs.items():
         ax.semilogy(
             run.t,
-            np.maximum(run.null_space_velocity, 1e-12),
+            plot.floored(run.null_space_velocity),
             color=_COLORS[controller],
             label=controller.value,
         )
-    ax.set_title(r"null-space velocity $\|\hat P_{RNS}\dot\theta\|$ (7.14)", fontsize=9)
-    ax.set_ylabel("[rad/s]")
-    ax.set_xlabel("t [s]")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
+    title = r"null-space velocity $\|\hat P_{RNS}\dot\theta\|$ (7.14)"
+    plot.time_axes(ax, "[rad/s]", title)
+    plot.legend_grid(ax)
 
 
-register(
+REPRODUCTIONS = register_all(
     Reproduction(
         "fig6.3",
         "Fig. 6.3",
@@ -433,9 +419,7 @@ register(
         functools.partial(_task_outcome, PLANAR),
         _plot_task,
         (8.0, 6.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig6.4",
         "Fig. 6.4",
@@ -443,9 +427,7 @@ register(
         functools.partial(_velocity_outcome, PLANAR),
         _plot_velocity,
         (9.0, 10.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig6.7",
         "Fig. 6.7",
@@ -453,9 +435,7 @@ register(
         functools.partial(_task_outcome, WALL),
         _plot_task,
         (8.0, 8.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig6.8",
         "Fig. 6.8",
@@ -463,5 +443,5 @@ register(
         functools.partial(_velocity_outcome, WALL),
         _plot_velocity,
         (9.0, 10.0),
-    )
+    ),
 )

@@ -21,12 +21,14 @@ import functools
 
 import numpy as np
 
+from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
     Status,
-    register,
+    register_all,
+    resolution_choice,
 )
 from rns_ros.analysis.virtual_mass import (
     DAMPER_GAIN_STEP,
@@ -170,13 +172,13 @@ def _settings(quick: bool) -> dict:
 
 
 def _quick_choice(quick: bool) -> str:
-    if quick:
-        return (
-            f"Quick run (tests): one half cycle of {QUICK_HALF_PERIOD:g} s (instead of two of "
-            f"{HALF_PERIOD:g} s), RK4 at {QUICK_STEP * 1e3:g} ms, damper k_d = "
-            f"{DAMPER_GAIN_STEP:g}/step = {DAMPER_GAIN_STEP / QUICK_STEP:g} 1/s, fewer masses."
-        )
-    return f"Full run: RK4 at {THESIS_STEP * 1e3:g} ms, two half cycles of {HALF_PERIOD:g} s."
+    return resolution_choice(
+        quick,
+        f"one half cycle of {QUICK_HALF_PERIOD:g} s (instead of two of {HALF_PERIOD:g} s), RK4 "
+        f"at {QUICK_STEP * 1e3:g} ms, damper k_d = {DAMPER_GAIN_STEP:g}/step = "
+        f"{DAMPER_GAIN_STEP / QUICK_STEP:g} 1/s, fewer masses.",
+        f"RK4 at {THESIS_STEP * 1e3:g} ms, two half cycles of {HALF_PERIOD:g} s.",
+    )
 
 
 def _decreasing(values) -> bool:
@@ -186,16 +188,35 @@ def _decreasing(values) -> bool:
 # --------------------------------------------------------------------------- Fig. 7.1 / 7.3
 
 
-def _compute_fig7_1(quick: bool) -> Outcome:
-    sweep = _sweep(quick)
-    figure_masses = QUICK_FIGURE_MASSES if quick else FIGURE_MASSES
-    runs = {float(m): _run(Variant.RNS.value, float(m), quick) for m in figure_masses}
+def _per_mass_values(sweep, runs: dict[float, ArmRun]) -> dict:
+    """{m_hat: run values} of the sweep (with RMS vs J^+) and of the figure runs not in it."""
     per_mass = {}
     for mass, run, rms in zip(sweep.masses, sweep.runs, sweep.rms, strict=True):
         per_mass[f"{mass:g}"] = {**_run_values(run), "rms_vs_resolved_rad": float(rms)}
     for mass, run in runs.items():
         if f"{mass:g}" not in per_mass:
             per_mass[f"{mass:g}"] = {**_run_values(run), "rms_vs_resolved_rad": None}
+    return per_mass
+
+
+def _ours_over_spec(per_mass: dict, spec: dict) -> dict:
+    """Our values over the spec [V] table's, per mass in both and per value we have."""
+    return {
+        key: {
+            name: per_mass[key][name] / spec[key][name]
+            for name in _V_KEYS
+            if per_mass[key].get(name) is not None
+        }
+        for key in per_mass
+        if key in spec
+    }
+
+
+def _compute_fig7_1(quick: bool) -> Outcome:
+    sweep = _sweep(quick)
+    figure_masses = QUICK_FIGURE_MASSES if quick else FIGURE_MASSES
+    runs = {float(m): _run(Variant.RNS.value, float(m), quick) for m in figure_masses}
+    per_mass = _per_mass_values(sweep, runs)
     masses = [float(m) for m in sweep.masses]
     rms = [float(r) for r in sweep.rms]
     upper = [m for m in masses if m >= SLOPE_FROM_MASS]
@@ -206,15 +227,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
     nsv = [float(runs[m].null_space_rns.max()) for m in figure_masses]
     nsv_j = [float(runs[m].null_space_jacobian.max()) for m in figure_masses]
     spec = {f"{mass:g}": dict(zip(_V_KEYS, row, strict=True)) for mass, row in SPEC_V_TABLE.items()}
-    ours_over_spec = {
-        key: {
-            name: per_mass[key][name] / spec[key][name]
-            for name in _V_KEYS
-            if per_mass[key].get(name) is not None
-        }
-        for key in per_mass
-        if key in spec
-    }
+    ours_over_spec = _ours_over_spec(per_mass, spec)
     spec_nsv = [SPEC_V_TABLE[m][1] for m in figure_masses]
     spec_rms = [SPEC_V_TABLE[m][0] for m in masses]
     rows = [
@@ -223,7 +236,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
             "decreasing with the constrained link mass (Fig. 7.1, no numbers)",
             nsv,
             "rad/s",
-            Status.QUALITATIVE if _decreasing(nsv) else Status.NOT_REPRODUCIBLE,
+            Status.claim(_decreasing(nsv)),
             f"max ||P_RNS theta_dot|| for m_hat = {list(figure_masses)} kg; ||P_J theta_dot|| "
             f"{[round(x, 4) for x in nsv_j]}; spec [V] (not a target) {spec_nsv}.",
         ),
@@ -232,7 +245,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
             "decreasing with the mass (Fig. 7.3, log axis, no numbers)",
             rms,
             "rad",
-            Status.QUALITATIVE if _decreasing(rms) else Status.NOT_REPRODUCIBLE,
+            Status.claim(_decreasing(rms)),
             f"RMS[Delta theta] (7.7) RNS-C vs J^+ for m_hat = {masses} kg; spec [V] (T_half 2.5 "
             f"s, not a target) {spec_rms}.",
         ),
@@ -241,7 +254,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
             "Q_M_Al -> Q_J as the mass grows (RNS-C -> minimum acceleration norm)",
             slope,
             "",
-            Status.QUALITATIVE if -1.1 <= slope <= -0.9 else Status.NOT_REPRODUCIBLE,
+            Status.claim(-1.1 <= slope <= -0.9),
             f"least-squares slope of log10 RMS against log10 m_hat for m_hat >= "
             f"{SLOPE_FROM_MASS:g} kg; spec [V]: -1 (RMS ~ 1/m_hat); RMS drop over mass ratio "
             "between neighbours (1 = 1/m_hat): "
@@ -284,9 +297,8 @@ def _plot_fig7_1(outcome: Outcome, figure) -> None:
     for column, (mass, run) in enumerate(runs.items()):
         ax = figure.add_subplot(grid[0, column], sharey=share)
         share = share or ax
-        for j in range(run.v.shape[1]):
-            ax.plot(run.t, run.v[:, j], lw=0.9, label=rf"$\dot\theta_{j + 1}$")
-        ax.set_title(rf"$\hat m_3$ = {mass:g} kg", fontsize=9)
+        plot.joint_lines(ax, run.t, run.v, plot.THETA_DOT_LABEL, lw=0.9)
+        ax.set_title(rf"$\hat m_3$ = {mass:g} kg", fontsize=plot.TITLE_SIZE)
         ax.set_xlabel("t [s]")
         if column == 0:
             ax.set_ylabel("joint velocity [rad/s]")
@@ -305,9 +317,12 @@ def _plot_fig7_1(outcome: Outcome, figure) -> None:
     spec = [SPEC_V_TABLE.get(float(m), (np.nan,))[0] for m in sweep.masses]
     ax.loglog(sweep.masses, spec, "x:", color=_GREY, label="spec [V] (T_half 2.5 s)")
     slope = outcome.values["rms_vs_mass"]["log_slope"]
-    ax.set_title(rf"Fig. 7.3: RMS[$\Delta\theta$] (7.7), log slope {slope:.3f}", fontsize=9)
-    ax.set_xlabel(r"virtual mass $\hat m_3$ [kg]")
-    ax.set_ylabel(r"RMS[$\Delta\theta$] [rad]")
+    plot.label_axes(
+        ax,
+        r"virtual mass $\hat m_3$ [kg]",
+        r"RMS[$\Delta\theta$] [rad]",
+        rf"Fig. 7.3: RMS[$\Delta\theta$] (7.7), log slope {slope:.3f}",
+    )
     ax.grid(True, which="both", lw=0.3)
     ax.legend(fontsize=7)
 
@@ -340,6 +355,16 @@ def _divergence(quick: bool) -> dict:
     return {"k_d_1_s": gain, "k_d_step": UNSTABLE_DAMPER_STEP, "diverged": False, "message": ""}
 
 
+_FIG7_4_CHOICES = (
+    f"Damper (§7.2.2): theta_ddot_a = -k_d theta_dot, k_d = {DAMPER_GAIN_STEP:g}/step (2770 "
+    "1/s at 1 ms), entered as P_hat_RNS theta_ddot_a through rns_control's oblique projector "
+    "(the task stays exact).",
+    "Velocity-level term (7.13): the 'velocity' form +P_hat_RNS Wdot^T W^{+T} theta_dot "
+    "(Wdot by a central difference along theta_dot) is the main curve; the printed "
+    "'momentum' form -P_hat_RNS Wdot^T (W W^T)^-1 M_red J theta_dot is a labelled extra.",
+)
+
+
 def _compute_fig7_2(quick: bool) -> Outcome:
     runs = {
         VELOCITY: _run(Variant.VELOCITY.value, FIG7_4_MASS, quick),
@@ -360,7 +385,7 @@ def _compute_fig7_2(quick: bool) -> Outcome:
             "damper's null-space velocity much larger in order (Fig. 7.4, no numbers)",
             ratio_peak,
             "",
-            Status.QUALITATIVE if ratio_peak >= ORDER_RATIO else Status.NOT_REPRODUCIBLE,
+            Status.claim(ratio_peak >= ORDER_RATIO),
             f"max ||P_RNS theta_dot||: damper (k_d = {damper_gain:g} 1/s) {peak[DAMPER]:.3g}, "
             f"velocity-level (7.13, velocity form) {peak[VELOCITY]:.3g} rad/s; final values "
             f"{final[DAMPER]:.3g} and {final[VELOCITY]:.3g} rad/s (ratio {ratio_final:.3g}).",
@@ -370,7 +395,7 @@ def _compute_fig7_2(quick: bool) -> Outcome:
             "(7.13) as printed (M_A V_A form) beats the damper",
             momentum_ratio,
             "",
-            Status.QUALITATIVE if momentum_ratio > 1.0 else Status.NOT_REPRODUCIBLE,
+            Status.claim(momentum_ratio > 1.0),
             f"printed form -P Wdot^T (W W^T)^-1 M_red V_A: max ||P_RNS theta_dot|| "
             f"{peak[MOMENTUM]:.3g} rad/s. It equals the velocity form only under the control "
             "model's zero momentum (7.9), which the real fixed arm does not keep at finite "
@@ -384,7 +409,7 @@ def _compute_fig7_2(quick: bool) -> Outcome:
             if divergence["diverged"]
             else {"stable_k_d_step": DAMPER_GAIN_STEP, "diverged_at_k_d_step": None},
             "",
-            Status.QUALITATIVE if divergence["diverged"] else Status.NOT_REPRODUCIBLE,
+            Status.claim(divergence["diverged"]),
             f"the damper run at k_d step = {DAMPER_GAIN_STEP:g} stays finite; a "
             f"{UNSTABLE_DURATION:g} s run at k_d step = {UNSTABLE_DAMPER_STEP:g} "
             + (
@@ -410,16 +435,7 @@ def _compute_fig7_2(quick: bool) -> Outcome:
         "damper_gain_1_s": damper_gain,
         "velocity_term_forms": {VELOCITY: "velocity", MOMENTUM: "momentum"},
     }
-    choices = (
-        *_CHOICES,
-        f"Damper (§7.2.2): theta_ddot_a = -k_d theta_dot, k_d = {DAMPER_GAIN_STEP:g}/step (2770 "
-        "1/s at 1 ms), entered as P_hat_RNS theta_ddot_a through rns_control's oblique projector "
-        "(the task stays exact).",
-        "Velocity-level term (7.13): the 'velocity' form +P_hat_RNS Wdot^T W^{+T} theta_dot "
-        "(Wdot by a central difference along theta_dot) is the main curve; the printed "
-        "'momentum' form -P_hat_RNS Wdot^T (W W^T)^-1 M_red J theta_dot is a labelled extra.",
-        _quick_choice(quick),
-    )
+    choices = (*_CHOICES, *_FIG7_4_CHOICES, _quick_choice(quick))
     return Outcome(tuple(rows), values, settings, choices, {"runs": runs})
 
 
@@ -434,27 +450,23 @@ def _plot_fig7_2(outcome: Outcome, figure) -> None:
     }
     for label, run in runs.items():
         color, ls, name = styles[label]
-        ax.semilogy(run.t, np.maximum(run.null_space_rns, 1e-16), color=color, ls=ls, label=name)
-    ax.set_title(r"Fig. 7.4: $\|\hat P_{RNS}\dot\theta\|$, $\hat m_3$ = 1e4 kg", fontsize=9)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("null-space velocity [rad/s]")
+        ax.semilogy(run.t, plot.floored(run.null_space_rns, 1e-16), color=color, ls=ls, label=name)
+    title = r"Fig. 7.4: $\|\hat P_{RNS}\dot\theta\|$, $\hat m_3$ = 1e4 kg"
+    plot.time_axes(ax, "null-space velocity [rad/s]", title)
     ax.legend(fontsize=7)
     ax = axes[1]
     run, other = runs[VELOCITY], runs[DAMPER]
-    for j in range(run.v.shape[1]):
-        ax.plot(run.t, run.v[:, j], lw=0.9, label=rf"$\dot\theta_{j + 1}$")
+    plot.joint_lines(ax, run.t, run.v, plot.THETA_DOT_LABEL, lw=0.9)
     difference = float(np.abs(run.v - other.v).max())
-    ax.set_title(
+    title = (
         f"joint velocities, velocity-level run (the damper run differs by at most "
-        f"{difference:.2g} rad/s)",
-        fontsize=9,
+        f"{difference:.2g} rad/s)"
     )
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("joint velocity [rad/s]")
+    plot.time_axes(ax, "joint velocity [rad/s]", title)
     ax.legend(fontsize=7)
 
 
-register(
+REPRODUCTIONS = register_all(
     Reproduction(
         "fig7.1",
         "Figs. 7.1, 7.3",
@@ -462,9 +474,7 @@ register(
         _compute_fig7_1,
         _plot_fig7_1,
         (12.0, 10.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig7.2",
         "Fig. 7.4",
@@ -472,5 +482,5 @@ register(
         _compute_fig7_2,
         _plot_fig7_2,
         (9.0, 8.0),
-    )
+    ),
 )

@@ -1,6 +1,6 @@
 """The reproduction registry: every thesis figure and table as one :class:`Reproduction`.
 
-A chapter module registers its results at import (``register(Reproduction(...))``);
+A chapter module registers its results at import (``register_all(Reproduction(...), ...)``);
 :func:`load_all` imports the chapter modules listed in :data:`CHAPTER_MODULES`, so a later
 chapter adds itself by adding its module there. Each result has
 
@@ -26,15 +26,16 @@ from typing import Any
 
 import numpy as np
 
+from rns_ros.analysis.reproduce.plotting import save_figure
 from rns_ros.core.errors import ConfigError
 
-#: Modules that register results when imported, in report order (later issues append theirs).
+#: Modules that register results when imported, in report order (a new chapter appends its own).
 CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter3",
     "rns_ros.analysis.reproduce.chapter4",
     "rns_ros.analysis.reproduce.chapter4_ptp",
     "rns_ros.analysis.reproduce.chapter5",
-    "rns_ros.analysis.reproduce.chapter5_inspection",
+    "rns_ros.analysis.reproduce.chapter5_inspection_energy",
     "rns_ros.analysis.reproduce.chapter6",
     "rns_ros.analysis.reproduce.chapter7",
 )
@@ -46,6 +47,11 @@ class Status(StrEnum):
     EXACT = "reproduced exactly"
     QUALITATIVE = "reproduced qualitatively"
     NOT_REPRODUCIBLE = "not reproducible"
+
+    @classmethod
+    def claim(cls, holds: bool) -> Status:
+        """The status of a thesis claim checked on our model: QUALITATIVE when it holds."""
+        return cls.QUALITATIVE if holds else cls.NOT_REPRODUCIBLE
 
 
 @dataclass(frozen=True)
@@ -121,6 +127,17 @@ def register(reproduction: Reproduction) -> Reproduction:
     return reproduction
 
 
+def resolution_choice(quick: bool, quick_run: str, full_run: str) -> str:
+    """The choice that states a result's resolution: ``Quick run (tests): <quick_run>`` or
+    ``Full run: <full_run>``."""
+    return f"Quick run (tests): {quick_run}" if quick else f"Full run: {full_run}"
+
+
+def register_all(*reproductions: Reproduction) -> dict[str, Reproduction]:
+    """Register ``reproductions`` in the given order; {id: reproduction} of them."""
+    return {reproduction.id: register(reproduction) for reproduction in reproductions}
+
+
 def load_all() -> dict[str, Reproduction]:
     """Import every chapter module and return {id: reproduction} in registration order."""
     for module in CHAPTER_MODULES:
@@ -172,18 +189,15 @@ def output_dir(path: str | Path) -> Path:
 
 def run_one(reproduction: Reproduction, out: Path, *, quick: bool = False) -> RunRecord:
     """Compute ``reproduction``, write ``out/<id>.json`` and ``out/<id>.png``."""
-    import matplotlib
-
-    matplotlib.use("Agg")  # headless: no display is needed or used
-    from matplotlib.figure import Figure
-
     start = time.perf_counter()
     outcome = reproduction.compute(quick)
-    figure = Figure(figsize=reproduction.size, layout="constrained")
-    reproduction.plot(outcome, figure)
-    figure.suptitle(f"{reproduction.figure}: {reproduction.title}", fontsize=10)
     png = out / f"{reproduction.id}.png"
-    figure.savefig(png, dpi=110)
+    save_figure(
+        png,
+        reproduction.size,
+        f"{reproduction.figure}: {reproduction.title}",
+        lambda figure: reproduction.plot(outcome, figure),
+    )
     seconds = time.perf_counter() - start
     document = {
         "id": reproduction.id,

@@ -1,13 +1,12 @@
-"""Chapter 5 inspection reproductions (Figs. 5.4-5.5): quick runs give finite JSON with the
+"""Chapter 5 inspection-energy reproductions (Figs. 5.4-5.5): quick runs give finite JSON with the
 documented keys and a PNG."""
 
 from __future__ import annotations
 
 import pytest
-from rns_testing import json_finite, quick_documents
+from rns_testing import assert_chapter_order, quick_documents, quick_result_statuses
 
-from rns_ros.analysis.reproduce import chapter5_inspection as ch5
-from rns_ros.analysis.reproduce import registry
+from rns_ros.analysis.reproduce import chapter5_inspection_energy as ch5
 from rns_ros.analysis.reproduce.registry import Status
 
 IDS = ("fig5.4", "fig5.5")
@@ -17,30 +16,18 @@ RUNS = {ch5.REACTIONLESS, ch5.CONVENTIONAL}
 @pytest.fixture(scope="module")
 def documents(tmp_path_factory):
     """{id: (json document, png path)}; condition 1 is shared through the cache."""
-    return quick_documents(IDS, tmp_path_factory.mktemp("chapter5_inspection"))
+    return quick_documents(IDS, tmp_path_factory.mktemp("chapter5_inspection_energy"))
 
 
 def test_the_module_comes_after_the_other_chapters_and_registers_both_results():
-    modules = list(registry.CHAPTER_MODULES)
-    ours = modules.index("rns_ros.analysis.reproduce.chapter5_inspection")
-    for earlier in ("chapter3", "chapter4", "chapter4_ptp", "chapter5"):
-        name = f"rns_ros.analysis.reproduce.{earlier}"
-        if name in modules:
-            assert modules.index(name) < ours
-    assert set(IDS) <= set(registry.load_all())
+    earlier = ("chapter3", "chapter4", "chapter4_ptp", "chapter5")
+    assert_chapter_order("chapter5_inspection_energy", earlier, IDS)
 
 
 @pytest.mark.parametrize("identifier", IDS)
 def test_each_result_writes_finite_json_and_a_png(documents, identifier):
     document, png = documents[identifier]
-    assert document["id"] == identifier
-    assert document["quick"] is True
-    assert json_finite(document)
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert png.stat().st_size > 10_000
-    statuses = {c["status"] for c in document["comparisons"]}
-    assert statuses
-    assert statuses <= {status.value for status in Status}
+    assert quick_result_statuses(document, png, identifier)
     settings = document["settings"]
     assert settings["controller_rate_hz"] == ch5.QUICK_RATE
     assert settings["simulation_step_s"] == ch5.QUICK_STEP

@@ -34,17 +34,20 @@ from rns_ros.analysis.energy_inspection import (
     geometric_mean,
     random_conditions,
 )
+from rns_ros.analysis.reproduce import plotting as plot
+from rns_ros.analysis.reproduce.plotting import floored
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
     Status,
-    register,
+    register_all,
+    resolution_choice,
 )
+from rns_ros.analysis.reproduce.scenario_runs import default_robot
 from rns_ros.control.scenario import load_scenario
-from rns_ros.core import FreeFloatingModel, load_model
 from rns_ros.core.energy import WHEEL_INERTIA
-from rns_ros.resources import default_model_config, scenario_path
+from rns_ros.resources import scenario_path
 
 #: Thesis §5.2.2: "almost 10^3 times reduction" of both costs [-].
 THESIS_RATIO = 1e3
@@ -56,9 +59,6 @@ QUICK_RATE, QUICK_STEP = 50.0, 2e-2
 CONDITIONS, QUICK_CONDITIONS = 5, 3
 #: A run "completes the task" when the camera ends within this of the target [deg].
 TASK_TOLERANCE_DEG = 1.0
-#: Log-scale floor for energies that can be exactly zero [J].
-_FLOOR = 1e-12
-
 SATELLITE = "satellite_observation"
 REACTIONLESS, CONVENTIONAL = "reactionless", "conventional_wheels"
 _RED, _GREEN = "tab:red", "tab:green"
@@ -91,11 +91,6 @@ _CHOICES = (
 )
 
 
-@functools.cache
-def _robot() -> FreeFloatingModel:
-    return load_model(default_model_config())
-
-
 def _loop(quick: bool) -> tuple[float, float]:
     return (QUICK_RATE, QUICK_STEP) if quick else (FULL_RATE, FULL_STEP)
 
@@ -103,7 +98,7 @@ def _loop(quick: bool) -> tuple[float, float]:
 @functools.cache
 def _conditions(count: int) -> tuple[InspectionCondition, ...]:
     """Condition 1 (Fig. 4.3(a)) and count - 1 random ones (seed CONDITION_SEED)."""
-    robot = _robot()
+    robot = default_robot()
     first = fixed_condition(robot, load_scenario(scenario_path(SATELLITE)), "condition 1")
     return (first, *random_conditions(robot, count - 1, seed=CONDITION_SEED))
 
@@ -113,7 +108,7 @@ def _comparison(index: int, quick: bool) -> ConditionComparison:
     """Both runs of condition ``index`` (0-based) of the quick or full condition list."""
     count = QUICK_CONDITIONS if quick else CONDITIONS
     rate, step = _loop(quick)
-    return compare(_robot(), _conditions(count)[index], rate=rate, simulation_step=step)
+    return compare(default_robot(), _conditions(count)[index], rate=rate, simulation_step=step)
 
 
 def _completed(run: EnergyRun) -> bool:
@@ -162,7 +157,7 @@ def _torque_values(run: EnergyRun) -> dict:
 
 def _settings(quick: bool, count: int) -> dict:
     rate, step = _loop(quick)
-    robot = _robot()
+    robot = default_robot()
     return {
         "model": f"{robot.name} (config/urdf/rns_7dof_arm.urdf, {robot.n} joints)",
         "controller_rate_hz": rate,
@@ -187,17 +182,17 @@ def _settings(quick: bool, count: int) -> dict:
 
 
 def _quick_choice(quick: bool) -> str:
-    if quick:
-        return (
-            f"Quick run (tests): {QUICK_RATE:g} Hz controller, one {QUICK_STEP * 1e3:g} ms RK4 "
-            f"step per period, {QUICK_CONDITIONS} conditions instead of {CONDITIONS}."
-        )
-    return f"Full run: {FULL_RATE:g} Hz controller, {FULL_STEP * 1e3:g} ms RK4 step."
+    return resolution_choice(
+        quick,
+        f"{QUICK_RATE:g} Hz controller, one {QUICK_STEP * 1e3:g} ms RK4 step per period, "
+        f"{QUICK_CONDITIONS} conditions instead of {CONDITIONS}.",
+        f"{FULL_RATE:g} Hz controller, {FULL_STEP * 1e3:g} ms RK4 step.",
+    )
 
 
 def _ratio_status(ratio: dict) -> Status:
     """QUALITATIVE when both costs drop by at least an order of magnitude."""
-    return Status.QUALITATIVE if min(ratio.values()) > 10.0 else Status.NOT_REPRODUCIBLE
+    return Status.claim(min(ratio.values()) > 10.0)
 
 
 # --------------------------------------------------------------------------- Fig. 5.4
@@ -217,7 +212,7 @@ def _compute_fig5_4(quick: bool) -> Outcome:
             "'quite larger' (no number printed)",
             wheel_over_arm,
             "",
-            Status.QUALITATIVE if wheel_over_arm > 10.0 else Status.NOT_REPRODUCIBLE,
+            Status.claim(wheel_over_arm > 10.0),
             f"conventional + wheels: peak wheel energy {conv_values['peak_energy_J']['wheels']:.4g}"
             f" J over peak arm energy {conv_values['peak_energy_J']['arm']:.4g} J; Lambda_r "
             "scales as 1/I_r with I_r = 0.11 kg m^2.",
@@ -237,9 +232,7 @@ def _compute_fig5_4(quick: bool) -> Outcome:
             f"above ETS-VII's {ETS_VII_WHEEL_TORQUE_LIMIT} N m implied ('would need lower speed')",
             torque["peak_Nm"],
             "N m",
-            Status.QUALITATIVE
-            if torque["peak_Nm"] > ETS_VII_WHEEL_TORQUE_LIMIT
-            else Status.NOT_REPRODUCIBLE,
+            Status.claim(torque["peak_Nm"] > ETS_VII_WHEEL_TORQUE_LIMIT),
             f"|tau_r| of eq. (5.14), {torque['peak_over_limit']:.3g}x the limit, above it for "
             f"{torque['time_above_limit_s']:.2f} s of {CONDITION_DURATION:g} s (largest single "
             f"wheel {torque['peak_single_wheel_Nm']:.3g} N m); the same motion would need about "
@@ -251,28 +244,12 @@ def _compute_fig5_4(quick: bool) -> Outcome:
             "~0 (M~_omega_m theta_dot ~ 0)",
             residual,
             "",
-            Status.QUALITATIVE if residual < 1e-6 else Status.NOT_REPRODUCIBLE,
+            Status.claim(residual < 1e-6),
             "peak wheel part over peak arm part of the reactionless motion: the sampled "
             "controller's residual coupling momentum (midpoint hold, O(T^2)).",
         ),
     ]
-    values = {
-        "peak_energy_J": {
-            REACTIONLESS: rns_values["peak_energy_J"],
-            CONVENTIONAL: conv_values["peak_energy_J"],
-        },
-        "c_max_J": {
-            REACTIONLESS: rns_values["c_max_J"]["total"],
-            CONVENTIONAL: conv_values["c_max_J"]["total"],
-        },
-        "c_sum_Js": {
-            REACTIONLESS: rns_values["c_sum_Js"]["total"],
-            CONVENTIONAL: conv_values["c_sum_Js"]["total"],
-        },
-        "energy_ratio": ratio,
-        "wheel_torque": torque,
-        "runs": {REACTIONLESS: rns_values, CONVENTIONAL: conv_values},
-    }
+    values = _fig5_4_values(rns_values, conv_values, ratio, torque)
     condition = comparison.condition
     settings = {
         **_settings(quick, 1),
@@ -291,33 +268,61 @@ def _compute_fig5_4(quick: bool) -> Outcome:
     )
 
 
+def _fig5_4_values(rns_values: dict, conv_values: dict, ratio: dict, torque: dict) -> dict:
+    """The JSON values of Fig. 5.4: peak energies and total costs of both motions, their ratio,
+    the wheel torque and every run value."""
+    return {
+        "peak_energy_J": {
+            REACTIONLESS: rns_values["peak_energy_J"],
+            CONVENTIONAL: conv_values["peak_energy_J"],
+        },
+        "c_max_J": {
+            REACTIONLESS: rns_values["c_max_J"]["total"],
+            CONVENTIONAL: conv_values["c_max_J"]["total"],
+        },
+        "c_sum_Js": {
+            REACTIONLESS: rns_values["c_sum_Js"]["total"],
+            CONVENTIONAL: conv_values["c_sum_Js"]["total"],
+        },
+        "energy_ratio": ratio,
+        "wheel_torque": torque,
+        "runs": {REACTIONLESS: rns_values, CONVENTIONAL: conv_values},
+    }
+
+
 def _plot_fig5_4(outcome: Outcome, figure) -> None:
     comparison = outcome.figure_data["comparison"]
     rns, conv = comparison.reactionless.series, comparison.conventional.series
     axes = figure.subplots(3, 1)
-    ax = axes[0]
-    ax.semilogy(conv.t, np.maximum(conv.wheel_energy, _FLOOR), color=_GREEN, label="RW: wheels")
-    ax.semilogy(conv.t, np.maximum(conv.arm_energy, _FLOOR), color=_GREEN, ls="--", label="RW: arm")
-    ax.semilogy(rns.t, np.maximum(rns.arm_energy, _FLOOR), color=_RED, label="RNS: arm")
+    _energy_panel(axes[0], rns, conv)
+    _torque_panel(axes[1], conv)
+    _running_cost_panel(axes[2], rns, conv, outcome.values["energy_ratio"])
+
+
+def _energy_panel(ax, rns, conv) -> None:
+    """Kinetic energy [J] of both motions, arm and wheel parts (5.3), log scale."""
+    ax.semilogy(conv.t, floored(conv.wheel_energy), color=_GREEN, label="RW: wheels")
+    ax.semilogy(conv.t, floored(conv.arm_energy), color=_GREEN, ls="--", label="RW: arm")
+    ax.semilogy(rns.t, floored(rns.arm_energy), color=_RED, label="RNS: arm")
     ax.semilogy(
         rns.t,
-        np.maximum(rns.wheel_energy, _FLOOR),
+        floored(rns.wheel_energy),
         color=_RED,
         ls=":",
         lw=0.8,
         label="RNS: wheel residual",
     )
     ax.set_ylim(bottom=1e-10)  # the reactionless wheel residual is ~1e-8 of its arm energy
-    ax.set_title(
+    title = (
         r"kinetic energy $\frac{1}{2}\dot\theta^T\Lambda\dot\theta$, arm ($\Lambda_m$) and "
-        r"wheel ($\Lambda_r$) parts (5.3)",
-        fontsize=9,
+        r"wheel ($\Lambda_r$) parts (5.3)"
     )
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("energy [J]")
+    plot.time_axes(ax, "energy [J]", title)
     ax.legend(fontsize=7, ncol=2)
 
-    ax = axes[1]
+
+def _torque_panel(ax, conv) -> None:
+    """Wheel torque (5.14) [N m] per wheel and its norm against the ETS-VII limit, log scale."""
     torque = conv.wheel_torque()
     for j, name in enumerate("xyz"):
         ax.plot(torque.t, np.abs(torque.torque[:, j]), lw=0.8, label=rf"$|\tau_{{r,{name}}}|$")
@@ -325,26 +330,21 @@ def _plot_fig5_4(outcome: Outcome, figure) -> None:
     ax.axhline(ETS_VII_WHEEL_TORQUE_LIMIT, color="C3", ls="--", label="ETS-VII limit 0.1 N m")
     ax.set_yscale("log")
     ax.set_ylim(bottom=1e-4)
-    ax.set_title(r"wheel torque (5.14) $\tau_r = -\frac{d}{dt}(\tilde M_{\omega m}\dot\theta)$")
-    ax.title.set_fontsize(9)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("torque [N m]")
+    title = r"wheel torque (5.14) $\tau_r = -\frac{d}{dt}(\tilde M_{\omega m}\dot\theta)$"
+    plot.time_axes(ax, "torque [N m]", title)
     ax.legend(fontsize=7, ncol=3)
 
-    ax = axes[2]
+
+def _running_cost_panel(ax, rns, conv, ratio: dict) -> None:
+    """Running C_sum (5.13) [J s] of both motions, log scale."""
     for series, color, label in ((conv, _GREEN, "RW (conventional + wheels)"), (rns, _RED, "RNS")):
         dt = np.diff(series.t)
         cumulative = np.concatenate(
             ([0.0], np.cumsum(0.5 * (series.total_energy[1:] + series.total_energy[:-1]) * dt))
         )
-        ax.semilogy(series.t[1:], np.maximum(cumulative[1:], _FLOOR), color=color, label=label)
-    ratio = outcome.values["energy_ratio"]
-    ax.set_title(
-        f"running C_sum (5.13); ratio C_max {ratio['c_max']:.3g}, C_sum {ratio['c_sum']:.3g}",
-        fontsize=9,
-    )
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("C_sum [J s]")
+        ax.semilogy(series.t[1:], floored(cumulative[1:]), color=color, label=label)
+    title = f"running C_sum (5.13); ratio C_max {ratio['c_max']:.3g}, C_sum {ratio['c_sum']:.3g}"
+    plot.time_axes(ax, "C_sum [J s]", title)
     ax.legend(fontsize=7)
 
 
@@ -475,7 +475,7 @@ def _plot_fig5_5(outcome: Outcome, figure) -> None:
             (-width / 2, REACTIONLESS, _RED, "RNS (reactionless)"),
             (width / 2, CONVENTIONAL, _GREEN, "RW (conventional + wheels)"),
         ):
-            heights = [max(row[key][label], _FLOOR) for row in rows]
+            heights = [max(row[key][label], plot.FLOOR) for row in rows]
             hatches = ["" if row["task_completed"][label] else "//" for row in rows]
             bars = ax.bar(x + offset, heights, width, color=color, label=name)
             for bar, hatch in zip(bars, hatches, strict=True):
@@ -491,7 +491,7 @@ def _plot_fig5_5(outcome: Outcome, figure) -> None:
                 fontsize=7,
             )
         ax.set_yscale("log")
-        lowest = min(max(value, _FLOOR) for row in rows for value in row[key].values())
+        lowest = min(max(value, plot.FLOOR) for row in rows for value in row[key].values())
         ax.set_ylim(0.3 * lowest, 30.0 * max(max(row[key].values()) for row in rows))
         ax.set_xticks(x, [row["label"].replace("condition ", "cond. ") for row in rows])
         ax.set_ylabel(f"{title.split()[0]} [{unit}]")
@@ -501,7 +501,7 @@ def _plot_fig5_5(outcome: Outcome, figure) -> None:
         ax.legend(fontsize=7, loc="upper right")
 
 
-register(
+REPRODUCTIONS = register_all(
     Reproduction(
         "fig5.4",
         "Fig. 5.4",
@@ -509,9 +509,7 @@ register(
         _compute_fig5_4,
         _plot_fig5_4,
         (9.0, 11.0),
-    )
-)
-register(
+    ),
     Reproduction(
         "fig5.5",
         "Fig. 5.5",
@@ -519,5 +517,5 @@ register(
         _compute_fig5_5,
         _plot_fig5_5,
         (11.0, 5.5),
-    )
+    ),
 )

@@ -103,8 +103,8 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.control.camera_law import reactionless_camera_control, wrist_offset
 from rns_ros.control.controller import ControllerSettings, ReactionlessController
-from rns_ros.control.inspection import reactionless_camera_control, wrist_offset
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import (
     FreeFloatingState,

@@ -147,7 +147,7 @@ def stage_four(job):
 
 def _row(rank, geometry, scores) -> str:
     cells = [f"{rank:>2}", f"{geometry.label():<28}", f"{ai.total_shortfall(scores):8.3f}"]
-    for name in ai.CHEAP + ai.CLOSED_LOOP:
+    for name in ai.PATH_CONSTRAINTS + ai.CLOSED_LOOP_CONSTRAINTS:
         if name in scores:
             score = scores[name]
             cells.append(f"{score.value:8.3f}{'*' if score.passed else ' '}")
@@ -194,12 +194,12 @@ def main(argv=None) -> int:
         jobs = [(r[0], r[1].direction, r[1].axes, _x_of(r[1]), True) for r in stage4[: args.full]]
         full = pool.map(stage_four, jobs, chunksize=1)
     full.sort(key=lambda r: ai.total_shortfall(r[2]))
-    current = ai.score_all(ag.CURRENT, coarse=False, step=0.003)
+    current = ai.score_all(ag.INFERRED_GEOMETRY, coarse=False, step=0.003)
     header = " ".join(["rk", f"{'geometry':<28}", "  total "] + [f"{n[:9]:>9}" for n in
-                      ai.CHEAP + ai.CLOSED_LOOP])  # fmt: skip
+                      ai.PATH_CONSTRAINTS + ai.CLOSED_LOOP_CONSTRAINTS])  # fmt: skip
     print(f"\nranked finalists, full checks (* = passed) ({time.time() - t0:.0f} s)")
     print(header)
-    print(_row(0, ag.CURRENT, current) + "   <- current default")
+    print(_row(0, ag.INFERRED_GEOMETRY, current) + "   <- current default")
     for rank, (_, geometry, scores) in enumerate(full, 1):
         print(_row(rank, geometry, scores))
     print("\ncoarse closed-loop ranking")

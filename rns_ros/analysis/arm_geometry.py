@@ -197,10 +197,10 @@ def uniform_lengths() -> np.ndarray:
 
 
 #: The first, inferred geometry (config/urdf/rns_7dof_arm_inferred.urdf, docs/model.md).
-CURRENT = Geometry()
+INFERRED_GEOMETRY = Geometry()
 #: The identified geometry, best of ``scripts/identify_arm.py`` (seed 13): the default model
-#: (config/urdf/rns_7dof_arm.urdf is ``geometry_urdf(IDENTIFIED, "rns_7dof_arm")``).
-IDENTIFIED = Geometry(
+#: (config/urdf/rns_7dof_arm.urdf is ``geometry_urdf(IDENTIFIED_GEOMETRY, "rns_7dof_arm")``).
+IDENTIFIED_GEOMETRY = Geometry(
     direction="+z",
     axes=("-z", "+y", "+z", "+x", "+z", "+y", "+z"),
     lengths=(

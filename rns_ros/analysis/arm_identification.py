@@ -325,10 +325,10 @@ def score_inspection(robot: FreeFloatingModel, name: str, coarse: bool = True) -
 
 
 #: Cheap constraints (path integrals, no closed loop).
-CHEAP = ("ee_position", "fold_phase_I", "fold_phase_III", "stowed", "full_deployment",
+PATH_CONSTRAINTS = ("ee_position", "fold_phase_I", "fold_phase_III", "stowed", "full_deployment",
          "partial_deployment")  # fmt: skip
 #: Closed-loop constraints.
-CLOSED_LOOP = ("singular_window", "satellite_observation", "own_device_inspection")
+CLOSED_LOOP_CONSTRAINTS = ("singular_window", "satellite_observation", "own_device_inspection")
 
 
 def score_all(

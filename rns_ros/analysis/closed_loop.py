@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.control.camera_law import ControlGains, Method, wrist_offset
 from rns_ros.control.controller import (
     ControllerSettings,
     ControllerStep,
@@ -20,7 +21,6 @@ from rns_ros.control.controller import (
     ReactionlessController,
     angular_velocity_in_world,
 )
-from rns_ros.control.inspection import ControlGains, Method, wrist_offset
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.integration import attitude_deviation

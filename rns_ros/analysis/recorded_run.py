@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rns_ros.control.camera_law import wrist_offset
 from rns_ros.control.controller import TwistFrame
-from rns_ros.control.inspection import wrist_offset
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
 from rns_ros.core.integration import attitude_deviation

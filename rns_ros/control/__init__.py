@@ -3,7 +3,7 @@ controller that holds it over a sampling period, operator-command handling for t
 the scripted inspection scenarios. Built on :mod:`rns_ros.core` only; no rclpy or rerun.
 """
 
-from rns_ros.control.inspection import (
+from rns_ros.control.camera_law import (
     ControlGains,
     ControlOutput,
     Method,

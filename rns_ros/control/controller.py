@@ -1,4 +1,4 @@
-"""Sampled reactionless camera controller: the law of :mod:`rns_ros.control.inspection`, held.
+"""Sampled reactionless camera controller: the law of :mod:`rns_ros.control.camera_law`, held.
 
 A digital controller evaluates eq. (4.5)/(4.15) at the sampled configuration theta_k and holds the
 resulting theta_dot for one period T while the arm moves. The constraint M~_omega_m(theta) theta_dot
@@ -12,7 +12,7 @@ vanish to second order and also centres the camera's angular velocity on the int
 prediction extrapolates the last two held outputs and is checked against the output (repeated
 from the output when they disagree by more than HOLD_CONSISTENCY); the law at the midpoint runs on a
 partial state in closed form (:meth:`FreeFloatingState.arm_kinematics`,
-:func:`~rns_ros.control.inspection.arm_law_rates`). The base deviations of both corrections
+:func:`~rns_ros.control.camera_law.arm_law_rates`). The base deviations of both corrections
 are compared in docs/controller.md.
 
 The controller also integrates the joint position reference theta_ref += T theta_dot that a
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rns_ros.control.inspection import (
+from rns_ros.control.camera_law import (
     ControlGains,
     ControlOutput,
     LawRates,
@@ -162,9 +162,9 @@ class ReactionlessController:
         self._wrist_reference: np.ndarray | None = None
         self._reference: np.ndarray | None = None
         # the hold in progress: theta_ref at its start and theta_dot held (for end_hold)
-        self._hold: tuple[np.ndarray, np.ndarray] | None = None
+        self._open_hold: tuple[np.ndarray, np.ndarray] | None = None
         # theta_dot held over the last (up to) two periods, oldest first: the midpoint predictor
-        self._held: tuple[np.ndarray, ...] = ()
+        self._recent_rates: tuple[np.ndarray, ...] = ()
 
     @property
     def wrist_reference(self) -> np.ndarray | None:
@@ -180,8 +180,8 @@ class ReactionlessController:
         """Take p_w^init and theta_ref from ``state`` (start, or after the operator idled)."""
         self._wrist_reference = wrist_offset(state) if state.wrist is not None else None
         self._reference = state.theta.copy()
-        self._hold = None
-        self._held = ()
+        self._open_hold = None
+        self._recent_rates = ()
 
     def resync(self, state: FreeFloatingState) -> None:
         """Restart theta_ref at the measured angles, keeping the wrist reference (taken from
@@ -190,8 +190,8 @@ class ReactionlessController:
         if self._wrist_reference is None and state.wrist is not None:
             self._wrist_reference = wrist_offset(state)
         self._reference = state.theta.copy()
-        self._hold = None
-        self._held = ()
+        self._open_hold = None
+        self._recent_rates = ()
 
     def end_hold(self, elapsed: float) -> None:
         """End the hold in progress after ``elapsed`` [s], which may differ from the period T.
@@ -204,16 +204,16 @@ class ReactionlessController:
         make theta_ref stray is caught by the node's resync. Without a hold in progress this
         does nothing.
         """
-        if self._hold is None:
+        if self._open_hold is None:
             return
-        start, theta_dot = self._hold
+        start, theta_dot = self._open_hold
         self._reference = start + max(float(elapsed), 0.0) * theta_dot
-        self._hold = None
+        self._open_hold = None
 
     def configure(self, settings: ControllerSettings) -> None:
         """Swap settings between steps (run-time parameter changes)."""
         self.settings = settings
-        self._held = ()
+        self._recent_rates = ()
 
     def step(
         self, state: FreeFloatingState, omega_ref, hold: float | None = None
@@ -242,8 +242,8 @@ class ReactionlessController:
         theta_dot = output.joint_velocity
         start = self._reference
         self._reference = start + period * theta_dot
-        self._hold = (start, theta_dot)
-        self._held = (*self._held[-1:], theta_dot)
+        self._open_hold = (start, theta_dot)
+        self._recent_rates = (*self._recent_rates[-1:], theta_dot)
         return ControllerStep(
             output=output,
             joint_velocity=theta_dot,
@@ -269,7 +269,7 @@ class ReactionlessController:
         """
         settings = self.settings
         half = 0.5 * period
-        held = self._held
+        held = self._recent_rates
         if not held:
             predicted = self._rates(state, omega_ref, period).joint_velocity
             for _ in range(settings.hold_iterations):

@@ -33,8 +33,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.control.camera_law import ControlGains, Method
 from rns_ros.control.controller import TwistFrame
-from rns_ros.control.inspection import ControlGains, Method
 from rns_ros.core.config import check_keys, read_yaml_mapping
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.timing import QUINTIC_PEAK_RATE, quintic

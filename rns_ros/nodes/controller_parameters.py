@@ -3,8 +3,8 @@ they configure."""
 
 from __future__ import annotations
 
+from rns_ros.control.camera_law import ControlGains, Method
 from rns_ros.control.controller import ControllerSettings, HoldCorrection, TwistFrame
-from rns_ros.control.inspection import ControlGains, Method
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
 from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (

@@ -162,7 +162,9 @@ def run_method(
         for line in processes.problems():  # a watchdog that stopped the arm, a rejection
             print(f"  {line}", flush=True)
         if logger is not None:
-            closed = [line for line in processes.output(logger).splitlines() if CLOSED in line]
+            closed = [
+                line for line in processes.output(logger).splitlines() if LOGGER_CLOSED_LINE in line
+            ]
             print("\n".join(closed[-1:]), flush=True)
     figures = run_figures(robot, scenario, **data)
     return DemoRow(
@@ -317,7 +319,7 @@ def simulation_step(args: argparse.Namespace, wheels: bool) -> float:
 
 
 #: What rns_rerun_logger's summary line on closing its recording contains.
-CLOSED = "recording closed"
+LOGGER_CLOSED_LINE = "recording closed"
 #: Robot states before the first command that the figures include [s].
 TASK_MARGIN = 0.2
 #: Zero twists the operator sends after the profile [s] (its default).

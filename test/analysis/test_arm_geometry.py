@@ -22,10 +22,10 @@ def default_robot():
 
 
 def test_the_default_model_is_the_identified_geometry():
-    """config/model.yaml's URDF is generate(IDENTIFIED): same frames and inertia everywhere."""
-    default, identified = load_model(MODEL_YAML), ag.build_model(ag.IDENTIFIED)
+    """config/model.yaml's URDF is the identified geometry's: same frames and inertia everywhere."""
+    default, identified = load_model(MODEL_YAML), ag.build_model(ag.IDENTIFIED_GEOMETRY)
     assert (MODEL_YAML.parent / "urdf" / "rns_7dof_arm.urdf").read_text() == ag.geometry_urdf(
-        ag.IDENTIFIED, name="rns_7dof_arm"
+        ag.IDENTIFIED_GEOMETRY, name="rns_7dof_arm"
     )
     rng = np.random.default_rng(1)
     for _ in range(10):
@@ -45,7 +45,7 @@ def test_the_default_model_is_the_identified_geometry():
 
 @pytest.fixture(scope="module")
 def current_robot():
-    return ag.build_model(ag.CURRENT)
+    return ag.build_model(ag.INFERRED_GEOMETRY)
 
 
 def test_generator_with_current_parameters_reproduces_the_default_urdf(
@@ -63,7 +63,7 @@ def test_generator_with_current_parameters_reproduces_the_default_urdf(
             np.testing.assert_allclose(a.translation, b.translation, atol=1e-12)
             np.testing.assert_allclose(a.rotation, b.rotation, atol=1e-12)
         np.testing.assert_allclose(
-            ag.camera_position(ag.CURRENT, theta),
+            ag.camera_position(ag.INFERRED_GEOMETRY, theta),
             default_robot.data.oMf[default_robot.camera_frame_id].translation - q[:3],
             atol=1e-12,
         )
@@ -89,7 +89,7 @@ def test_reference_data_are_table_4_1_and_the_mount():
 @pytest.mark.parametrize(
     "geometry",
     [
-        ag.CURRENT,
+        ag.INFERRED_GEOMETRY,
         ag.Geometry(
             direction="-x",
             axes=("+z", "+y", "-x", "-z", "-x", "+y", "-x"),

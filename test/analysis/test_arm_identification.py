@@ -8,7 +8,7 @@ from rns_ros.analysis import arm_identification as ai
 
 @pytest.fixture(scope="module")
 def current_robot():
-    return ag.build_model(ag.CURRENT)
+    return ag.build_model(ag.INFERRED_GEOMETRY)
 
 
 def test_current_geometry_misses_the_thesis_end_effector_by_two_metres(current_robot):

@@ -10,7 +10,7 @@ import functools
 import pytest
 
 from rns_ros.analysis.closed_loop import run_scenario
-from rns_ros.control.inspection import ControlGains
+from rns_ros.control.camera_law import ControlGains
 
 INSPECTION = ("satellite_observation", "own_device_inspection")
 

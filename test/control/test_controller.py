@@ -10,15 +10,7 @@ from hypothesis import given, settings
 from rns_testing import SATELLITE_OBSERVATION_DEG, vectors
 
 from rns_ros.analysis.closed_loop import run_scenario
-from rns_ros.control.controller import (
-    HOLD_CONSISTENCY,
-    HOLD_SPEED_FLOOR,
-    ControllerSettings,
-    ReactionlessController,
-    TwistFrame,
-    angular_velocity_in_world,
-)
-from rns_ros.control.inspection import (
+from rns_ros.control.camera_law import (
     ControlGains,
     Method,
     arm_law_rates,
@@ -26,6 +18,14 @@ from rns_ros.control.inspection import (
     law_rates,
     reactionless_camera_control,
     wrist_offset,
+)
+from rns_ros.control.controller import (
+    HOLD_CONSISTENCY,
+    HOLD_SPEED_FLOOR,
+    ControllerSettings,
+    ReactionlessController,
+    TwistFrame,
+    angular_velocity_in_world,
 )
 from rns_ros.core import ConfigError, FreeFloatingState
 from rns_ros.core.integration import attitude_deviation

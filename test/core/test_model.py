@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from rns_ros.analysis.arm_geometry import IDENTIFIED
+from rns_ros.analysis.arm_geometry import IDENTIFIED_GEOMETRY
 from rns_ros.core import ConfigError, FreeFloatingModel, InputError, ModelError, ModelSpec
 from rns_ros.core.config import load_model, load_model_config
 from rns_ros.resources import default_model_config
@@ -24,7 +24,7 @@ TABLE_4_1 = {
     "link_7": (25.0, (0.0990, 0.0990, 0.0313)),
 }
 # The identified geometry (docs/arm_identification.md): link lengths [m] and lateral offsets.
-LINK_LENGTHS = IDENTIFIED.lengths
+LINK_LENGTHS = IDENTIFIED_GEOMETRY.lengths
 MOUNT = (-0.79, -0.29, 1.0)  # m, thesis section 4.1.1
 
 
@@ -74,7 +74,9 @@ def test_mount_position_and_straight_arm_at_zero(robot):
     assert np.allclose(joint_1, MOUNT)
     # theta = 0: straight arm along base +z, plus the shoulder, elbow and wrist offsets (x, y)
     camera = data.oMf[robot.camera_frame_id].translation
-    lateral = np.add.reduce([IDENTIFIED.shoulder, IDENTIFIED.elbow, IDENTIFIED.wrist])
+    lateral = np.add.reduce(
+        [IDENTIFIED_GEOMETRY.shoulder, IDENTIFIED_GEOMETRY.elbow, IDENTIFIED_GEOMETRY.wrist]
+    )
     assert np.allclose(camera - joint_1, [*lateral, sum(LINK_LENGTHS)])
     wrist = data.oMf[robot.wrist_frame_id].translation
     joint_6 = data.oMi[model.getJointId("joint_6")].translation

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from rns_ros.control.camera_law import Method
 from rns_ros.control.controller import HoldCorrection, TwistFrame
-from rns_ros.control.inspection import Method
 from rns_ros.core import ConfigError
 from rns_ros.nodes.controller_parameters import (
     PARAMETERS,

@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.analysis.closed_loop import ClosedLoopResult, PeriodSample, run_scenario
-from rns_ros.control.inspection import wrist_offset
+from rns_ros.control.camera_law import wrist_offset
 from rns_ros.control.scenario import Scenario, load_scenario
 from rns_ros.core import FreeFloatingModel, load_model
 from rns_ros.core.integration import attitude_deviation

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import assume, given, settings
 from rns_testing import SATELLITE_OBSERVATION_DEG, configurations, vectors
 
-from rns_ros.control.inspection import (
+from rns_ros.control.camera_law import (
     ControlGains,
     ConventionalWrist,
     Method,

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from force_cases import LWR, START, ZERO, ns, one_step
 
-from rns_ros.analysis.contact_tasks import ArcScenario, WallScenario
 from rns_ros.analysis.motion_force_runs import QUICK_PERIOD, run_closed_loop
+from rns_ros.control.contact_tasks import ArcScenario, WallScenario
 from rns_ros.control.force.commands import (
     ForceSetpoint,
     JointMeasurement,

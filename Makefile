@@ -3,7 +3,7 @@
 #   make venv       create/refresh .venv (pinned deps + editable rns_ros); a no-op when up to date
 #   make demo       run the demo node       (ARGS='--help' etc. are passed through)
 #   make test       ruff check + ruff format --check + the whole pytest suite (what CI runs)
-#   make test-quick ruff + the ROS-free layers without the tests marked slow (under a minute)
+#   make test-quick ruff + the ROS-free layers without the tests marked slow, on 2 cores (< 1 min)
 #   make lint       ruff check + ruff format --check
 #   make format     ruff format + ruff check --fix
 #   make clean      remove colcon/pytest artefacts (keeps .venv)
@@ -75,7 +75,7 @@ QUICK_TESTS := test/core test/control test/sim test/analysis test/viz test/test_
 test-quick: venv
 	$(VENV_BIN)/ruff check .
 	$(VENV_BIN)/ruff format --check .
-	$(VENV_PY) -m pytest -q -m "not slow" $(QUICK_TESTS)
+	$(VENV_PY) -m pytest -q -n 2 -m "not slow" $(QUICK_TESTS)
 
 lint: venv
 	$(VENV_BIN)/ruff check .

@@ -645,7 +645,7 @@ def lockstep(runs: int, domain_id: int) -> None:
 def force_controller(samples: int) -> None:
     """rns_force_controller's step (rns_ros.control.force.controller) on the LWR wall task, one
     stroke closed around the in-process ContactSimulator, and the simulator's contact step."""
-    from rns_ros.analysis.contact_tasks import WallScenario
+    from rns_ros.control.contact_tasks import WallScenario
     from rns_ros.control.force.commands import (
         ForceSetpoint,
         JointMeasurement,

@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rns_ros"
 #: room -> the rns_ros rooms (subpackages or top-level modules) its modules may import
 ALLOWED = {
     "core": set(),
-    "control": {"core"},
+    "control": {"core", "resources"},
     "sim": {"core"},
     "cli": {"core"},
     "resources": {"core"},

@@ -5,7 +5,7 @@ computes the :class:`FixedBaseState`, the task references, the motion loop (6.33
 (6.34) with the contact force measured at that instant and the controller torque (RNS-C closed
 form, OS-C literal or OS-C kinematic), and holds that torque over the next
 :class:`~rns_ros.sim.contact.ContactSimulator` RK4 step (zero-order hold). The tasks:
-:mod:`rns_ros.analysis.contact_tasks`; errors, signs and the contact frame {E}: docs/part2.md.
+:mod:`rns_ros.control.contact_tasks`; errors, signs and the contact frame {E}: docs/part2.md.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rns_ros.analysis.arrays import read_only
-from rns_ros.analysis.contact_tasks import ArcScenario, Reference, Setup, WallScenario
+from rns_ros.control.contact_tasks import ArcScenario, Reference, Setup, WallScenario
 from rns_ros.control.motion_force.osc import OscVariant, os_control
 from rns_ros.control.motion_force.outer_loops import (
     ForceGains,
@@ -28,9 +28,10 @@ from rns_ros.control.motion_force.projectors import kernel_projector
 from rns_ros.control.motion_force.reversed_model import ReversedModel
 from rns_ros.control.motion_force.rnsc import rns_control
 from rns_ros.control.motion_force.task_space import TaskSpace
+from rns_ros.core.contact_geometry import PlaneConstraint
 from rns_ros.core.fixed_base import FixedBaseState
 from rns_ros.core.validation import Choice, positive
-from rns_ros.sim.contact import ContactSimulator, PlaneConstraint
+from rns_ros.sim.contact import ContactSimulator
 
 #: Control model's virtual-link mass m_hat [kg] (thesis section 6.2.1; I_hat = m_hat / 12).
 VIRTUAL_MASS = 1.0e5

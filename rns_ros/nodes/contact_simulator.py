@@ -54,6 +54,7 @@ from std_srvs.srv import Trigger
 
 from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.core.config import read_yaml_mapping
+from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint, project_onto_constraint
 from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.contact_simulator_parameters import NODE_NAME, PARAMETERS, SPECS
@@ -63,12 +64,7 @@ from rns_ros.nodes.runner import stop_worker
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator_parameters import check_parameter_changes
 from rns_ros.resources import config_dir
-from rns_ros.sim.contact import (
-    ArcConstraint,
-    ContactSimulator,
-    PlaneConstraint,
-    project_onto_constraint,
-)
+from rns_ros.sim.contact import ContactSimulator
 from rns_ros.sim.free_arm import FreeArmSimulator, JointBrake
 
 DEFAULT_MODEL = "lwr_7dof.yaml"

@@ -12,7 +12,7 @@ each goes out that long before its instant, stamped with the instant, for a cont
 serves twists at their stamps (rns_controller's ``await_commands``; zeros from the start
 condition until the profile starts).
 
-Part II scenario files (``kind: motion_force``, :mod:`rns_ros.analysis.contact_scenarios`,
+Part II scenario files (``kind: motion_force``, :mod:`rns_ros.control.contact_scenarios`,
 docs/part2_ros.md): at ``rate`` (500 Hz suggested: the force controller runs at 1 kHz) BOTH
 ``cmd_twist`` (``frame_id`` = ``world_frame``, linear = the EE reference velocity p_dot_des(t) of
 (6.33), angular = 0) and ``force_setpoint`` (geometry_msgs/WrenchStamped, ``frame_id`` =
@@ -42,7 +42,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 
-from rns_ros.analysis.contact_scenarios import (
+from rns_ros.control.contact_scenarios import (
     MotionForceScenario,
     OperatorSample,
     load_operator_scenario,
@@ -73,7 +73,7 @@ OPERATOR_CATCH_UP = 10
 
 class OperatorNode(Node):
     """Plays one :class:`~rns_ros.control.scenario.Scenario` or
-    :class:`~rns_ros.analysis.contact_scenarios.MotionForceScenario` (module docstring).
+    :class:`~rns_ros.control.contact_scenarios.MotionForceScenario` (module docstring).
 
     Attributes:
         scenario: the loaded scenario; motion_force: True for a ``kind: motion_force`` file.

@@ -1,71 +1,13 @@
 """rns_simulator: the free-floating satellite + arm, integrated at a fixed step, as a ROS 2 node.
 
 Physics is :class:`rns_ros.sim.free_floating.FreeFloatingSimulator`; this node only converts
-messages. It steps from its own monotonic-clock thread (absolute deadlines, so no drift), not from
-an executor timer (in lockstep at ``real_time_factor`` 0: from the command callback, below).
+messages: commands in (:mod:`rns_ros.nodes.simulator_commands`), state topics out
+(:mod:`rns_ros.nodes.simulator_publishing`). It steps from its own monotonic-clock thread
+(absolute deadlines, so no drift) or, in lockstep with a controller, as
+:class:`rns_ros.nodes.lockstep.LockstepPacer` decides. ``mode: contact`` starts
+:mod:`rns_ros.nodes.contact_simulator` instead.
 
-Publishes (all remappable):
-    joint_states  sensor_msgs/JointState      names, positions [rad], velocities [rad/s],
-                                              efforts [N m] (dynamic mode only)
-    base_odom     nav_msgs/Odometry           base pose in ``world_frame``; twist in the base
-                                              frame (child_frame_id = base link)
-    momentum      geometry_msgs/WrenchStamped force = linear momentum p [kg m/s], torque =
-                                              angular momentum about the system CoM [kg m^2/s],
-                                              both in ``world_frame`` axes
-    energy        std_msgs/Float64MultiArray  at ``energy_rate`` (20 Hz): kinetic energy of the
-                                              true state, layout
-                                              :data:`ENERGY_LABELS` (eq. 5.1 terms, the
-                                              Lambda_m / Lambda_r cost of the joint motion,
-                                              running C_max and C_sum, sim time) [J, J s, s]
-    wheel_states  sensor_msgs/JointState      with ``reaction_wheels``: wheel_x/y/z spin angle
-                                              [rad], rate relative to the base [rad/s], applied
-                                              motor torque [N m] (after the limits)
-    /clock        rosgraph_msgs/Clock         when ``publish_clock`` is true: every step; in
-                                              lockstep only with each state publication (the
-                                              ``publish_rate`` grid and every pause), so other
-                                              nodes' sim-time timers fire at those instants
-With ``lockstep_period`` > 0 the simulation pauses whenever it is that far (simulated time) past
-the newest joint command, so a controller sees the same sampling at any ``real_time_factor``;
-before the first command it runs in real time, and a controller that stops answering pauses it
-(after ``LOCKSTEP_PATIENCE`` of wall time one step is taken, with its state and /clock).
-The period counts on the grid of the command's header stamp when /clock is published and the
-stamp is a recent simulated time (from the stamp itself, or from the last point of its grid
-before now for a command older than a period; a controller ticking on this clock: the next
-pause is its next tick, whatever the command's latency), else from its receipt. A
-JointTrajectory stamped ahead of the simulated time (with /clock, by at most
-``lockstep_period``, or ``MAX_CATCH_UP`` without lockstep) waits for its stamp, as a trajectory
-controller starts a trajectory at its header stamp: a controller that stamps its output one
-period after its tick (rns_controller ``output_lead``) computes while this node simulates the
-period before it, so the two run side by side instead of in turn. ``command_timeout`` then counts
-simulated time, and the state is also published at each pause (off the ``publish_rate`` grid
-if the controller's ticks are), so the controller's tick there samples that instant. At
-``real_time_factor`` 0 the command callback itself steps to the next pause (up to
-``CALLBACK_STEPS`` steps, the simulation thread goes on beyond them): the executor thread runs
-the whole period, with no hand-off between threads.
-Subscribes:
-    joint_references  trajectory_msgs/JointTrajectory (``command_interface: trajectory``),
-                      first point: positions/velocities/accelerations matched by joint name
-    joint_velocities  std_msgs/Float64MultiArray (``command_interface: velocity``), one velocity
-                      [rad/s] per joint in the order of the ``joints`` parameter (the
-                      ros2_control forward_command_controller convention)
-    wheel_torque      geometry_msgs/Vector3Stamped (with ``reaction_wheels``): motor torques of
-                      the x, y, z wheels [N m] (frame_id empty or the base link), clipped to
-                      ``wheel_torque_limit``; older than ``command_timeout``: motors off
-Also publishes, once, ``robot_description`` (std_msgs/String, transient local, depth 1): the URDF
-text of the simulated model, for robot_state_publisher / rviz users (latched: late joiners get it).
-Service:
-    ~/reset       std_srvs/Trigger            back to the initial state, at rest; clears a fault
-
-Safety: a JointTrajectory whose positions lie outside the URDF position limits or farther than
-``max_reference_error`` from the current joint angles is rejected (logged, no motion). For
-``reset_hold`` of simulated time after ``~/reset`` joint commands are ignored, so every controller
-sees the reset state before it commands again (a stale one would pull the arm back); a
-JointTrajectory that starts at the reset state ends the hold early (a resynchronized
-controller). In dynamic mode the servo keeps the URDF velocity and effort limits (see
-:mod:`rns_ros.sim.free_floating`).
-If a step diverges anyway (:class:`SimulationDivergedError`) the node logs one error and stops
-stepping: it keeps publishing the last finite state with zero velocities (joint and base) and
-zero efforts until ``~/reset``; no non-finite value is ever published.
+Topics, services, QoS, safety and parameters: docs/nodes/rns_simulator.md.
 """
 
 from __future__ import annotations

@@ -30,19 +30,19 @@ from geometry_msgs.msg import TwistStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from rns_ros.analysis.contact_scenarios import (
+from rns_ros.analysis.motion_force_runs import run_closed_loop
+from rns_ros.analysis.recorded_contact import ContactRunFigures, contact_run_figures
+from rns_ros.control.contact_scenarios import (
     ScenarioKind,
     Task,
     load_motion_force_scenario,
     scenario_kind,
 )
-from rns_ros.analysis.motion_force_runs import run_closed_loop
-from rns_ros.analysis.recorded_contact import ContactRunFigures, contact_run_figures
 from rns_ros.core import ConfigError, RnsError
+from rns_ros.core.contact_geometry import ArcConstraint
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
 from rns_ros.runs.logger import start_logger
-from rns_ros.sim.contact import ArcConstraint
 
 #: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
 CONTACT_METHODS = {

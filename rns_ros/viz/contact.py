@@ -49,11 +49,11 @@ import yaml
 
 from rns_ros.control.contact_topics import ERROR_LABELS
 from rns_ros.core.config import load_model_config
+from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, load_fixed_base_model
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import as_vector
-from rns_ros.sim.contact import ArcConstraint, PlaneConstraint
 from rns_ros.viz import paths
 from rns_ros.viz.blueprint import contact_blueprint
 from rns_ros.viz.quantities import RateLimiter
@@ -196,8 +196,9 @@ class ForceErrorSample:
 @dataclass(frozen=True)
 class Environment:
     """The ``environment`` JSON: ``kind`` wall / arc / none, its ``frame`` and the constraint
-    (:class:`~rns_ros.sim.contact.PlaneConstraint`, :class:`~rns_ros.sim.contact.ArcConstraint`,
-    None for ``none``) with its vectors checked and normalized."""
+    (:class:`~rns_ros.core.contact_geometry.PlaneConstraint`,
+    :class:`~rns_ros.core.contact_geometry.ArcConstraint`, None for ``none``) with its vectors
+    checked and normalized."""
 
     kind: str
     frame: str

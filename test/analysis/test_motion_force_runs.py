@@ -6,18 +6,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rns_ros.analysis.contact_tasks import (
-    FORCE,
-    ArcScenario,
-    WallScenario,
-    quick_scenarios,
-)
 from rns_ros.analysis.motion_force_runs import (
     CONTROLLERS,
     QUICK_PERIOD,
     ClosedLoopRun,
     Controller,
     run_closed_loop,
+)
+from rns_ros.control.contact_tasks import (
+    FORCE,
+    ArcScenario,
+    WallScenario,
+    quick_scenarios,
 )
 from rns_ros.core.errors import ConfigError, RnsError, SimulationDivergedError
 
@@ -156,8 +156,8 @@ def test_a_force_sensor_one_period_late_diverges_with_the_thesis_gain():
 def test_force_and_motion_are_decoupled_on_the_wall(controller):
     """A 10 N force step (0.02 s ramp) with the arm holding still does not move the end
     effector in the wall plane; a stroke with zero force keeps the contact force at zero."""
-    from rns_ros.analysis.contact_tasks import WallScenario
     from rns_ros.analysis.motion_force_runs import run_closed_loop
+    from rns_ros.control.contact_tasks import WallScenario
 
     hold = WallScenario(stroke=1e6, strokes=1, force=10.0, force_ramp=0.02)
     run = run_closed_loop(hold, controller, dt=2e-3, duration=0.5)

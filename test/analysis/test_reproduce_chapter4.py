@@ -8,6 +8,9 @@ from rns_testing import quick_documents
 from rns_ros.analysis.reproduce import chapter4, scenario_runs
 from rns_ros.analysis.reproduce.registry import Status
 
+# whole closed-loop reproductions (quick grids): make test, not test-quick
+pytestmark = pytest.mark.slow
+
 IDS = ("fig4.4", "fig4.5", "fig4.6", "fig4.7", "fig4.8")
 METHODS = {
     "fig4.4": {"dls", "dls_kg0", "conventional"},

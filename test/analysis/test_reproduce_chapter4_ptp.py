@@ -9,6 +9,9 @@ from rns_testing import quick_documents
 from rns_ros.analysis.reproduce import chapter4_ptp
 from rns_ros.analysis.reproduce.registry import CHAPTER_MODULES, Status
 
+# whole point-to-point reproductions (quick grids): make test, not test-quick
+pytestmark = pytest.mark.slow
+
 IDS = ("table4.2", "fig4.10", "fig4.12", "fig4.13", "partial_deployment")
 METHODS = {"3-phase", "JS-C", "IJ-C", "TJ-C"}
 

@@ -9,6 +9,9 @@ from rns_testing import assert_chapter_order, quick_documents, quick_result_stat
 from rns_ros.analysis.reproduce import chapter5_inspection_energy as ch5
 from rns_ros.analysis.reproduce.registry import Status
 
+# whole energy reproductions (quick grids): make test, not test-quick
+pytestmark = pytest.mark.slow
+
 IDS = ("fig5.4", "fig5.5")
 RUNS = {ch5.REACTIONLESS, ch5.CONVENTIONAL}
 

@@ -9,6 +9,9 @@ from rns_testing import assert_chapter_order, quick_documents, quick_result_stat
 from rns_ros.analysis.reproduce import chapter6 as ch6
 from rns_ros.analysis.reproduce.registry import Status
 
+# whole motion/force reproductions (quick runs): make test, not test-quick
+pytestmark = pytest.mark.slow
+
 IDS = ("fig6.3", "fig6.4", "fig6.7", "fig6.8")
 CONTROLLERS = {"RNS-C", "OS-C", "OS-C-kinematic"}
 KEYS = ("peak_joint_speed_rad_s", "max_position_error_m", "max_force_error_N")

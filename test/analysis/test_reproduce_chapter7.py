@@ -9,6 +9,9 @@ from rns_testing import assert_chapter_order, quick_documents, quick_result_stat
 from rns_ros.analysis.reproduce import chapter7 as ch7
 from rns_ros.analysis.reproduce.registry import Status
 
+# whole chapter-7 reproductions (quick runs): make test, not test-quick
+pytestmark = pytest.mark.slow
+
 IDS = ("fig7.1", "fig7.2")
 RUN_KEYS = {
     "peak_joint_speed_rad_s",

@@ -28,6 +28,9 @@ from rns_ros.core.errors import ConfigError, InputError, SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.resources import config_dir
 
+# every virtual-mass variant over a whole task: make test, not test-quick
+pytestmark = pytest.mark.slow
+
 PATH = ArcPath(half_period=0.5, halves=1)
 SETTINGS = RunSettings(step=2e-3)
 #: EE distance from the circle [m] allowed under every variant (measured ~1e-9).

@@ -51,6 +51,7 @@ def _run(robot, speed: float, wheels: bool, gains: AttitudeGains | None = None):
     return math.degrees(deviation), saturated, peak
 
 
+@pytest.mark.slow
 def test_wheels_hold_the_base_during_a_slow_conventional_motion(robot):
     """Wrist at up to 0.01 rad/s: the demanded torque stays below 0.1 N m and the base stays
     within 1e-4 deg, against ~5e-3 deg without wheels."""
@@ -63,6 +64,7 @@ def test_wheels_hold_the_base_during_a_slow_conventional_motion(robot):
     assert held < 1e-4
 
 
+@pytest.mark.slow
 def test_a_faster_motion_saturates_the_wheels_and_the_base_turns(robot):
     """Wrist at 0.05 rad/s needs ~0.2 N m (thesis: the ETS-VII 0.1 N m wheels cannot deliver an
     inspection motion); the saturation is reported and the base turns by far more."""

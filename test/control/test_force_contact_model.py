@@ -15,8 +15,9 @@ from rns_ros.control.force.contact_model import (
     normal_acceleration,
     predicted_contact_force,
 )
+from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint
 from rns_ros.core.fixed_base import FixedBaseState
-from rns_ros.sim.contact import ArcConstraint, ContactSimulator, PlaneConstraint
+from rns_ros.sim.contact import ContactSimulator
 
 
 def _plane_sim(q, v, normal):

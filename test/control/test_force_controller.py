@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from force_cases import LWR, START, ZERO, ns, one_step
 
-from rns_ros.analysis.contact_tasks import ArcScenario, WallScenario
 from rns_ros.analysis.motion_force_runs import QUICK_PERIOD, run_closed_loop
+from rns_ros.control.contact_tasks import ArcScenario, WallScenario
 from rns_ros.control.force.commands import (
     ForceSetpoint,
     JointMeasurement,
@@ -90,6 +90,7 @@ ARC_SETTINGS = {
 
 @pytest.mark.parametrize("normal_mode", ["fixed", "wrench"])
 @pytest.mark.parametrize(("method", "label"), [("rns", "RNS-C"), ("os", "OS-C")])
+@pytest.mark.slow
 def test_dds_fed_loop_reproduces_the_planar_arc(method, label, normal_mode):
     """The planar arc (one half cycle, 2 ms): the normal from the surface model (a circle of
     radius 1/kappa through the start point) or from the pushing wrench gives the in-process
@@ -107,6 +108,7 @@ def test_dds_fed_loop_reproduces_the_planar_arc(method, label, normal_mode):
     assert states <= {ForceControlState.OK}
 
 
+@pytest.mark.slow
 def test_late_twists_keep_their_acceleration_feed_forward():
     """Twists every 2 ms reaching the controller one 1 ms step after their stamp (what the
     operator's sim-time timer and DDS give): the first-order hold extrapolates each over up to
@@ -118,6 +120,7 @@ def test_late_twists_keep_their_acceleration_feed_forward():
 
 
 @pytest.mark.parametrize(("method", "label"), [("rns", "RNS-C"), ("os", "OS-C")])
+@pytest.mark.slow
 def test_dds_fed_loop_reproduces_the_in_process_loop(method, label):
     """Predicted force (same instant, sensor-corrected) over DDS-timed inputs == run_closed_loop
     (one stroke of the LWR wall task, 2 ms period). Measured: peak joint speed 1.0432 vs 1.0432

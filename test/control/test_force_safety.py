@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 from force_cases import LWR, START, ZERO, ns
 
-from rns_ros.analysis.contact_tasks import WallScenario
+from rns_ros.control.contact_tasks import WallScenario
 from rns_ros.control.force.commands import (
     ForceSetpoint,
     JointMeasurement,

@@ -12,7 +12,7 @@ from rns_ros.core import ConfigError
 from rns_ros.resources import config_dir, scenario_path
 
 #: The shipped Part I scenario files (Part II files say ``kind: motion_force``: their own loader,
-#: rns_ros.analysis.contact_scenarios).
+#: rns_ros.control.contact_scenarios).
 CAMERA_ROTATION_FILES = [
     path
     for path in sorted((config_dir() / "scenarios").glob("*.yaml"))

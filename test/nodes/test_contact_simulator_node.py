@@ -19,14 +19,15 @@ from rns_testing import Recorder
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 
-from rns_ros.analysis.contact_tasks import ArcScenario
+from rns_ros.control.contact_tasks import ArcScenario
 from rns_ros.control.contact_topics import CONTACT_LABELS
 from rns_ros.core import ConfigError
+from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.contact_simulator import ContactSimulatorNode
 from rns_ros.nodes.contact_simulator_parameters import WALL_TASK_RAD
 from rns_ros.nodes.simulator import SimulatorNode, create_simulator_node
-from rns_ros.sim.contact import ArcConstraint, ContactSimulator, PlaneConstraint
+from rns_ros.sim.contact import ContactSimulator
 
 REPO = Path(__file__).resolve().parents[2]
 COMMAND_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)

@@ -10,7 +10,7 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
-from rns_ros.analysis.contact_scenarios import load_motion_force_scenario, operator_sample
+from rns_ros.control.contact_scenarios import load_motion_force_scenario, operator_sample
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack

@@ -21,15 +21,10 @@ import pinocchio as pin
 import pytest
 
 from rns_ros.core import ConfigError, InputError
+from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint, project_onto_constraint
 from rns_ros.core.errors import SimulationDivergedError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
-from rns_ros.sim.contact import (
-    ArcConstraint,
-    Baumgarte,
-    ContactSimulator,
-    PlaneConstraint,
-    project_onto_constraint,
-)
+from rns_ros.sim.contact import Baumgarte, ContactSimulator
 
 CONFIG = Path(__file__).resolve().parents[2] / "config"
 PLANAR_START = np.radians([106.4, -45.7, -56.2])  # thesis_rest A-4.6, about 1 mm off the arc
@@ -221,44 +216,6 @@ def test_wrist_wrench_is_the_contact_force_in_ee_axes():
     np.testing.assert_allclose(wrench[3:], 0.0, atol=1e-12)
 
 
-@pytest.mark.parametrize(
-    "constraint",
-    [
-        ArcConstraint([0.3, -0.2, 0.1], 0.5, axis=[0.2, 1.0, 0.4]),
-        PlaneConstraint([0.1, 0.2, 0.3], [1.0, -2.0, 0.5]),
-    ],
-    ids=["arc", "plane"],
-)
-def test_constraint_gradient_and_curvature_are_the_derivatives(constraint):
-    rng = np.random.default_rng(1)
-    h = 1e-5
-    for _ in range(5):
-        p, v = rng.normal(size=3), rng.normal(size=3)
-        gradient = constraint.gradient(p)
-        assert np.linalg.norm(gradient) == pytest.approx(1.0)
-        numeric = [
-            (constraint.phi(p + h * e) - constraint.phi(p - h * e)) / (2 * h) for e in np.eye(3)
-        ]
-        np.testing.assert_allclose(gradient, numeric, atol=1e-8)
-        second = (
-            constraint.phi(p + h * v) - 2 * constraint.phi(p) + constraint.phi(p - h * v)
-        ) / h**2
-        assert constraint.curvature(p, v) == pytest.approx(second, abs=1e-4)
-        phi, normal, kappa = constraint.evaluate(p, v)
-        assert (phi, kappa) == pytest.approx((constraint.phi(p), constraint.curvature(p, v)))
-        np.testing.assert_allclose(normal, gradient)
-
-
-def test_arc_normal_points_into_the_cylinder():
-    arc = ArcConstraint(CENTER, RADIUS)
-    outside = CENTER + np.array([RADIUS, 0.0, 0.3])
-    assert arc.phi(outside) == pytest.approx(0.0)
-    np.testing.assert_allclose(arc.gradient(outside), [-1.0, 0.0, 0.0])
-    assert arc.phi(CENTER + np.array([0.5 * RADIUS, 0.0, 0.0])) > 0.0  # inside: penetration
-    # moving along the circle at 2 m/s needs 4 / R m/s^2 toward the centre
-    assert arc.curvature(outside, [0.0, 2.0, 5.0]) == pytest.approx(-4.0 / RADIUS)
-
-
 def test_baumgarte_pulls_a_start_offset_back_critically_damped():
     """Start 0.1 mm off the arc: phi(t) = phi0 (1 + w t) exp(-w t), w = 50 rad/s; without
     stabilization the offset stays."""
@@ -280,19 +237,6 @@ def test_baumgarte_pulls_a_start_offset_back_critically_damped():
 
 
 def test_bad_parameters_fail_with_typed_errors():
-    with pytest.raises(ConfigError, match="arc center must be 3 finite"):
-        ArcConstraint([1.0, math.nan, 0.0], 1.0)
-    for radius in (0.0, -1.0, math.inf, "big"):
-        with pytest.raises(ConfigError, match="arc radius must be a finite number > 0"):
-            ArcConstraint(CENTER, radius)
-    with pytest.raises(ConfigError, match="arc axis must be a non-zero direction"):
-        ArcConstraint(CENTER, 1.0, axis=[0.0, 0.0, 0.0])
-    with pytest.raises(ConfigError, match="plane normal must be a non-zero"):
-        PlaneConstraint([0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
-    with pytest.raises(ConfigError, match="plane point must be 3 finite numbers"):
-        PlaneConstraint([0.0, 0.0], [0.0, 0.0, 1.0])
-    with pytest.raises(InputError, match="on the arc axis"):
-        ArcConstraint(CENTER, 1.0).gradient(CENTER + np.array([0.0, 0.0, 1.0]))
     with pytest.raises(ConfigError, match="velocity_gain must be finite and >= 0 1/s"):
         Baumgarte(velocity_gain=-1.0)
 

@@ -22,15 +22,6 @@ import functools
 
 import numpy as np
 
-from rns_ros.analysis.contact_tasks import (
-    FORCE,
-    FORCE_RAMP,
-    PLANAR_HALF_CYCLE,
-    WALL_STROKE,
-    WALL_STROKES,
-    ArcScenario,
-    WallScenario,
-)
 from rns_ros.analysis.motion_force_runs import (
     CONTROL_PERIOD,
     CONTROLLERS,
@@ -51,6 +42,15 @@ from rns_ros.analysis.reproduce.registry import (
     Status,
     register_all,
     resolution_choice,
+)
+from rns_ros.control.contact_tasks import (
+    FORCE,
+    FORCE_RAMP,
+    PLANAR_HALF_CYCLE,
+    WALL_STROKE,
+    WALL_STROKES,
+    ArcScenario,
+    WallScenario,
 )
 
 #: Thesis §6.2.1 peak joint speeds [rad/s] and their ratio [D].

@@ -15,12 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rns_ros.control.motion_force.task_space import FULL_ROWS, PLANAR_ROWS, contact_frame
+from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint, project_onto_constraint
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState, load_fixed_base_model
 from rns_ros.core.timing import quintic_profile
 from rns_ros.core.validation import positive
 from rns_ros.resources import config_dir
-from rns_ros.sim.contact import ArcConstraint, PlaneConstraint, project_onto_constraint
 
 #: Half-cycle duration T_half of the planar arc [s] ([A-4.7]): chosen so that the RNS-C peak
 #: joint speed is about the thesis' 0.73 rad/s (see docs/part2.md, "Chapter 6 runs").

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import yaml
 
-from rns_ros.analysis.contact_scenarios import (
+from rns_ros.control.contact_scenarios import (
     MotionForceScenario,
     ScenarioKind,
     Task,
@@ -17,7 +17,7 @@ from rns_ros.analysis.contact_scenarios import (
     operator_sample,
     scenario_kind,
 )
-from rns_ros.analysis.contact_tasks import ArcScenario, WallScenario
+from rns_ros.control.contact_tasks import ArcScenario, WallScenario
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import ConfigError
 from rns_ros.resources import config_dir

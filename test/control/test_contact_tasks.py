@@ -1,10 +1,10 @@
-"""The chapter-6 task records (rns_ros.analysis.contact_tasks): profiles and validation."""
+"""The chapter-6 task records (rns_ros.control.contact_tasks): profiles and validation."""
 
 from __future__ import annotations
 
 import pytest
 
-from rns_ros.analysis.contact_tasks import ArcScenario, WallScenario, back_and_forth, force_profile
+from rns_ros.control.contact_tasks import ArcScenario, WallScenario, back_and_forth, force_profile
 from rns_ros.core.errors import ConfigError
 
 

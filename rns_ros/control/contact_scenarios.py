@@ -1,6 +1,6 @@
 r"""Motion/force scenario files (``config/scenarios/*.yaml`` with ``kind: motion_force``).
 
-One file holds one chapter-6 task of :mod:`rns_ros.analysis.contact_tasks` as YAML, so that the
+One file holds one chapter-6 task of :mod:`rns_ros.control.contact_tasks` as YAML, so that the
 DDS stack (``rns_operator`` -> ``rns_force_controller`` -> ``rns_simulator``) and the in-process
 reproduction play the same task. Keys, and what the operator publishes (:func:`operator_sample`):
 docs/part2_ros.md.
@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 import yaml
 
-from rns_ros.analysis.contact_tasks import ArcScenario, Setup, WallScenario
+from rns_ros.control.contact_tasks import ArcScenario, Setup, WallScenario
 from rns_ros.control.scenario import Scenario, load_scenario
 from rns_ros.core.config import check_keys
 from rns_ros.core.errors import ConfigError, InputError

@@ -11,11 +11,11 @@ Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller|
 core       median / p99 of one FreeFloatingState, the DLS and SC inverses, one P_RNS projection.
 simulator  step time (median, p99) of FreeFloatingSimulator at 1 ms RK4 in kinematic and dynamic
            mode while the joints move, and the real-time factor = dt / median step time.
-           Goals (simulator issue): kinematic >= 20x, dynamic >= 10x real time.
+           Goals: kinematic >= 20x, dynamic >= 10x real time.
 controller one evaluation of the law (4.5)/(4.15) per method, and one controller step (the law
            held over a 10 ms period) with the naive and the midpoint hold correction, both steps
-           timed alternately in one loop, with the ratio midpoint / naive of the medians (the goal
-           of issue 18: <= 1.7 for dls and sc, on any machine). "steady" repeats one state (the
+           timed alternately in one loop, with the ratio midpoint / naive of the medians (goal:
+           <= 1.7 for dls and sc, on any machine). "steady" repeats one state (the
            midpoint's extrapolated predictor is then exact); "along own_device" steps through the
            2000 periods of that scenario (recorded once, ~2 s), with the midpoint's mean
            evaluations per step. "tick" adds the FreeFloatingState of the sampled robot, i.e.
@@ -36,7 +36,7 @@ lockstep   `rns_demo --real-time-factor 0` over DDS (satellite observation, dls,
            process): the task's wall time (21.3 s simulated) side by side (the default) and in
            turn (--no-output-lead), with the base deviation, alternated --runs times (default 3)
            with the in-process core loop over the same 21.3 s (rns_ros.analysis.closed_loop, one
-           RK4 step per period, as the demo's simulator). Goal of issue 18: >= 10x real time
+           RK4 step per period, as the demo's simulator). Goal: >= 10x real time
            side by side. The machine's speed varies here from hour to hour, and the four-process
            lockstep slows down more than the one-process loop (task / in-process loop was ~3 in
            a quiet hour, 5-6 in a slower one): the loop's time says which hour it was. "run"

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Search the 7-DoF geometry the thesis used (issue 13): discrete axes x continuous lengths.
+"""Search the 7-DoF geometry the thesis used: discrete axes x continuous lengths.
 
 Discrete space (symmetry-reduced, see docs/arm_identification.md): the straight arm at theta = 0
 points along u (+z, -x, +x, -y, +y of the base); joints 3, 5, 7 roll about +u (every thesis

@@ -1,4 +1,4 @@
-"""Start-up contract of every installed executable (issue 11): a bad argument, params file,
+"""Start-up contract of every installed executable: a bad argument, params file,
 parameter or model is one line ``<executable>: <problem>`` on stderr and exit code 2, never a
 traceback; Ctrl-C during start-up (imports included) is exit code 0; an unknown ``-p`` name is a
 warning naming the closest valid one.
@@ -28,7 +28,7 @@ from rns_ros.resources import default_model_config
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 TIMEOUT_S = 20.0  # a start-up failure takes ~1 s; a node that does not fail runs until killed
-#: The executables of issue 11 (rns_param / rns_topic have their own tests).
+#: The executables with the start-up contract (rns_param / rns_topic have their own tests).
 CHECKED = (
     "rns_attitude_control",
     "rns_controller",

@@ -108,10 +108,9 @@ def run_method(
     The nodes run as their own processes (:class:`~rns_ros.harness.ProcessStack`: the installed
     ``rns_simulator``, ``rns_controller``, ``rns_operator``, ``rns_rerun_logger`` and, with
     wheels, ``rns_attitude_control``, each on its own executor, as ``ros2 run`` starts them);
-    this process only records the topics. In one process the simulation thread and every
-    node shared one GIL: outputs came 15-40 ms apart instead of 10 (timer ticks waiting for
-    the lock) and reached the simulator 0.4-8 ms after they were published, which turned the
-    base by 0.6-1.9e-4 deg (dls) where separate processes give 2.6-2.8e-5 deg.
+    this process only records the topics. Separate processes keep the simulation thread and
+    the nodes from sharing one GIL, whose waits would delay the controller's outputs
+    (docs/controller.md, "Accuracy over DDS").
 
     Raises:
         RnsError: a node did not start, or the run did not finish in time.

@@ -41,7 +41,7 @@ def test_current_geometry_turns_back_on_both_deployments(current_robot):
 
 @pytest.mark.slow
 def test_current_geometry_singular_window_is_late_and_kg_100_misses(current_robot):
-    # full rate: at the coarse 20 Hz the checked-extrapolation midpoint (issue 18) drifts into
+    # full rate: at the coarse 20 Hz the checked-extrapolation midpoint drifts into
     # the window later (16.85-22.3 s); at 100 Hz it is where it was (16.08-20.55 s)
     window = ai.singular_window(current_robot, coarse=False)
     assert window.start == pytest.approx(16.1, abs=0.3)

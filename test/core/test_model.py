@@ -194,7 +194,7 @@ def test_base_link_is_the_urdf_root(robot):
     assert robot.base_link == "base_link"
 
 
-# --- inertial validation (issue 11): what the URDF writes, and what Pinocchio builds from it ----
+# --- inertial validation: what the URDF writes, and what Pinocchio builds from it ----
 def _default_urdf() -> str:
     urdf, _ = load_model_config(default_model_config())
     return urdf.read_text()

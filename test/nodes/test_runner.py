@@ -79,7 +79,7 @@ def test_a_signal_ends_the_spin_with_exit_code_0_and_a_live_context_for_the_last
     assert not rclpy.ok()
 
 
-# --- start-up failures (issue 11): one line and exit code 2, never a traceback -----------------
+# --- start-up failures: one line and exit code 2, never a traceback -----------------
 class _Quiet(Node):
     def __init__(self) -> None:
         super().__init__("rns_runner_test")

@@ -161,3 +161,12 @@ def test_the_import_graph_has_no_circles():
 
 def test_the_circle_finder_finds_a_circle():
     assert _circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_no_program_imports_another():
+    """The programs stand apart: what two of them share lives in a library (``rns_ros.runs``)."""
+    programs = {_module_name(path) for path in _modules("apps")} - {"rns_ros.apps"}
+    graph = _import_graph()
+    for program in sorted(programs):
+        others = (graph.get(program, set()) & programs) - {program}
+        assert not others, f"{program} imports {sorted(others)}"

@@ -10,6 +10,7 @@ from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (
     JOINTS,
     MODEL_CONFIG,
+    OUTPUT_INTERFACE,
     WORLD_FRAME,
     ParameterSpec,
     specs_by_name,
@@ -199,13 +200,7 @@ PARAMETERS = (
         "Axes of unstamped or frame-less commands: world, base, camera, or the world_frame, "
         "base link or camera frame name",
     ),
-    ParameterSpec(
-        "output_interface",
-        "trajectory",
-        "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
-        "joint_velocities (order: joints)",
-        choices=("trajectory", "velocity"),
-    ),
+    OUTPUT_INTERFACE,
     JOINTS,
     WORLD_FRAME,
 )

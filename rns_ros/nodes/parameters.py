@@ -112,6 +112,16 @@ MODEL_CONFIG = ParameterSpec(
     "Model YAML (URDF, camera/wrist frames, subchains); empty: the default 7-DoF arm",
 )
 WORLD_FRAME = ParameterSpec("world_frame", "world", "Frame id of the inertial frame")
+#: Where the nodes that command the joints (rns_controller, rns_ptp) send them: a
+#: JointTrajectory for a trajectory controller or rns_simulator, or Float64MultiArray velocities
+#: in the ``joints`` order for a ros2_control forward_command_controller.
+OUTPUT_INTERFACE = ParameterSpec(
+    "output_interface",
+    "trajectory",
+    "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
+    "joint_velocities (order: joints)",
+    choices=("trajectory", "velocity"),
+)
 #: Joint order of Float64MultiArray velocity commands, as ros2_control's forward_command_controller
 #: takes it from its ``joints`` parameter. The default is the default model's joints in URDF order;
 #: another model needs its own list (checked against the model when the velocity interface is used).

@@ -6,6 +6,7 @@ from rns_ros.control.ptp import PtpMethod
 from rns_ros.nodes.parameters import (
     JOINTS,
     MODEL_CONFIG,
+    OUTPUT_INTERFACE,
     WORLD_FRAME,
     ParameterSpec,
     choices_of,
@@ -69,13 +70,7 @@ PARAMETERS = (
         0.01,
         1000.0,
     ),
-    ParameterSpec(
-        "output_interface",
-        "trajectory",
-        "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
-        "joint_velocities (order: joints)",
-        choices=("trajectory", "velocity"),
-    ),
+    OUTPUT_INTERFACE,
     JOINTS,
     WORLD_FRAME,
 )

@@ -54,3 +54,9 @@ def test_every_description_is_one_short_line(module, file_name):
         text = f"{spec.description} {spec.unit}".strip()
         assert "\n" not in text, spec.name
         assert len(text) <= DESCRIPTION_LIMIT, f"{spec.name}: {len(text)} characters"
+
+
+@pytest.mark.parametrize(("module", "file_name"), DEFAULTS)
+def test_every_parameter_is_declared_once(module, file_name):
+    names = [spec.name for spec in importlib.import_module(module).PARAMETERS]
+    assert len(names) == len(set(names)), sorted(name for name in names if names.count(name) > 1)

@@ -100,6 +100,13 @@ class AttitudeControlLaw:
         self._previous = None
         self._rate = np.zeros(3)
 
+    def restart_rate(self) -> None:
+        """Difference the coupling momentum anew from the next sample, holding the current rate
+        until then: the samples of a new source or clock of theta_dot_ref (references stamped by
+        their sender, measured rates timed by the node) are not differenced across the switch,
+        where a jump divided by an arbitrary interval would be a torque spike."""
+        self._previous = None
+
     def step(
         self,
         time: float,

@@ -96,6 +96,7 @@ class AttitudeControlNode(Node):
         self._received = {"joints": -math.inf, "odom": -math.inf, "wheels": -math.inf}
         self._reference_received = -math.inf
         self._reference_time = 0.0  # [s], stamp of the newest joint_references
+        self._feedforward_fresh = False  # the feed-forward's source: joint_references
         self._saturated_time = 0.0
         self._stopped = True  # no torque is being applied
 
@@ -219,6 +220,9 @@ class AttitudeControlNode(Node):
         if self.law is None:
             self.law = AttitudeControlLaw(state.base_rotation, self.gains)
         fresh = now - self._reference_received <= self._reference_timeout
+        if fresh != self._feedforward_fresh:
+            self.law.restart_rate()  # references and measured rates run on different clocks
+            self._feedforward_fresh = fresh
         rates = self._reference if fresh else self._theta_dot
         wheel_momentum = self._wheel_inertia * (self._wheel_speeds + self._omega)
         command = self.law.step(

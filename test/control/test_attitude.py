@@ -88,6 +88,23 @@ def test_feedforward_is_the_negative_rate_of_the_coupling_momentum(robot):
     assert command.feedback == pytest.approx(np.zeros(3), abs=1e-12)  # on reference, at rest
 
 
+def test_a_restarted_rate_is_held_until_the_next_interval(robot):
+    """After restart_rate the next sample starts a new difference: a sample 1 ms later on
+    another clock keeps the held rate instead of dividing its jump by 1 ms."""
+    law = AttitudeControlLaw(np.eye(3), AttitudeGains(torque_limit=1e3))
+    state = FreeFloatingState.compute(robot, robot.configuration(THETA_0))
+    rates = np.full(7, 0.1)
+    law.step(0.0, state, rates, np.zeros(3), np.zeros(3))
+    held = law.step(0.5, state, 2.0 * rates, np.zeros(3), np.zeros(3)).feedforward
+    law.restart_rate()
+    switched = law.step(0.501, state, 3.0 * rates, np.zeros(3), np.zeros(3))
+    assert switched.feedforward == pytest.approx(held, rel=1e-12)
+    later = law.step(0.601, state, 4.0 * rates, np.zeros(3), np.zeros(3))
+    coupling = state.coupling_angular_momentum_matrix @ rates
+    expected = -state.base_rotation.T @ coupling / 0.1
+    assert later.feedforward == pytest.approx(expected, rel=1e-9)
+
+
 def test_bad_gains_are_rejected():
     with pytest.raises(ConfigError, match="torque_limit must be finite and > 0 N m"):
         AttitudeGains(torque_limit=0.0)

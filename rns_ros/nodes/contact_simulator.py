@@ -131,19 +131,10 @@ class ContactSimulatorNode(Node):
         self._world_frame = params["world_frame"]
         self._ee_frame = robot.model.frames[robot.ee_frame_id].name
 
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._command_arrived = threading.Event()
         # lockstep: the period counts from the simulated time of a torque command's receipt
-        self._pacer = LockstepPacer(
-            self.simulator,
-            lockstep_period=params["lockstep_period"],
-            real_time_factor=params["real_time_factor"],
-            publish_period=1.0 / params["publish_rate"],  # [s], wall time while faulted
-            lock=self._lock,
-            stop=self._stop,
-            wake=self._command_arrived,
-        )
+        self._pacer = LockstepPacer.from_parameters(self.simulator, params)
+        self._lock, self._stop = self._pacer.lock, self._pacer.stop
+        self._command_arrived = self._pacer.wake
         self._steps = 0  # since the start or the last reset
         self._reset_requested = False
         self._command: np.ndarray | None = None  # newest valid torque, model order [N m]

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
-from typing import NamedTuple, Protocol
+from collections.abc import Callable, Mapping
+from typing import Any, NamedTuple, Protocol
 
 #: A lockstep pause longer than this [s] (wall time) ends in the node's way
 #: (:meth:`SteppedSimulation.patience_over`), so a controller whose sim-time timer waits for a
@@ -118,6 +118,19 @@ class LockstepPacer:
         self._anchor = (0.0, 0.0)
 
     # --- decisions (caller holds the lock where noted) ----------------------------------------
+    @classmethod
+    def from_parameters(cls, simulator, params: Mapping[str, Any], **options) -> LockstepPacer:
+        """The pacer of a simulator node, from the node's ``lockstep_period``,
+        ``real_time_factor`` and ``publish_rate`` [Hz] (the wait between held states while
+        faulted); ``options`` as for the constructor. Its lock and events are new."""
+        return cls(
+            simulator,
+            lockstep_period=params["lockstep_period"],
+            real_time_factor=params["real_time_factor"],
+            publish_period=1.0 / params["publish_rate"],
+            **options,
+        )
+
     def pauses_here(self) -> bool:
         """Lockstep: the simulation has reached ``lockstep_period`` past the newest command.
         Caller holds the lock."""

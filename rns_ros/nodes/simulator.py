@@ -114,19 +114,10 @@ class SimulatorNode(Node):
         self._steps = 0  # since the start or the last reset
         self._run_state = RunState()
 
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._command_arrived = threading.Event()
-        self._pacer = LockstepPacer(
-            self.simulator,
-            lockstep_period=params["lockstep_period"],
-            real_time_factor=params["real_time_factor"],
-            publish_period=1.0 / params["publish_rate"],  # [s], wall time while faulted
-            lock=self._lock,
-            stop=self._stop,
-            wake=self._command_arrived,
-            idle_poll=CALLBACK_POLL,  # at real_time_factor 0 the command callback steps
-        )
+        # at real_time_factor 0 the command callback steps: the simulation thread only polls
+        self._pacer = LockstepPacer.from_parameters(self.simulator, params, idle_poll=CALLBACK_POLL)
+        self._lock, self._stop = self._pacer.lock, self._pacer.stop
+        self._command_arrived = self._pacer.wake
         self._publisher = StatePublisher(
             self,
             self.robot,

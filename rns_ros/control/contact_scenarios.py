@@ -14,11 +14,10 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
-import yaml
 
 from rns_ros.control.contact_tasks import ArcScenario, Setup, WallScenario
 from rns_ros.control.scenario import Scenario, load_scenario
-from rns_ros.core.config import check_keys
+from rns_ros.core.config import check_keys, read_yaml_mapping
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.validation import Choice
 
@@ -202,16 +201,7 @@ def load_operator_scenario(path: str | Path) -> Scenario | MotionForceScenario:
 
 def _read(path: str | Path) -> tuple[Path, dict]:
     """(path, mapping) of a YAML file holding one mapping; keys are checked per kind and task."""
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"scenario file not found: {path}")
-    try:
-        content = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
-    if not isinstance(content, dict):
-        raise ConfigError(f"{path}: expected a mapping of scenario keys, got {content!r}")
-    return path, content
+    return read_yaml_mapping(path, None, "scenario file")
 
 
 def _check_types(values: dict) -> None:

@@ -13,8 +13,9 @@ from rns_ros.core.model import FreeFloatingModel, ModelSpec
 _KEYS = {"urdf", "camera_frame", "wrist_frame", "positioning_joints", "wrist_joints"}
 
 
-def read_yaml_mapping(path: str | Path, keys: set[str], what: str) -> tuple[Path, dict]:
-    """Read a YAML file holding one mapping whose keys are all in ``keys``.
+def read_yaml_mapping(path: str | Path, keys: set[str] | None, what: str) -> tuple[Path, dict]:
+    """Read a YAML file holding one mapping whose keys are all in ``keys`` (None: the caller
+    checks them, e.g. once it knows which kind of file it is).
 
     Returns (path, mapping). A missing file, invalid YAML, a non-mapping or an unknown key raise
     :class:`ConfigError` naming the file (and the key).
@@ -27,8 +28,10 @@ def read_yaml_mapping(path: str | Path, keys: set[str], what: str) -> tuple[Path
     except yaml.YAMLError as exc:
         raise ConfigError(f"{path}: not valid YAML: {exc}") from exc
     if not isinstance(content, dict):
-        raise ConfigError(f"{path}: expected a mapping with keys {sorted(keys)}")
-    check_keys(content, keys, str(path))
+        expected = "a mapping" if keys is None else f"a mapping with keys {sorted(keys)}"
+        raise ConfigError(f"{path}: expected {expected}, got {content!r}")
+    if keys is not None:
+        check_keys(content, keys, str(path))
     return path, content
 
 

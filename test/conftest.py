@@ -1,11 +1,21 @@
-"""Shared fixtures: the default 7-DoF model (session scoped)."""
+"""Shared fixtures: the default 7-DoF model (session scoped); the interpreter's thread switch
+interval for in-process stacks."""
 
 from __future__ import annotations
+
+import sys
 
 import pytest
 
 from rns_ros.core import FreeFloatingModel, load_model
 from rns_ros.resources import default_model_config
+
+# In-process stacks (rns_ros.harness.Harness) run a simulation thread beside the executor in one
+# interpreter. A thread back from a system call (rclpy's logging stats source files; DDS waits)
+# waits for the GIL until the switch interval ends: 5 ms by default, so a free-running
+# simulation thread could delay each log call by seconds. 1 ms keeps the executor responsive,
+# as separate processes (ros2 run) are.
+sys.setswitchinterval(0.001)
 
 
 @pytest.fixture(scope="session")

@@ -175,7 +175,9 @@ def _rosout_errors(probe, level=Log.ERROR):
     ],
 )
 def test_bad_references_are_rejected_and_nothing_moves(ros, message, reason):
-    _simulator(ros, real_time_factor=0.0)
+    # real time: a free-running simulation thread in this process would starve the executor
+    # that records the states and logs the rejections (one GIL)
+    _simulator(ros, real_time_factor=1.0)
     probe = ros.probe()
     errors = _rosout_errors(probe)
     joints = Recorder(probe, JointState, "joint_states")

@@ -85,9 +85,8 @@ def test_wheels_hold_the_base_during_a_slow_wrist_motion(ros):
     # statuses published before the first complete state (WAITING_FOR_STATE) carry no numbers
     controlling = [s for s in statuses if s["state"] != "WAITING_FOR_STATE"]
     assert {s["state"] for s in controlling} <= {"OK", "SATURATED"}
-    # The motion needs far less than the limit. A reference sample delivered late on a loaded
-    # machine can still spike the numerical rate of eq. (5.14) for a tick (seen once in about
-    # ten fresh-clone CI runs; its numbers are printed here to find the cause): at most 1 %.
+    # The motion needs far less than the limit, but on a loaded machine a single tick can still
+    # saturate (cause not yet known; the torques are printed to find it): at most 1 %.
     saturated = [s for s in controlling if s["state"] == "SATURATED"]
     for status in saturated[:5]:
         print({key: status.get(key) for key in ("torque", "feedforward", "feedback")})

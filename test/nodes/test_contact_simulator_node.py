@@ -184,12 +184,12 @@ def test_killed_controller_mid_push_releases_within_the_timeout(ros):
         command.publish(Float64MultiArray(data=tau.tolist()))
         return (
             contacts.messages  # (its subscription may match later than the joints')
+            and contacts.messages[-1].data[LABEL["normal_force"]] > 5.0  # (and lag behind them)
             and joints.messages
             and np.abs(joints.messages[-1].velocity).max() > 0.05
         )
 
-    assert ros.spin_until(sliding, timeout=10.0)
-    assert contacts.messages[-1].data[LABEL["normal_force"]] > 5.0
+    assert ros.spin_until(sliding, timeout=10.0), "the controller never pushed and slid"
     killed = time.monotonic()
     assert ros.spin_until(
         lambda: (

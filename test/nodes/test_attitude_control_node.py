@@ -84,13 +84,11 @@ def test_wheels_hold_the_base_during_a_slow_wrist_motion(ros):
     assert held < 3e-4
     # statuses published before the first complete state (WAITING_FOR_STATE) carry no numbers
     controlling = [s for s in statuses if s["state"] != "WAITING_FOR_STATE"]
-    assert {s["state"] for s in controlling} <= {"OK", "SATURATED"}
-    # The motion needs far less than the limit, but on a loaded machine a single tick can still
-    # saturate (cause not yet known; the torques are printed to find it): at most 1 %.
-    saturated = [s for s in controlling if s["state"] == "SATURATED"]
-    for status in saturated[:5]:
+    # the motion needs far less than the limit: no tick saturates (a saturated tick's torques
+    # are printed to show its cause)
+    for status in [s for s in controlling if s["state"] == "SATURATED"][:5]:
         print({key: status.get(key) for key in ("torque", "feedforward", "feedback")})
-    assert len(saturated) <= 0.01 * len(controlling)
+    assert {s["state"] for s in controlling} == {"OK"}
     assert max(float(s["attitude_error_deg"]) for s in controlling) < 3e-4
     assert any(s["feedforward_source"] == "joint_references" for s in controlling)
 

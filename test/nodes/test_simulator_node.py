@@ -28,6 +28,7 @@ from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import base_twist_from_momentum
 from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE
+from rns_ros.nodes.runner import stop_worker
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.nodes.simulator_commands import MAX_GRID_AGE
@@ -128,6 +129,9 @@ def test_serialized_state_messages_equal_the_messages_they_replace(ros, mode):
     """The pre-serialized state topics (rns_ros.nodes.cdr) carry exactly what the message path
     (kept for a layout the templates cannot capture) publishes, efforts included."""
     node = _simulator(ros, mode=mode, publish_clock=True, energy_rate=0.0)
+    # only this test publishes: the simulation thread is stopped before the publishers are patched
+    stop_worker(node._thread, node._stop, node._command_arrived)
+    assert not node._thread.is_alive()
     sent = []
     publisher_of = node._publisher
     for publisher in (

@@ -30,6 +30,9 @@ from rns_ros.sim.free_floating import FreeFloatingSimulator
 #: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to (older: another clock
 #: or a stale command, acted on at receipt).
 MAX_CATCH_UP = 0.05
+#: Most JointTrajectories stamped ahead that wait for their stamps (within one lockstep period
+#: of the simulated time: a controller's next one or two; a flood keeps the newest).
+MAX_PENDING = 8
 #: Lockstep: a command stamped up to this long [s] before the simulated time still puts the
 #: pauses on its stamp's grid (older: another clock; the period counts from its receipt).
 MAX_GRID_AGE = 1.0
@@ -85,9 +88,11 @@ class CommandIntake:
         self._catch_up = params["catch_up_late_commands"]
         self._reset_hold = params["reset_hold"]
         self.command_timeout = params["command_timeout"]
-        # a JointTrajectory stamped ahead (sim time): (stamp [s], positions, velocities,
-        # accelerations), set as the reference at the first step from its stamp
-        self._pending: tuple | None = None
+        # JointTrajectories stamped ahead (sim time), in stamp order: (stamp [s], positions,
+        # velocities, accelerations), each the reference from the first step at its stamp. A
+        # controller ticking side by side can send the next before the simulation reached the
+        # stamp of the previous one: both wait.
+        self._pending: list[tuple] = []
         self._stale_logged = False
         self._hold_until = -math.inf  # simulated time [s] before which commands are ignored
         self.hold_logged = False
@@ -245,9 +250,12 @@ class CommandIntake:
             if self._blocked():
                 return  # changed since the check: the command is stale now
             if self._ahead(stamp):
-                self._pending = (stamp, positions, velocities, accelerations)
+                # a newer command replaces those waiting for its stamp or a later one
+                waiting = [command for command in self._pending if command[0] < stamp]
+                waiting.append((stamp, positions, velocities, accelerations))
+                self._pending = waiting[-MAX_PENDING:]
             else:
-                self._pending = None  # a newer command replaces one still waiting
+                self._pending = []  # a newer command replaces those still waiting
                 self.simulator.set_reference(
                     positions, velocities, accelerations, since=self._lateness(stamp)
                 )
@@ -328,18 +336,18 @@ class CommandIntake:
     # --- simulation step (caller holds the lock) ----------------------------------------------
     def reset(self) -> None:
         """The simulation was reset: no command, the reset hold starts."""
-        self._pending = None
+        self._pending = []
         self._hold_until = self.simulator.time + self._reset_hold
         self._last_wheel_command = None
 
     def start_pending(self) -> None:
-        """The waiting command becomes the reference once the next step starts at its stamp."""
-        if (
-            self._pending is not None
-            and self.simulator.time + 0.5 * self.simulator.dt >= self._pending[0]
-        ):
-            _, positions, velocities, accelerations = self._pending
-            self._pending = None
+        """The newest waiting command whose stamp the next step starts at (or past) becomes
+        the reference; those before it are over."""
+        starts = self.simulator.time + 0.5 * self.simulator.dt
+        due = [command for command in self._pending if command[0] <= starts]
+        if due:
+            self._pending = self._pending[len(due) :]
+            _, positions, velocities, accelerations = due[-1]
             self.simulator.set_reference(positions, velocities, accelerations)
 
     def expire_stale(self) -> None:

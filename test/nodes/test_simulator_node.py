@@ -810,3 +810,32 @@ def test_wheel_torque_in_a_foreign_frame_is_rejected(ros):
     assert ros.spin_until(rejected, timeout=10.0)
     assert "frame_id 'camera'" in next(m.msg for m in logs.messages if "wheel" in m.msg)
     assert all(m.effort[0] == 0.0 for m in wheels.messages)
+
+
+def test_commands_stamped_ahead_each_act_from_their_own_stamp(ros):
+    """Lockstep side by side at a real-time factor > 0 with one step per control period: the
+    controller's next output (stamped one period later) can arrive while the simulation still
+    sits before the stamp of the previous one. Both wait for their stamps, and each is the joint
+    rate of the step that starts at its stamp (a single waiting slot lost the first: the arm
+    never got the commanded motion)."""
+    period = 0.01
+    node = _simulator(
+        ros,
+        real_time_factor=1.0,
+        publish_clock=True,
+        lockstep_period=period,
+        step_size=period,
+    )
+    stop_worker(node._thread, node._stop, node._command_arrived)
+    assert not node._thread.is_alive()
+    first, second = np.full(7, 0.1), np.full(7, -0.2)
+    start = node.simulator.time
+    node._commands._accept(None, first, None, stamp=start + period)
+    node.advance()  # to the first stamp; the second command comes before the next step
+    assert node.simulator.time == pytest.approx(start + period)
+    assert np.array_equal(node.simulator.reference.velocities, np.zeros(7))
+    node._commands._accept(None, second, None, stamp=start + 2 * period)
+    node.advance()
+    assert np.array_equal(node.simulator.reference.velocities, first)
+    node.advance()
+    assert np.array_equal(node.simulator.reference.velocities, second)

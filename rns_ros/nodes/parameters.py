@@ -131,6 +131,18 @@ JOINTS = ParameterSpec(
     "Joint order of Float64MultiArray velocities (velocity interface): a permutation of the "
     "model's joints",
 )
+#: Under use_sim_time, the wall-clock check that /clock moves (rns_ros.nodes.input_clock): the
+#: nodes that command the robot stop it when their simulated clock stands still this long.
+CLOCK_TIMEOUT = ParameterSpec(
+    "clock_timeout",
+    1.0,
+    "use_sim_time: /clock standing still this long (wall time, once it moved) stops the arm "
+    "(STALE_STATE); ages of inputs are simulated time",
+    "[s]",
+    0.05,
+    60.0,
+    read_only=False,
+)
 #: frame_id of twists in the base and camera frames (nodes that send or read TwistStamped).
 BASE_FRAME = ParameterSpec("base_frame", "base_link", "frame_id of base-frame twists")
 CAMERA_FRAME = ParameterSpec("camera_frame", "camera", "frame_id of camera-frame twists")

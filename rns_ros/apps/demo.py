@@ -21,6 +21,7 @@ from pathlib import Path
 from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
 from rns_ros.core import RnsError
 from rns_ros.resources import default_model_config, scenario_path
+from rns_ros.runs.clock import clock_text
 from rns_ros.runs.contact import (
     CONTACT_METHODS,
     CONTACT_SCENARIOS,
@@ -92,14 +93,22 @@ def _parser() -> argparse.ArgumentParser:
         "--real-time-factor",
         type=float,
         default=1.0,
-        help="simulated s per wall s; other than 1 runs on sim time (/clock); 0 = as fast as "
-        "possible",
+        help="simulated s per wall s the simulator keeps to while the machine keeps up (a busy "
+        "machine only slows the run down: the nodes are on simulated time, /clock, in "
+        "lockstep); 0 = as fast as possible",
+    )
+    parser.add_argument(
+        "--wall-clock",
+        action="store_true",
+        help="inspection and point-to-point: run the nodes on the wall clock, as hardware and a "
+        "human operator do (no /clock, no lockstep; real-time factor 1); the figures then "
+        "depend on how promptly this machine schedules the processes",
     )
     parser.add_argument(
         "--output-lead",
         action=argparse.BooleanOptionalAction,
         default=True,
-        help="off real time: the controller stamps each output one period after its tick, so "
+        help="in lockstep: the controller stamps each output one period after its tick, so "
         "simulator and controller compute side by side on two cores (default; about 1.6x "
         "faster than in turn; a twist acts one period later); --no-output-lead: in turn",
     )
@@ -147,6 +156,13 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
         parser.error(f"--rate must be in [1, 1000] Hz, got {args.rate}")
     if not 0.0 <= args.real_time_factor <= 1000.0:
         parser.error(f"--real-time-factor must be in [0, 1000], got {args.real_time_factor}")
+    if args.wall_clock and args.real_time_factor != 1.0:
+        parser.error(
+            f"--wall-clock runs at real-time factor 1, got --real-time-factor "
+            f"{args.real_time_factor:g}"
+        )
+    if args.wall_clock and is_contact_scenario(args.scenario):
+        parser.error("--wall-clock is for the inspection and point-to-point scenarios")
     if not 1 <= args.runs <= 100:
         parser.error(f"--runs must be in [1, 100], got {args.runs}")
     if args.sim_step is not None:
@@ -188,7 +204,7 @@ def _main_inspection(args: argparse.Namespace) -> int:
     print(f"scenario: {scenario_file} ({scenario.description})")
     print(
         f"model: {default_model_config()}; {args.mode} simulation, controller at "
-        f"{args.rate:g} Hz, real-time factor {args.real_time_factor:g}, "
+        f"{args.rate:g} Hz, {clock_text(args)}, "
         f"ROS domain {args.domain_id} (localhost only)\n",
         flush=True,
     )
@@ -249,7 +265,7 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
     print(f"scenario: {scenario.name} ({scenario.description})")
     print(
         f"model: {default_model_config()}; {args.mode} simulation, rns_ptp at {args.rate:g} Hz, "
-        f"real-time factor {args.real_time_factor:g}, ROS domain {args.domain_id} "
+        f"{clock_text(args)}, ROS domain {args.domain_id} "
         "(localhost only)\n",
         flush=True,
     )

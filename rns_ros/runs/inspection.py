@@ -31,6 +31,7 @@ from rns_ros.core import RnsError, load_model
 from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
 from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.resources import default_model_config
+from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import start_logger
 from rns_ros.runs.recorded import EnergyFigures, energy_figures, robot_arrays
 
@@ -40,7 +41,7 @@ WHEELS_SUFFIX = "+wheels"
 METHODS = ("dls", "sc", "pinv", "conventional", "conventional+wheels")
 DEFAULT_METHODS = ("dls", "sc", "conventional")
 #: Settling time after the operator's zeros before the run ends [s], on the run's clock (sim
-#: time off real time): the figures cover the same stretch of the run at any speed.
+#: time in lockstep): the figures cover the same stretch of the run at any speed.
 SETTLE = 0.3
 
 
@@ -117,7 +118,7 @@ def run_method(
     """
     scenario = load_scenario(scenario_file)
     robot = load_model(default_model_config())
-    sim_time = args.real_time_factor != 1.0
+    sim_time = lockstep(args)
     wheels = method.endswith(WHEELS_SUFFIX)
     ros_args = list(args.ros_args[1:]) if args.ros_args else []
     start = time.perf_counter()
@@ -144,7 +145,7 @@ def run_method(
         # subscription among its min_subscribers
         _wait_for_start(stack, processes, streams, listeners, method)
         task, end, task_wall = _run_task(stack, processes, streams, scenario, args, method)
-        # stopped before the recorded messages are read: off real time the stack would go on
+        # stopped before the recorded messages are read: in lockstep the stack would go on
         # stepping as fast as it can meanwhile, competing with this process for the cores
         processes.stop()  # the logger writes its summary line as it closes the recording
         # from just before the task: the robot is at rest until the first command, and a
@@ -181,9 +182,9 @@ def _controller_parameters(
     method: str, args: argparse.Namespace, scenario: Scenario
 ) -> dict[str, object]:
     """rns_controller's parameters for ``method`` (its control law, without ``+wheels``) at
-    ``--rate``; off real time on sim time, waiting for the lockstep simulator; the scenario's
+    ``--rate``; in lockstep on sim time, waiting for the lockstep simulator; the scenario's
     own controller settings (its method aside) last."""
-    sim_time = args.real_time_factor != 1.0
+    sim_time = lockstep(args)
     parameters = {
         "method": method.removesuffix(WHEELS_SUFFIX),
         "rate": args.rate,
@@ -216,7 +217,7 @@ def _start_nodes(
     """Start rns_controller, rns_operator, (with wheels) rns_attitude_control and rns_simulator
     for ``scenario`` (read from ``scenario_file``); return the nodes whose subscriptions the task
     waits for (``logger``: one is running)."""
-    sim_time = args.real_time_factor != 1.0
+    sim_time = lockstep(args)
     timing = {"use_sim_time": True} if sim_time else {}
     wheels = method.endswith(WHEELS_SUFFIX)
     processes.start(
@@ -256,7 +257,7 @@ def _start_nodes(
             "step_size": simulation_step(args, wheels),
             "real_time_factor": args.real_time_factor,
             "publish_clock": sim_time,
-            # off real time, the simulator waits for each control period's output, so the
+            # in lockstep, the simulator waits for each control period's output, so the
             # figures do not depend on how fast this machine is
             "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
             "reaction_wheels": wheels,
@@ -280,7 +281,7 @@ def _run_task(
     budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
     if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
         raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
-    # the end on the stamps' clock: off real time a lockstep run goes on at its own pace,
+    # the end on the stamps' clock: a lockstep run goes on at its own pace,
     # so a wall-time settle would let figures depend on this machine's speed
     task = profile_start(commands, scenario, OPERATOR_RATE)
     task_started = time.perf_counter()
@@ -303,15 +304,15 @@ MIN_SIM_STEP, MAX_SIM_STEP = 1e-5, 0.1
 
 
 def simulation_step(args: argparse.Namespace, wheels: bool) -> float:
-    """rns_simulator's step [s] for an inspection run: ``--sim-step`` when given; off real time
+    """rns_simulator's step [s] for an inspection run: ``--sim-step`` when given; in lockstep
     in kinematic mode without wheels one control period, since the joint rate is held over the
     period and only the base is integrated (one 10 ms RK4 step gives the 1 ms figures to nine
     digits, dls and conventional: ``test_closed_loop``); else ``SIM_STEP``. Wheels keep 1 ms:
     their torque changes within a period with the attitude loop's."""
     if args.sim_step is not None:
         return args.sim_step
-    lockstep = args.real_time_factor != 1.0 and args.mode == "kinematic" and not wheels
-    if not lockstep:
+    lockstep_run = lockstep(args) and args.mode == "kinematic" and not wheels
+    if not lockstep_run:
         return SIM_STEP
     period = 1.0 / args.rate
     return period / math.ceil(period / MAX_SIM_STEP - 1e-9)
@@ -369,15 +370,18 @@ def _wait_for_start(
 ) -> None:
     """Until this process records the robot state and ``listeners`` subscribe to it."""
     probe = stack.probe()
+    state_streams = ("joints", "odom", "momentum")
 
-    def ready() -> bool:
-        if not all(len(streams[name]) for name in ("joints", "odom", "momentum")):
-            return False
+    def missing() -> list[str]:
+        """What is not up yet: unrecorded state streams, listeners not subscribed."""
         nodes = {info.node_name for info in probe.get_subscriptions_info_by_topic("/base_odom")}
-        return all(name in nodes for name in listeners)
+        return [
+            *(f"no {streams[name].topic} recorded" for name in state_streams if not streams[name]),
+            *(f"{name} not subscribed to base_odom" for name in listeners if name not in nodes),
+        ]
 
-    if not stack.spin_until(ready, timeout=timeout):
+    if not stack.spin_until(lambda: not missing(), timeout=timeout):
         raise RnsError(
-            f"{method}: the robot state or its listeners ({', '.join(listeners)}) did not come "
-            f"up within {timeout:.0f} s{processes.exit_report()}"
+            f"{method}: not ready within {timeout:.0f} s: {'; '.join(missing())}"
+            f"{processes.exit_report()}"
         )

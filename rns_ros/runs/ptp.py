@@ -33,6 +33,7 @@ from rns_ros.core.state import FreeFloatingState
 from rns_ros.harness import Harness, TopicLog
 from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import add_logger
 
 #: rns_ptp methods in Table 4.2 order, with the thesis' labels.
@@ -120,7 +121,7 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
     Raises:
         RnsError: rns_ptp rejected the goal, lost the state, or did not finish in time.
     """
-    sim_time = args.real_time_factor != 1.0
+    sim_time = lockstep(args)
     timing = {"use_sim_time": True} if sim_time else {}
     start = time.perf_counter()
     with Harness(args.domain_id, args.ros_args) as stack:

@@ -17,7 +17,9 @@ Subscribes:
                   ``default_twist_frame``). Only the angular part is achievable; the linear
                   part is reported as unachieved.
     joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
-                  ``state_timeout`` (receipt time) or from more than one publisher stops the arm
+                  ``state_timeout`` (receipt time; simulated time under use_sim_time) or from
+                  more than one publisher stops the arm; under use_sim_time a /clock standing
+                  still for ``clock_timeout`` of wall time stops it too
     base_odom     nav_msgs/Odometry (base pose in world; identity until the first message, then
                   watched like joint_states)
 Publishes (joint commands only once a joint state has arrived):
@@ -86,6 +88,7 @@ from rns_ros.nodes.controller_status import (
     joint_limit_text,
     step_values,
 )
+from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
@@ -127,8 +130,12 @@ class ControllerNode(Node):
         self._theta_stamp: int | None = None
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
-        # input watchdogs: monotonic receipt times [s], a discontinuity seen in joint_states
+        # input watchdogs: receipt times [s] on the input clock (simulated time under
+        # use_sim_time), a discontinuity seen in joint_states; the monotonic receipt time of
+        # the newest joint state [s] (output_lead's catch-up, the /clock watch)
+        self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
         self._state_received = -np.inf
+        self._state_received_wall = -np.inf
         self._odom_received: float | None = None
         self._jump: str | None = None
         self._stopped = True  # the last output was zero velocity: the next one ramps up
@@ -267,7 +274,7 @@ class ControllerNode(Node):
                 frame_id,
                 self._frames,
                 self._params["max_angular_speed"],
-                time.monotonic(),
+                self._input_clock.now(),
             )
         except InputError as exc:
             self._gate.reject(str(exc))
@@ -315,7 +322,8 @@ class ControllerNode(Node):
         self._theta = command.positions
         self._theta_rate = command.velocities
         self._theta_stamp = stamp
-        self._state_received = time.monotonic()
+        self._state_received = self._input_clock.receipt_time(stamp * 1e-9)
+        self._state_received_wall = time.monotonic()
 
     def _discontinuity(self, theta: np.ndarray, stamp: int) -> str | None:
         """Why ``theta`` (stamped ``stamp`` [ns]) cannot follow from the previous sample, or None.
@@ -343,7 +351,8 @@ class ControllerNode(Node):
         pose = base_pose(fields.pose)
         if pose is not None:
             self._base_position, self._base_orientation = pose
-            self._odom_received = time.monotonic()
+            sec, nanosec = fields.stamp
+            self._odom_received = self._input_clock.receipt_time(sec + 1e-9 * nanosec)
 
     # --- control period -------------------------------------------------------------------------
     def _on_tick(self) -> None:
@@ -372,7 +381,7 @@ class ControllerNode(Node):
     def _lead_instant(self, tick: int) -> int | None:
         """With ``output_lead``: the instant [ns] to serve for the /clock tick ``tick`` [ns], or
         None to skip it (:meth:`TickInstants.lead_instant`)."""
-        instant = self._instants.lead_instant(tick, self._theta_stamp, self._state_received)
+        instant = self._instants.lead_instant(tick, self._theta_stamp, self._state_received_wall)
         if instant is not None and instant != tick:
             # expected once at the start: the first command reaches a simulation that still
             # runs in real time
@@ -392,7 +401,8 @@ class ControllerNode(Node):
 
     def _serve_tick(self, tick: int) -> None:
         """The control period of ``tick`` [ns] once its inputs are there: state, law, output."""
-        now, held = self._instants.serve(tick)
+        _, held = self._instants.serve(tick)
+        now = self._input_clock.now()
         if held is not None:
             # the previous output was held this long on the plant's clock (sim time: /clock)
             self.controller.end_hold(held)
@@ -446,8 +456,24 @@ class ControllerNode(Node):
             self.controller.reset(state)
         return state
 
+    def _on_clock_stopped(self, still: float) -> None:
+        """use_sim_time: /clock has stood still for ``still`` [s] of wall time. While the arm
+        moves, no joint state came for as long either (a dead simulator) and no tick waits for
+        the operator's twist (that wait has its own watchdog), stop it here: the sim-time
+        ticks that would stop it have stopped too."""
+        waiting = self._awaited is not None and self._awaited.oldest_waiting is not None
+        quiet = time.monotonic() - self._state_received_wall
+        if self._theta is None or self._stopped or waiting or quiet < self._input_clock.timeout:
+            return
+        self._hold_still(
+            ControllerState.STALE_STATE,
+            f"/clock stood still for {still:.3f} s (clock_timeout "
+            f"{self._params['clock_timeout']} s wall time)",
+        )
+
     def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:
-        """(state, detail) when the measured state cannot be trusted: stale or two sources."""
+        """(state, detail) when the measured state cannot be trusted: stale or two sources;
+        ``now`` [s] on the input clock."""
         problem = measured_state_problem(
             now,
             self._sources.state_publishers,
@@ -557,6 +583,7 @@ class ControllerNode(Node):
         self.controller.configure(settings)
         self._gate.timeout, self._gate.deceleration = gate.timeout, gate.deceleration
         self._gate.acceleration = gate.acceleration
+        self._input_clock.set_clock_timeout(self._params["clock_timeout"])
 
     def _configured(self, parameters) -> tuple[dict, ControllerSettings, CommandGate]:
         """(parameter values, law settings, command gate) with ``parameters`` set.

@@ -8,6 +8,7 @@ from rns_ros.control.controller import ControllerSettings, HoldCorrection, Twist
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
 from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (
+    CLOCK_TIMEOUT,
     JOINTS,
     MODEL_CONFIG,
     OUTPUT_INTERFACE,
@@ -129,8 +130,8 @@ PARAMETERS = (
     ParameterSpec(
         "state_timeout",
         0.1,
-        "joint_states or base_odom older than this (receipt time) stop the arm (STALE_STATE) "
-        "until a fresh state",
+        "joint_states or base_odom older than this (sim time under use_sim_time) stop the arm "
+        "(STALE_STATE)",
         "[s]",
         0.005,
         10.0,
@@ -200,6 +201,7 @@ PARAMETERS = (
         "Axes of unstamped or frame-less commands: world, base, camera, or the world_frame, "
         "base link or camera frame name",
     ),
+    CLOCK_TIMEOUT,
     OUTPUT_INTERFACE,
     JOINTS,
     WORLD_FRAME,

@@ -42,6 +42,7 @@ class InputClock:
         self._node = node
         self.sim_time = bool(node.get_parameter("use_sim_time").value)
         self._on_stopped = on_clock_stopped
+        self.timeout = clock_timeout
         self._watch: ClockWatch | None = None
         self._timer = None
         if self.sim_time:
@@ -58,8 +59,19 @@ class InputClock:
             return self._node.get_clock().now().nanoseconds * 1e-9
         return time.monotonic()
 
+    def receipt_time(self, stamp: float | None = None) -> float:
+        """[s] to note as a message's receipt time: :meth:`now`; under use_sim_time before the
+        first /clock (the clock reads 0), the message's header ``stamp`` [s] when given (a
+        simulator publishes a state before its /clock; a node joining a running simulation
+        would otherwise judge its first state as old as the simulated time)."""
+        now = self.now()
+        if self.sim_time and now == 0.0 and stamp is not None:
+            return stamp
+        return now
+
     def set_clock_timeout(self, clock_timeout: float) -> None:
         """A new clock_timeout [s] (a parameter change)."""
+        self.timeout = clock_timeout
         if self._watch is not None:
             self._watch.timeout = clock_timeout
 

@@ -136,8 +136,7 @@ JOINTS = ParameterSpec(
 CLOCK_TIMEOUT = ParameterSpec(
     "clock_timeout",
     1.0,
-    "use_sim_time: /clock standing still this long (wall time, once it moved) stops the arm "
-    "(STALE_STATE); ages of inputs are simulated time",
+    "use_sim_time: /clock standing still this long (wall time) stops the arm (STALE_STATE)",
     "[s]",
     0.05,
     60.0,

@@ -596,10 +596,12 @@ class _LockstepPlant:
         _node(
             ros,
             ControllerNode,
-            use_sim_time=True,
-            output_lead=0.01,
-            state_timeout=TEST_STATE_TIMEOUT,
-            **parameters,
+            **{
+                "use_sim_time": True,
+                "output_lead": 0.01,
+                "state_timeout": TEST_STATE_TIMEOUT,
+                **parameters,
+            },
         )
         probe = ros.probe()
         self._twists = probe.create_publisher(
@@ -951,3 +953,57 @@ def test_a_joint_state_in_big_endian_cdr_is_read_through_rclpy(ros):
     )
     assert np.array_equal(controller._theta, angles)
     assert controller._theta_stamp == 3 * 10**9 + 4  # [ns]
+
+
+def _status_states(ros, status) -> list[str]:
+    ros.spin_for(0.05)
+    return [status_values(m)["state"] for m in status.messages]
+
+
+def test_under_sim_time_a_state_is_aged_in_simulated_time(ros):
+    """use_sim_time: a simulation the machine delays (here: /clock held for four times
+    state_timeout of wall time) does not age the controller's inputs, so the next tick serves
+    the operator; state_timeout of simulated time without a state still stops the arm. On wall
+    time the held clock would have stopped the arm (STALE_STATE at 1.01 s)."""
+    plant = _LockstepPlant(ros, state_timeout=0.1, clock_timeout=30.0)
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_controller/status", qos=100)
+    plant.state(1.0)
+    plant.clock(1.0)
+    plant.twist(1.0, 0.2)
+    ros.spin_for(0.4)  # a delayed simulation: 0.4 s of wall time, no simulated time
+    plant.clock(1.01)
+    assert "STALE_STATE" not in _status_states(ros, status)
+    for k in range(2, 16):  # /clock goes on, joint_states do not: 0.15 s of simulated time
+        plant.clock(1.0 + 0.01 * k)
+    states = _status_states(ros, status)
+    assert states[-1] == "STALE_STATE"
+    first_stale = 1.0 + 0.01 * (states.index("STALE_STATE"))  # one status per tick from 1.0
+    assert 1.1 <= first_stale <= 1.12
+    assert plant.output_speeds()[-1] == 0.0
+
+
+def test_under_sim_time_a_clock_that_stops_stops_the_moving_arm(ros):
+    """use_sim_time: a dead simulator stops /clock and joint_states alike, and with them the
+    sim-time ticks. The wall-clock watch on /clock (clock_timeout) still commands zero velocity
+    and reports STALE_STATE naming /clock."""
+    plant = _LockstepPlant(ros, state_timeout=0.1, clock_timeout=1.0)
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_controller/status", qos=100)
+    plant.state(0.5)
+    plant.clock(0.5)
+    plant.twist(0.5, 0.2)  # in force for command_timeout (0.5 s) of simulated time
+    for k in range(1, 30):  # the arm ramps up to the commanded motion
+        t = 0.5 + 0.01 * k
+        plant.state(t)
+        plant.clock(t)
+    assert plant.output_speeds()[-1] > 0.0
+    count = len(plant.references.messages)
+
+    def stopped() -> bool:
+        after = plant.references.messages[count:]
+        return bool(after) and plant.output_speeds()[-1] == 0.0
+
+    def reported() -> bool:
+        return status_values(status.messages[-1])["state"] == "STALE_STATE"
+
+    assert ros.spin_until(lambda: stopped() and reported(), timeout=10.0)
+    assert "/clock stood still" in status.messages[-1].status[0].message

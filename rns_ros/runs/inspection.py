@@ -191,9 +191,6 @@ def _controller_parameters(
         **({"use_sim_time": True} if sim_time else {}),
     }
     if sim_time:
-        # lockstep pauses wait for the controller: a state can come later than the 0.1 s
-        # wall-time default while the 2 cores are busy
-        parameters["state_timeout"] = 1.0
         if args.output_lead:
             # each output acts one period after its tick: the simulator computes that period
             # while the controller computes the next output (two cores side by side)

@@ -98,6 +98,10 @@ from rns_ros.resources import default_model_config
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
+#: A joint state older than this many control periods (and than STATE_GAP_FLOOR [s]) at a tick
+#: is a gap in the state stream, ridden through up to state_timeout and logged (throttled).
+STATE_GAP_PERIODS = 3
+STATE_GAP_FLOOR = 0.05
 #: Inputs: only the newest message matters; best effort also matches reliable publishers.
 INPUT_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: cmd_twist under await_commands: best effort (matches the operators' best-effort publishers),
@@ -410,6 +414,7 @@ class ControllerNode(Node):
         if fault is not None:
             self._hold_still(*fault, at=tick)
             return
+        self._note_state_gap(now)
         theta, hold = self._plan(tick)
         state = self._sampled_state(theta)
         gate = self._gate.update(now, self._period)
@@ -455,6 +460,18 @@ class ControllerNode(Node):
             # a new pose (reset, re-homed arm): the wrist is held where it is now, eq. (4.6)
             self.controller.reset(state)
         return state
+
+    def _note_state_gap(self, now: float) -> None:
+        """Log (throttled) a joint state older than a few periods at a tick ``now`` [s]: a gap
+        in the state stream shorter than state_timeout, served on the newest state (moved on by
+        the outputs since, up to MAX_PREDICTION_AGE) instead of stopping the arm."""
+        age = now - self._state_received
+        if age > max(STATE_GAP_PERIODS * self._period, STATE_GAP_FLOOR):
+            self.get_logger().warn(
+                f"joint_states {age:.3f} s old: ridden through on the newest state (the arm "
+                f"stops at state_timeout {self._params['state_timeout']} s)",
+                throttle_duration_sec=5.0,
+            )
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. While the arm

@@ -129,9 +129,9 @@ PARAMETERS = (
     ),
     ParameterSpec(
         "state_timeout",
-        0.1,
-        "joint_states or base_odom older than this (sim time under use_sim_time) stop the arm "
-        "(STALE_STATE)",
+        0.25,
+        "joint_states or base_odom older than this stop the arm (STALE_STATE); shorter gaps "
+        "are ridden through",
         "[s]",
         0.005,
         10.0,

@@ -13,8 +13,9 @@ Subscribes:
     joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
                   ``state_timeout`` (receipt time) stops the arm and abandons the plan. Ages are
                   simulated time under ``use_sim_time`` (:class:`InputClock`), where a /clock
-                  that stands still for ``clock_timeout`` of wall time during a motion or a
-                  planning stops the arm the same way; else monotonic wall time.
+                  that stands still for ``clock_timeout`` of wall time with no joint state
+                  meanwhile (a dead simulator) during a motion or a planning stops the arm the
+                  same way; else monotonic wall time.
     base_odom     nav_msgs/Odometry (base pose, for the predicted coupling momentum; watched like
                   joint_states once it has arrived)
 Publishes (only while a plan plays, plus one zero-velocity message at each stop):

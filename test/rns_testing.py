@@ -138,3 +138,30 @@ def big_endian_joint_state(names: list[str], position: list[float]) -> bytes:
 def status_values(msg) -> dict[str, str]:
     """The key values of a diagnostic_msgs/DiagnosticArray's first status."""
     return {kv.key: kv.value for kv in msg.status[0].values}
+
+
+class SimClock:
+    """A simulated ``/clock`` a test publishes itself, for nodes under ``use_sim_time``: time
+    stands still between :meth:`advance` calls, whatever the wall clock does.
+
+    Args:
+        node: the node that publishes (e.g. a harness probe).
+        start: the first reading [s].
+    """
+
+    def __init__(self, node, start: float = 100.0) -> None:
+        from rclpy.qos import QoSProfile
+        from rosgraph_msgs.msg import Clock
+
+        self._msg_type = Clock
+        self._publisher = node.create_publisher(Clock, "/clock", QoSProfile(depth=1))
+        self.seconds = start
+
+    def advance(self, dt: float):
+        """Publish the clock ``dt`` [s] later; returns its stamp (builtin_interfaces/Time)."""
+        from rns_ros.nodes.sim_clock import stamp_from_seconds
+
+        self.seconds += dt
+        stamp = stamp_from_seconds(self.seconds)
+        self._publisher.publish(self._msg_type(clock=stamp))
+        return stamp

@@ -23,6 +23,11 @@ Publishes:
                       feed-forward, feedback [N m], saturated time [s], coupling momentum
 Service:
     ~/hold            std_srvs/Trigger: hold the current attitude from now on
+
+Input ages (state_timeout, reference_timeout) are receipt times on the node clock under
+``use_sim_time`` (simulated time: a delayed or paused simulation ages nothing), else monotonic
+wall time (:class:`InputClock`). Under ``use_sim_time`` a /clock that stands still for
+``clock_timeout`` of wall time with no state meanwhile (a dead simulator) is a stale state.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ from rns_ros.core.errors import InputError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import attitude_control_parameters
 from rns_ros.nodes.cdr import odometry_fields
+from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
@@ -93,7 +99,12 @@ class AttitudeControlNode(Node):
         self._omega = np.zeros(3)
         self._wheel_speeds: np.ndarray | None = None
         self._reference: np.ndarray | None = None
+        # receipt times [s] on the input clock (simulated time under use_sim_time); the
+        # monotonic receipt time of the newest state of any stream [s] (the /clock watch)
+        self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
+        self._clock_timeout = params["clock_timeout"]
         self._received = {"joints": -math.inf, "odom": -math.inf, "wheels": -math.inf}
+        self._state_received_wall = -math.inf
         self._reference_received = -math.inf
         self._reference_time = 0.0  # [s], stamp of the newest joint_references
         self._feedforward_fresh = False  # the feed-forward's source: joint_references
@@ -110,6 +121,7 @@ class AttitudeControlNode(Node):
         )
         self._status_pub = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
         self.create_service(Trigger, "~/hold", self._on_hold)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         self.create_timer(self._period, self._on_tick)
         self.get_logger().info(
             f"holding the base of {self.robot.name} with reaction wheels at {params['rate']} Hz "
@@ -143,7 +155,7 @@ class AttitudeControlNode(Node):
         self._theta = command.positions
         if command.velocities is not None:
             self._theta_dot = command.velocities
-        self._received["joints"] = time.monotonic()
+        self._note_receipt("joints", msg.header.stamp)
 
     def _on_odom(self, msg: Odometry) -> None:
         pose = base_pose(odometry_fields(msg).pose)
@@ -153,7 +165,7 @@ class AttitudeControlNode(Node):
             self.get_logger().error("ignored base_odom: not finite", throttle_duration_sec=1.0)
             return
         self._pose, self._omega = pose, omega
-        self._received["odom"] = time.monotonic()
+        self._note_receipt("odom", msg.header.stamp)
 
     def _on_wheels(self, msg: JointState) -> None:
         command = self._matched(
@@ -162,7 +174,12 @@ class AttitudeControlNode(Node):
         if command is None:
             return
         self._wheel_speeds = command.velocities
-        self._received["wheels"] = time.monotonic()
+        self._note_receipt("wheels", msg.header.stamp)
+
+    def _note_receipt(self, stream: str, stamp) -> None:
+        """A state of ``stream`` received now (header ``stamp``)."""
+        self._received[stream] = self._input_clock.receipt_time(stamp.sec + 1e-9 * stamp.nanosec)
+        self._state_received_wall = time.monotonic()
 
     def _on_reference(self, msg: JointTrajectory) -> None:
         if not msg.points:
@@ -175,8 +192,8 @@ class AttitudeControlNode(Node):
         )
         if command is not None and command.velocities is not None:
             self._reference = command.velocities
-            self._reference_received = time.monotonic()
             stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+            self._reference_received = self._input_clock.receipt_time(stamp or None)
             # the sender's stamp times the derivative of eq. (5.14); unstamped: receipt time
             self._reference_time = stamp if stamp > 0.0 else self._now()
 
@@ -199,7 +216,7 @@ class AttitudeControlNode(Node):
         ).base_rotation
 
     def _on_tick(self) -> None:
-        now = time.monotonic()
+        now = self._input_clock.now()
         if self._theta is None or self._pose is None or self._wheel_speeds is None:
             self._publish_status(AttitudeState.WAITING_FOR_STATE, "waiting for the robot state")
             return
@@ -253,6 +270,31 @@ class AttitudeControlNode(Node):
                 "feedforward_source": "joint_references" if fresh else "joint_states",
             },
         )
+
+    def _on_clock_stopped(self, still: float) -> None:
+        """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no state
+        came for as long either (a dead simulator), the wheels go off as on a stale state, from
+        here: the sim-time control timer that would do it has stopped too. Before the first
+        complete state nothing is commanded and nothing changes."""
+        waiting = self._theta is None or self._pose is None or self._wheel_speeds is None
+        quiet = time.monotonic() - self._state_received_wall
+        if waiting or quiet < self._input_clock.timeout:
+            return
+        reason = (
+            f"/clock stood still for {still:.3f} s (clock_timeout {self._clock_timeout} s wall "
+            "time)"
+        )
+        self.get_logger().error(
+            f"STALE_STATE: {reason}; wheel torque zero", throttle_duration_sec=5.0
+        )
+        self._stale(reason)
+
+    def _apply_parameters(self, parameters) -> None:
+        """After a set: the run-time parameters (clock_timeout) take their new values."""
+        for parameter in parameters:
+            if parameter.name == "clock_timeout":
+                self._clock_timeout = parameter.value
+                self._input_clock.set_clock_timeout(parameter.value)
 
     def _stale(self, reason: str) -> None:
         if not self._stopped:

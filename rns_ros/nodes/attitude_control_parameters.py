@@ -3,7 +3,7 @@ config/attitude_control.yaml."""
 
 from __future__ import annotations
 
-from rns_ros.nodes.parameters import MODEL_CONFIG, ParameterSpec, specs_by_name
+from rns_ros.nodes.parameters import CLOCK_TIMEOUT, MODEL_CONFIG, ParameterSpec, specs_by_name
 
 NODE_NAME = "rns_attitude_control"
 SUMMARY = "Holds the base attitude with three reaction wheels (eq. 5.14 feed-forward + PD)."
@@ -30,8 +30,8 @@ PARAMETERS = (
     ParameterSpec(
         "state_timeout",
         0.1,
-        "joint_states, base_odom or wheel_states older than this (receipt time): zero torque, "
-        "STALE_STATE",
+        "joint_states, base_odom or wheel_states older than this (sim time under use_sim_time): "
+        "zero torque, STALE_STATE",
         "[s]",
         0.005,
         10.0,
@@ -44,5 +44,6 @@ PARAMETERS = (
         0.005,
         10.0,
     ),
+    CLOCK_TIMEOUT,
 )
 SPECS = specs_by_name(PARAMETERS)

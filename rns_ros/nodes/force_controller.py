@@ -22,6 +22,11 @@ Publishes:
 Service:
     ~/reset         std_srvs/Trigger: clears a latched safety stop, re-latches the reference at
                     the current pose (the force task waits for a new force setpoint)
+
+Input ages (state_timeout, command_timeout, force_timeout) are receipt times on the node clock
+under ``use_sim_time`` (simulated time: a delayed or paused simulation ages nothing), else
+monotonic wall time (:class:`InputClock`). Under ``use_sim_time`` a /clock that stands still for
+``clock_timeout`` of wall time with no joint_states meanwhile (a dead simulator) is a stale state.
 """
 
 from __future__ import annotations
@@ -56,14 +61,16 @@ from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.fixed_base import load_fixed_base_model
 from rns_ros.nodes import force_controller_parameters
 from rns_ros.nodes.force_controller_parameters import DEFAULT_MODEL
+from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import status_text
 from rns_ros.resources import config_dir
 
-#: Period of the stale-state check (wall clock) [s] and of /diagnostics [s].
+#: Period of the stale-state check [s] (wall clock; it judges ages on the input clock) and of
+#: /diagnostics [s].
 WATCHDOG_PERIOD, DIAGNOSTICS_PERIOD = 0.05, 1.0
-#: Window of the step-time statistics [s].
+#: Window of the step-time statistics [s] (wall clock: they measure the CPU cost of a step).
 STEP_TIME_WINDOW = 1.0
 _ERROR = {
     ForceControlState.INVALID_COMMAND,
@@ -112,7 +119,11 @@ class ForceControllerNode(Node):
         self._ee_frame = self.robot.model.frames[self.robot.ee_frame_id].name
         self._frames = command_frames(params["world_frame"], self._ee_frame)
         self._state_timeout = params["state_timeout"]
-        self._state_received: float | None = None  # monotonic [s]
+        self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
+        # receipt time of the newest joint state [s] on the input clock (simulated time under
+        # use_sim_time), and monotonic [s] (the /clock watch)
+        self._state_received: float | None = None
+        self._state_received_wall = -np.inf
         self._stale = False  # the zero torque of a stale state was published
         self._published = False  # any torque published (then shutdown publishes zero)
         self._step: ForceStep | None = None
@@ -134,6 +145,7 @@ class ForceControllerNode(Node):
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
         )
         self.create_service(Trigger, "~/reset", self._on_reset)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(WATCHDOG_PERIOD, self._on_watchdog, clock=steady)
         self.create_timer(1.0 / params["status_rate"], self._publish_status, clock=steady)
@@ -158,7 +170,7 @@ class ForceControllerNode(Node):
                 self._frames,
                 self.settings.default_twist_frame,
                 _stamp_ns(msg.header.stamp),
-                time.monotonic(),
+                self._input_clock.now(),
             ),
             self.controller.set_twist,
             self.controller.reject_twist,
@@ -173,7 +185,7 @@ class ForceControllerNode(Node):
                 [m.x, m.y, m.z],
                 msg.header.frame_id,
                 self._frames,
-                time.monotonic(),
+                self._input_clock.now(),
             ),
             self.controller.set_force,
             self.controller.reject_force,
@@ -229,25 +241,25 @@ class ForceControllerNode(Node):
         except InputError as exc:
             self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
             return
-        now = time.monotonic()
+        stamp = _stamp_ns(msg.header.stamp)
+        now = self._input_clock.receipt_time(stamp * 1e-9)
+        wall = time.monotonic()
         if self._stale:
             self.get_logger().info("joint_states resumed: reference re-latched at the pose")
             self.controller.resync()
         self._stale = False
-        self._state_received = now
+        self._state_received, self._state_received_wall = now, wall
         started = time.perf_counter()
         try:
-            step = self.controller.step(
-                JointMeasurement(_stamp_ns(msg.header.stamp), q[order], v[order], effort), now
-            )
+            step = self.controller.step(JointMeasurement(stamp, q[order], v[order], effort), now)
         except RnsError as exc:
             self._status_override = (ForceControlState.CONTROL_ERROR, str(exc))
             self.get_logger().error(f"control step failed: {exc}", throttle_duration_sec=1.0)
             return
         if step.torque is not None:
             self._publish_torque(step.torque)
-        self._step_times.append((now, time.perf_counter() - started))
-        while self._step_times and self._step_times[0][0] < now - STEP_TIME_WINDOW:
+        self._step_times.append((wall, time.perf_counter() - started))
+        while self._step_times and self._step_times[0][0] < wall - STEP_TIME_WINDOW:
             self._step_times.popleft()
         self._step, self._status_override = step, None
         self._publish_errors(step)
@@ -287,18 +299,47 @@ class ForceControllerNode(Node):
     def _on_watchdog(self) -> None:
         if self._state_received is None or self._stale:
             return
-        age = time.monotonic() - self._state_received
+        age = self._input_clock.now() - self._state_received
         if age <= self._state_timeout:
             return
-        self._stale = True
-        detail = (
-            f"{self._state_topic} {age:.3f} s old (state_timeout {self._state_timeout} s): one "
-            "zero torque published (motors off)"
+        self._motors_off(
+            f"{self._state_topic} {age:.3f} s old (state_timeout {self._state_timeout} s)"
         )
+
+    def _motors_off(self, reason: str) -> None:
+        """A stale state (``reason``): one zero torque, STALE_STATE, one error log."""
+        self._stale = True
+        detail = f"{reason}: one zero torque published (motors off)"
         self._status_override = (ForceControlState.STALE_STATE, detail)
         self.get_logger().error(f"STALE_STATE: {detail}")
         self._publish_torque(np.zeros(self.robot.n))
         self._publish_status()
+
+    def _on_clock_stopped(self, still: float) -> None:
+        """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint
+        state came for as long either (a dead simulator) after torques were published, the
+        motors go off as on a stale state: with simulated time standing still, the state's age
+        does not grow. Later calls while it stands still only update the status."""
+        quiet = time.monotonic() - self._state_received_wall
+        if not self._published or quiet < self._input_clock.timeout:
+            return
+        reason = (
+            f"/clock stood still for {still:.3f} s (clock_timeout "
+            f"{self._params['clock_timeout']} s wall time)"
+        )
+        if not self._stale:
+            self._motors_off(reason)
+            return
+        override = self._status_override
+        if override is not None and override[1].startswith("/clock"):
+            self._status_override = (override[0], f"{reason}: motors off")
+
+    def _apply_parameters(self, parameters) -> None:
+        """After a set: the run-time parameters (clock_timeout) take their new values."""
+        for parameter in parameters:
+            if parameter.name == "clock_timeout":
+                self._params["clock_timeout"] = parameter.value
+                self._input_clock.set_clock_timeout(parameter.value)
 
     def _step_time_stats(self) -> tuple[float, float]:
         if not self._step_times:

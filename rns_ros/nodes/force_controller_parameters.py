@@ -11,7 +11,13 @@ from rns_ros.control.force.settings import (
     NormalMode,
 )
 from rns_ros.control.motion_force.osc import OscVariant
-from rns_ros.nodes.parameters import WORLD_FRAME, ParameterSpec, choices_of, specs_by_name
+from rns_ros.nodes.parameters import (
+    CLOCK_TIMEOUT,
+    WORLD_FRAME,
+    ParameterSpec,
+    choices_of,
+    specs_by_name,
+)
 
 NODE_NAME = "rns_force_controller"
 SUMMARY = (
@@ -125,11 +131,13 @@ PARAMETERS = (
     ParameterSpec(
         "state_timeout",
         0.1,
-        "No joint_states for this long (wall clock, receipt): one zero torque, STALE_STATE",
+        "No joint_states for this long (receipt; sim time under use_sim_time): one zero torque, "
+        "STALE_STATE",
         "[s]",
         0.005,
         10.0,
     ),
+    CLOCK_TIMEOUT,
     ParameterSpec(
         "max_linear_speed", 0.5, "Twists faster than this are scaled down", "[m/s]", 1e-6, 10.0
     ),

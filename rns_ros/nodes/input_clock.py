@@ -70,10 +70,12 @@ class InputClock:
         return now
 
     def set_clock_timeout(self, clock_timeout: float) -> None:
-        """A new clock_timeout [s] (a parameter change)."""
+        """A new clock_timeout [s] (a parameter change); the checks follow its period."""
         self.timeout = clock_timeout
         if self._watch is not None:
             self._watch.timeout = clock_timeout
+            self._timer.timer_period_ns = round(clock_timeout / CHECKS_PER_TIMEOUT * 1e9)
+            self._timer.reset()  # the next check one new period from now, not at the old one
 
     def _check(self) -> None:
         still = self._watch.check(self._node.get_clock().now().nanoseconds)

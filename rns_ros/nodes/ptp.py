@@ -11,7 +11,11 @@ Subscribes:
                   (plan_deployment) from the measured configuration. A new goal replaces the
                   current plan: the arm stops and the goal is planned from the measured state.
     joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
-                  ``state_timeout`` (receipt time) stops the arm and abandons the plan
+                  ``state_timeout`` (receipt time) stops the arm and abandons the plan. Ages are
+                  simulated time under ``use_sim_time`` (:class:`InputClock`), where a /clock
+                  that stands still for ``clock_timeout`` of wall time with no joint state
+                  meanwhile (a dead simulator) during a motion or a planning stops the arm the
+                  same way; else monotonic wall time.
     base_odom     nav_msgs/Odometry (base pose, for the predicted coupling momentum; watched like
                   joint_states once it has arrived)
 Publishes (only while a plan plays, plus one zero-velocity message at each stop):
@@ -55,6 +59,7 @@ from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import ptp_parameters
 from rns_ros.nodes.cdr import odometry_fields
+from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
@@ -65,7 +70,8 @@ from rns_ros.resources import default_model_config
 DEPLOY_GOAL = ["deploy"]
 #: A stale state while a goal is planned does not abandon it: planning (pure Python, holding the
 #: GIL) can starve the executor, and the arm is at rest. A plan that is ready waits this long [s]
-#: for a fresh joint state before it is abandoned as STALE_STATE.
+#: (input clock: simulated time under use_sim_time) for a fresh joint state before it is
+#: abandoned as STALE_STATE.
 PLANNING_GRACE = 1.0
 #: Period of the /diagnostics publication [s] (wall clock).
 DIAGNOSTICS_PERIOD = 1.0
@@ -105,7 +111,10 @@ class PtpNode(Node):
         self._theta: np.ndarray | None = None
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
+        # receipt times [s] on the input clock (simulated time under use_sim_time); the
+        # monotonic receipt time of the newest joint state [s] (the /clock watch)
         self._state_received = -np.inf
+        self._state_received_wall = -np.inf
         self._odom_received: float | None = None
         # plan playback: the plan, its clock s [s], the playback rate r [-], node-clock time of
         # the last tick [s]
@@ -119,13 +128,16 @@ class PtpNode(Node):
         # planning in a worker thread: goals are numbered, only the newest result is taken
         self._lock = threading.Lock()
         self._generation = 0
-        self._planned: tuple[int, object, float] | None = None  # (goal, plan, monotonic time)
+        # (goal, plan, input-clock time it was ready [s]): compared with state receipt times
+        self._planned: tuple[int, object, float] | None = None
         self._last_status: DiagnosticStatus | None = None
         # the graph, read once a second: joint_states sources, other joint commanders
         self._state_publishers: list[str] = []
         self._commanders: list[str] = []
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
-        self._deferred: tuple[JointState, float] | None = None  # (goal, monotonic stop time)
+        # (goal, input-clock time of the stop [s]): compared with state receipt times
+        self._deferred: tuple[JointState, float] | None = None
+        self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self.create_subscription(JointState, "ptp_goal", self._on_goal, QoSProfile(depth=10))
@@ -149,6 +161,7 @@ class PtpNode(Node):
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
         )
         self.create_service(Trigger, "~/cancel", self._on_cancel)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         self.create_timer(self._period, self._on_tick)
         self.create_timer(
             DIAGNOSTICS_PERIOD,
@@ -170,16 +183,20 @@ class PtpNode(Node):
         if command.positions is None:
             return
         self._theta = command.positions
-        self._state_received = time.monotonic()
+        stamp = msg.header.stamp
+        self._state_received = self._input_clock.receipt_time(stamp.sec + 1e-9 * stamp.nanosec)
+        self._state_received_wall = time.monotonic()
 
     def _on_odom(self, msg: Odometry) -> None:
-        pose = base_pose(odometry_fields(msg).pose)
+        fields = odometry_fields(msg)
+        pose = base_pose(fields.pose)
         if pose is not None:
             self._base_position, self._base_orientation = pose
-            self._odom_received = time.monotonic()
+            sec, nanosec = fields.stamp
+            self._odom_received = self._input_clock.receipt_time(sec + 1e-9 * nanosec)
 
     def _on_goal(self, msg: JointState) -> None:
-        fault = self._fault(time.monotonic())
+        fault = self._fault(self._input_clock.now())
         if self._theta is None or fault is not None:
             self._reject(fault[1] if fault is not None else "no joint_states yet")
             return
@@ -202,7 +219,7 @@ class PtpNode(Node):
             self.get_logger().info("new goal: the current motion stops and is replaced")
             self._stop_output()
             self.plan = None
-            self._deferred = (msg, time.monotonic())
+            self._deferred = (msg, self._input_clock.now())
             self._mode, self._detail = PtpState.PLANNING, "stopping for the new goal"
             return
         self._start_planning(theta, goal)
@@ -237,7 +254,7 @@ class PtpNode(Node):
             result = InputError(f"planning failed: {type(exc).__name__}: {exc}")
         with self._lock:
             if generation == self._generation:
-                self._planned = (generation, result, time.monotonic())
+                self._planned = (generation, result, self._input_clock.now())
 
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected ptp_goal: {reason}")
@@ -269,7 +286,7 @@ class PtpNode(Node):
         if self._theta is None:
             self._publish_status(PtpState.WAITING_FOR_STATE, f"waiting for {self._state_topic}")
             return
-        now = time.monotonic()
+        now = self._input_clock.now()
         fault = self._fault(now)
         if fault is not None and self._mode is PtpState.PLANNING:
             with self._lock:
@@ -286,12 +303,7 @@ class PtpNode(Node):
                 self.get_logger().error(
                     f"{state.value}: {text}; joints commanded to rest{abandoned}"
                 )
-                self._stop_output()
-                self.plan = None
-                self._deferred = None
-                with self._lock:
-                    self._generation += 1
-                    self._planned = None
+                self._abandon()
             self._mode, self._detail = state, text
             self._publish_status(self._mode, text)
             return
@@ -306,6 +318,49 @@ class PtpNode(Node):
         if self._mode in (PtpState.MOVING, PtpState.CANCELLING):
             self._play(elapsed)
         self._publish_status(self._mode, self._detail)
+
+    def _abandon(self) -> None:
+        """Zero velocity; the plan, a deferred goal and a plan being computed are dropped."""
+        self._stop_output()
+        self.plan = None
+        self._deferred = None
+        with self._lock:
+            self._generation += 1
+            self._planned = None
+
+    def _on_clock_stopped(self, still: float) -> None:
+        """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint
+        state came for as long either (a dead simulator), a motion or a planning stops here as
+        on a stale state, and the status is published from here: the sim-time playback timer
+        that would do it has stopped too. An arm at rest is left as it is."""
+        quiet = time.monotonic() - self._state_received_wall
+        if quiet < self._input_clock.timeout:
+            return
+        text = (
+            f"/clock stood still for {still:.3f} s (clock_timeout "
+            f"{self._params['clock_timeout']} s wall time)"
+        )
+        if self._mode in (PtpState.MOVING, PtpState.CANCELLING, PtpState.PLANNING):
+            abandoned = "; the plan is abandoned" if self.plan is not None else ""
+            self.get_logger().error(
+                f"{PtpState.STALE_STATE.value}: {text}; joints commanded to rest{abandoned}"
+            )
+            self._abandon()
+        elif self._mode is not PtpState.STALE_STATE or not self._detail.startswith("/clock"):
+            return  # nothing commanded: the arm is at rest, nothing to stop
+        else:
+            self.get_logger().error(
+                f"{PtpState.STALE_STATE.value}: {text}", throttle_duration_sec=5.0
+            )
+        self._mode, self._detail = PtpState.STALE_STATE, text
+        self._publish_status(self._mode, text)
+
+    def _apply_parameters(self, parameters) -> None:
+        """After a set: the run-time parameters (clock_timeout) take their new values."""
+        for parameter in parameters:
+            if parameter.name == "clock_timeout":
+                self._params["clock_timeout"] = parameter.value
+                self._input_clock.set_clock_timeout(parameter.value)
 
     def _start_deferred(self, now: float) -> None:
         """Plan the goal that arrived during a motion once a joint state received at least two

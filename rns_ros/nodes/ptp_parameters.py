@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from rns_ros.control.ptp import PtpMethod
 from rns_ros.nodes.parameters import (
+    CLOCK_TIMEOUT,
     JOINTS,
     MODEL_CONFIG,
     OUTPUT_INTERFACE,
@@ -61,6 +62,7 @@ PARAMETERS = (
         0.005,
         10.0,
     ),
+    CLOCK_TIMEOUT,
     ParameterSpec(
         "cancel_deceleration",
         2.0,

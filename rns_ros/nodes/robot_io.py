@@ -69,7 +69,8 @@ def measured_state_problem(
 
     Returns ("CONFLICTING_STATE", reason) for more than one ``joint_states`` publisher, or
     ("STALE_STATE", reason) when joint_states (or base_odom, once received) are older than
-    ``timeout`` [s] by monotonic receipt time ``now`` [s].
+    ``timeout`` [s] at ``now`` [s], on the clock of the receipt times (the node's input clock:
+    simulated time under use_sim_time, else monotonic).
     """
     if len(state_publishers) > 1:
         return (

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -13,12 +14,15 @@ from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import Recorder, status_values
+from rns_testing import Recorder, SimClock, status_values
+from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.attitude_control import AttitudeControlNode
 from rns_ros.nodes.simulator import SimulatorNode
+from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
+from rns_ros.sim.reaction_wheels import WHEEL_NAMES
 
 REPO = Path(__file__).resolve().parents[2]
 JOINTS = [f"joint_{i}" for i in range(1, 8)]
@@ -135,3 +139,114 @@ def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
 
     with pytest.raises(ConfigError, match=message):
         _node(ros, AttitudeControlNode, **overrides)
+
+
+# --- simulated time: the test publishes /clock and the robot state itself -----------------------
+
+#: Simulated time per step of the test's /clock [s]; the base's turn rate about z [rad/s] (the
+#: wheels push back: a non-zero torque).
+STEP, TURN_RATE = 0.01, 0.01
+
+
+class _SimRobot:
+    """The state rns_simulator would publish (arm at rest, the base turning about z, wheels at
+    rest) on a /clock the test publishes."""
+
+    def __init__(self, ros):
+        self.ros = ros
+        probe = ros.probe()
+        self.clock = SimClock(probe)
+        self.start = self.clock.seconds
+        self.joints = probe.create_publisher(JointState, "joint_states", 10)
+        self.odom = probe.create_publisher(Odometry, "base_odom", 10)
+        self.wheels = probe.create_publisher(JointState, "wheel_states", 10)
+
+    def step(self, state: bool = True) -> None:
+        """One STEP of simulated time, with the state at its stamp unless ``state`` is False,
+        then the callbacks of 10 ms of wall time."""
+        stamp = self.clock.advance(STEP)
+        if state:
+            joints = JointState(
+                name=JOINTS, position=list(SATELLITE_OBSERVATION_RAD), velocity=[0.0] * 7
+            )
+            odom = Odometry()
+            angle = TURN_RATE * (self.clock.seconds - self.start)
+            o = odom.pose.pose.orientation
+            o.z, o.w = math.sin(angle / 2), math.cos(angle / 2)
+            odom.twist.twist.angular.z = TURN_RATE
+            wheels = JointState(name=list(WHEEL_NAMES), velocity=[0.0] * 3)
+            for msg, publisher in ((joints, self.joints), (odom, self.odom), (wheels, self.wheels)):
+                msg.header.stamp = stamp
+                publisher.publish(msg)
+        self.ros.spin_for(0.01)
+
+    def step_until(self, condition, timeout: float = 10.0, state: bool = True) -> bool:
+        """Step until ``condition()`` holds or ``timeout`` [s] of wall time passes."""
+        deadline = time.monotonic() + timeout
+        while not condition() and time.monotonic() < deadline:
+            self.step(state)
+        return bool(condition())
+
+
+def _sim_time_start(ros, **overrides):
+    """rns_attitude_control under use_sim_time, holding (OK: a torque limit the base's turn
+    does not reach) on the test's /clock."""
+    node = _node(ros, AttitudeControlNode, use_sim_time=True, torque_limit=1e3, **overrides)
+    probe = ros.probe()
+    torque = Recorder(probe, Vector3Stamped, "wheel_torque")
+    status = Recorder(probe, DiagnosticArray, "rns_attitude_control/status")
+    robot = _SimRobot(ros)
+    assert robot.step_until(lambda: _state(status) == "OK")
+    for _ in range(20):
+        robot.step()
+    return node, robot, torque, status
+
+
+def _state(status) -> str | None:
+    return status_values(status.messages[-1])["state"] if status.messages else None
+
+
+def _torque(torque) -> tuple[float, float, float]:
+    last = torque.messages[-1].vector
+    return last.x, last.y, last.z
+
+
+def test_sim_time_a_wall_clock_pause_of_the_simulation_does_not_turn_the_wheels_off(ros):
+    """Under use_sim_time the state's age is simulated time: /clock and the state paused for 1 s
+    of wall time (4 state_timeouts, below clock_timeout) age nothing."""
+    _, robot, torque, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=10.0)
+    ros.spin_for(1.0)  # the simulation pauses: no /clock, no state
+    for _ in range(20):
+        robot.step()
+    assert _state(status) == "OK"
+    assert "STALE_STATE" not in {status_values(m)["state"] for m in status.messages}
+    assert _torque(torque) != (0.0, 0.0, 0.0)
+
+
+def test_sim_time_a_stopped_clock_turns_the_wheels_off(ros):
+    """/clock and the state stop (a dead simulator): no simulated time passes and the control
+    timer stops, yet after clock_timeout of wall time (set at run time) a zero torque goes out
+    and the status says STALE_STATE; the clock and the state coming back resume the hold."""
+    node, robot, torque, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=30.0)
+    result = node.set_parameters([Parameter("clock_timeout", value=1.0)])
+    assert result[0].successful
+    for _ in range(50):  # the watch sees /clock move at its new checks
+        robot.step()
+    assert _torque(torque) != (0.0, 0.0, 0.0)
+    assert ros.spin_until(
+        lambda: "/clock stood still" in status.messages[-1].status[0].message, timeout=15.0
+    )
+    assert _state(status) == "STALE_STATE"
+    assert "(clock_timeout 1.0 s wall time)" in status.messages[-1].status[0].message
+    assert _torque(torque) == (0.0, 0.0, 0.0)
+    assert robot.step_until(lambda: _state(status) == "OK")
+
+
+def test_sim_time_a_state_stale_in_simulated_time_turns_the_wheels_off(ros):
+    """/clock goes on without the state: after state_timeout of simulated time, zero torque and
+    STALE_STATE."""
+    _, robot, torque, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=30.0)
+    assert robot.step_until(lambda: _state(status) == "STALE_STATE", state=False)
+    message = status.messages[-1].status[0].message
+    assert "(state_timeout 0.25 s)" in message
+    assert _torque(torque) == (0.0, 0.0, 0.0)

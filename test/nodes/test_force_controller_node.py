@@ -7,14 +7,16 @@ import os
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
+from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import status_values
+from rns_testing import SimClock, status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -177,3 +179,109 @@ def test_startup_errors_are_one_line_and_exit_2(args, pattern, tmp_path):
     assert len(lines) == 1, result.stderr[-2000:]
     assert lines[0].startswith("rns_force_controller: ")
     assert re.search(pattern, lines[0]), lines[0]
+
+
+# --- simulated time: the test publishes /clock, the wrench and joint_states itself --------------
+
+#: Simulated time per step of the test's /clock [s].
+STEP = 0.01
+
+
+class _SimArm(_Arm):
+    """:class:`_Arm` on a /clock the test publishes: each step advances it by STEP and sends the
+    wrench and the state stamped then."""
+
+    def __init__(self, ros):
+        super().__init__(ros)
+        self.clock = SimClock(self.probe)
+
+    def step(self, state: bool = True) -> None:
+        """One STEP of simulated time, with a wrench and a state at its stamp unless ``state``
+        is False, then the callbacks of 10 ms of wall time."""
+        stamp = self.clock.advance(STEP)
+        if state:
+            wrench = WrenchStamped()
+            wrench.header.stamp, wrench.header.frame_id = stamp, "ee"
+            wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z = PUSH
+            self.wrench.publish(wrench)
+            msg = JointState(
+                name=JOINTS, position=START.tolist(), velocity=ZERO7.tolist(), effort=ZERO7.tolist()
+            )
+            msg.header.stamp = stamp
+            self.states.publish(msg)
+            self.sent += 1
+        self.ros.spin_for(0.01)
+
+
+def _sim_time_start(ros, **overrides):
+    """rns_force_controller under use_sim_time, stepped 20 times on the test's /clock."""
+    node = ros.add(ForceControllerNode, {"use_sim_time": True, **overrides})
+    torques = ros.record(Float64MultiArray, "joint_efforts")
+    status = ros.record(DiagnosticArray, "rns_force_controller/status")
+    arm = _SimArm(ros)
+    assert ros.spin_until(
+        lambda: arm.states.get_subscription_count() and arm.wrench.get_subscription_count(), 10.0
+    )
+    for _ in range(20):
+        arm.step()
+    assert ros.spin_until(lambda: len(torques) >= 20, 5.0)
+    return node, arm, torques, status
+
+
+def _last_state(status) -> str | None:
+    return None if status.latest() is None else status_values(status.latest())["state"]
+
+
+def test_sim_time_a_wall_clock_pause_of_the_simulation_does_not_stop_the_motors(ros):
+    """Under use_sim_time the state's age is simulated time: /clock and the state paused for 1 s
+    of wall time (4 state_timeouts, below clock_timeout) age nothing: no zero torque."""
+    node, arm, torques, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=10.0)
+    ros.spin_for(1.0)  # the simulation pauses: no /clock, no joint_states
+    for _ in range(20):
+        arm.step()
+    assert ros.spin_until(lambda: len(torques) >= 40, 5.0)
+    ros.spin_for(0.1)
+    assert len(torques) == 40  # one per state, no zero torque of a stale state between them
+    assert not node._stale
+    assert "STALE_STATE" not in {status_values(m)["state"] for m in status.messages}
+
+
+def test_sim_time_a_stopped_clock_turns_the_motors_off(ros):
+    """/clock and the state stop (a dead simulator): no simulated time passes, yet after
+    clock_timeout of wall time (set at run time) one zero torque goes out and the status says
+    STALE_STATE; a state on a moving clock again resumes the torques."""
+    node, arm, torques, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=30.0)
+    result = node.set_parameters([Parameter("clock_timeout", value=1.0)])
+    assert result[0].successful
+    for _ in range(50):  # the watch sees /clock move at its new checks
+        arm.step()
+    assert ros.spin_until(lambda: len(torques) >= 70, 5.0)
+    assert ros.spin_until(
+        lambda: (
+            status.latest() is not None
+            and "/clock stood still" in status.latest().status[0].message
+        ),
+        15.0,
+    )
+    assert _last_state(status) == "STALE_STATE"
+    assert "(clock_timeout 1.0 s wall time)" in status.latest().status[0].message
+    assert len(torques) == 71  # the torques of the states, then exactly one zero
+    assert torques.latest().data.tolist() == [0.0] * 7
+    arm.step()
+    assert ros.spin_until(lambda: len(torques) >= 72, 5.0)
+    assert ros.spin_until(lambda: _last_state(status) != "STALE_STATE", 5.0)
+
+
+def test_sim_time_a_state_stale_in_simulated_time_turns_the_motors_off(ros):
+    """/clock goes on without joint_states: after state_timeout of simulated time, one zero
+    torque and STALE_STATE."""
+    _, arm, torques, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=30.0)
+    deadline = time.monotonic() + 10.0
+    while _last_state(status) != "STALE_STATE" and time.monotonic() < deadline:
+        arm.step(state=False)
+    assert _last_state(status) == "STALE_STATE"
+    message = status.latest().status[0].message
+    assert "joint_states" in message
+    assert "(state_timeout 0.25 s)" in message
+    assert len(torques) == 21
+    assert torques.latest().data.tolist() == [0.0] * 7

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -12,7 +13,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
-from rns_testing import Recorder, status_values
+from rns_testing import Recorder, SimClock, status_values
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
@@ -440,3 +441,112 @@ def test_dynamic_simulator_follows_the_positions_of_the_plan(ros):
     assert ros.spin_until(future.done, timeout=5.0)
     assert not future.result().success
     assert "nothing to cancel (DONE)" in future.result().message
+
+
+# --- simulated time: the test publishes /clock and joint_states itself -------------------------
+
+#: Simulated time per step of the test's /clock [s].
+STEP = 0.01
+
+
+def _sim_time_stack(ros, **ptp_overrides):
+    """rns_ptp under use_sim_time (joint_space, 5 s plans) on a /clock and joint_states that the
+    test publishes (no simulator: the arm stands at START, the playback is open loop)."""
+    ptp_overrides.setdefault("method", "joint_space")
+    ptp_overrides.setdefault("duration", 5.0)
+    ptp = _node(ros, PtpNode, use_sim_time=True, **ptp_overrides)
+    probe = ros.probe()
+    states = probe.create_publisher(JointState, "joint_states", 10)
+    clock = SimClock(probe)
+
+    def step(state: bool = True) -> None:
+        """One STEP of simulated time, with a joint state at its stamp unless ``state`` is
+        False, then the callbacks of 10 ms of wall time."""
+        stamp = clock.advance(STEP)
+        if state:
+            msg = JointState(name=JOINTS, position=START.tolist())
+            msg.header.stamp = stamp
+            states.publish(msg)
+        ros.spin_for(0.01)
+
+    def step_until(condition, timeout: float = 10.0, state: bool = True) -> bool:
+        """Step until ``condition()`` holds or ``timeout`` [s] of wall time passes."""
+        deadline = time.monotonic() + timeout
+        while not condition() and time.monotonic() < deadline:
+            step(state)
+        return bool(condition())
+
+    stack = SimpleNamespace(
+        ptp=ptp,
+        goal=probe.create_publisher(JointState, "ptp_goal", 10),
+        references=Recorder(probe, JointTrajectory, "joint_references"),
+        status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
+        step=step,
+        step_until=step_until,
+    )
+    assert step_until(lambda: _state(stack) == "IDLE")
+    _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
+    assert step_until(lambda: _state(stack) == "MOVING")
+    for _ in range(20):
+        step()
+    return stack
+
+
+def _velocities(stack) -> np.ndarray:
+    return np.array(stack.references.messages[-1].points[0].velocities)
+
+
+def _states_seen(stack) -> set[str]:
+    return {status_values(m)["state"] for m in stack.status.messages}
+
+
+def test_sim_time_a_wall_clock_pause_of_the_simulation_does_not_stop_the_arm(ros):
+    """Under use_sim_time the state's age is simulated time: /clock and joint_states paused for
+    1 s of wall time (4 state_timeouts, below clock_timeout) age nothing, the plan goes on."""
+    stack = _sim_time_stack(ros, state_timeout=0.25, clock_timeout=10.0)
+    ros.spin_for(1.0)  # the simulation pauses: no /clock, no joint_states
+    for _ in range(20):
+        stack.step()
+    assert _state(stack) == "MOVING"
+    assert "STALE_STATE" not in _states_seen(stack)
+    assert np.abs(_velocities(stack)).max() > 0.0
+    assert stack.ptp.plan is not None
+
+
+def test_sim_time_a_stopped_clock_stops_the_arm(ros):
+    """/clock stops during a motion (a dead simulator): no simulated time passes and the
+    playback timer stops, yet after clock_timeout of wall time (set at run time) the arm gets
+    zero velocity and the status says STALE_STATE; the clock coming back leaves it at rest."""
+    stack = _sim_time_stack(ros, state_timeout=0.5, clock_timeout=30.0)
+    result = stack.ptp.set_parameters([Parameter("clock_timeout", value=1.0)])
+    assert result[0].successful
+    for _ in range(50):  # the watch sees /clock move at its new checks
+        stack.step()
+    assert _state(stack) == "MOVING"
+    assert ros.spin_until(
+        lambda: "/clock stood still" in stack.status.messages[-1].status[0].message,
+        timeout=15.0,
+    )
+    entry = stack.status.messages[-1].status[0]
+    assert status_values(stack.status.messages[-1])["state"] == "STALE_STATE"
+    assert entry.level == entry.ERROR
+    assert "(clock_timeout 1.0 s wall time)" in entry.message
+    assert np.all(_velocities(stack) == 0.0)
+    assert stack.ptp.plan is None
+    count = len(stack.references.messages)
+    assert stack.step_until(lambda: _state(stack) == "IDLE")
+    for _ in range(10):
+        stack.step()
+    assert len(stack.references.messages) == count
+
+
+def test_sim_time_a_state_stale_in_simulated_time_stops_the_arm(ros):
+    """/clock goes on without joint_states: after state_timeout of simulated time the arm gets
+    zero velocity, STALE_STATE, and the plan is abandoned."""
+    stack = _sim_time_stack(ros, state_timeout=0.5, clock_timeout=30.0)
+    assert stack.step_until(lambda: _state(stack) == "STALE_STATE", state=False)
+    message = stack.status.messages[-1].status[0].message
+    assert "joint_states" in message
+    assert "(state_timeout 0.5 s)" in message
+    assert np.all(_velocities(stack) == 0.0)
+    assert stack.ptp.plan is None

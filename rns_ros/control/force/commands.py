@@ -22,7 +22,8 @@ class TwistCommand(NamedTuple):
         linear [m/s], angular [rad/s]: (3,), in ``frame`` axes, finite.
         frame: world or EE axes.
         stamp: header stamp [ns] (0: unstamped: no acceleration feed-forward).
-        received: monotonic receipt time [s].
+        received: receipt time [s] on the node's input clock (simulated time under
+            use_sim_time, else monotonic).
     """
 
     linear: np.ndarray
@@ -34,7 +35,7 @@ class TwistCommand(NamedTuple):
 
 class ForceSetpoint(NamedTuple):
     """One validated force setpoint: force [N] and torque [N m] (3,) in ``frame`` axes (only the
-    force along the contact normal is used), monotonic receipt time [s]."""
+    force along the contact normal is used), receipt time [s] on the node's input clock."""
 
     force: np.ndarray
     torque: np.ndarray

@@ -277,7 +277,7 @@ class ForceTeleopController:
 
         Args:
             measurement: the joint state (model order) with its stamp [ns] and held effort.
-            now: monotonic time [s] (command ages by receipt time).
+            now: time [s] on the clock of the commands' receipt times (command ages).
 
         Raises:
             InputError: non-finite or wrongly shaped q / v.

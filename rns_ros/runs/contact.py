@@ -272,9 +272,6 @@ def _start_plant(
             "model_config": model_config,
             "method": controller,
             "os_variant": variant,
-            # lockstep: the simulator waits for each torque, so a state can come late when
-            # the 2 cores are busy; the 0.1 s default is for a free-running plant
-            "state_timeout": 1.0,
             "use_sim_time": True,
         },
         params_file=controller_file,

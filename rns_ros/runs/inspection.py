@@ -190,14 +190,13 @@ def _controller_parameters(
         "rate": args.rate,
         **({"use_sim_time": True} if sim_time else {}),
     }
-    if sim_time:
-        if args.output_lead:
-            # each output acts one period after its tick: the simulator computes that period
-            # while the controller computes the next output (two cores side by side)
-            parameters["output_lead"] = 1.0 / args.rate
-            # and serves each tick with the operator's sample in force then, published ahead
-            # (OPERATOR_LEAD): a run's figures do not depend on when the operator got a core
-            parameters["await_commands"] = True
+    if sim_time and args.output_lead:
+        # each output acts one period after its tick: the simulator computes that period
+        # while the controller computes the next output (two cores side by side)
+        parameters["output_lead"] = 1.0 / args.rate
+        # and serves each tick with the operator's sample in force then, published ahead
+        # (OPERATOR_LEAD): a run's figures do not depend on when the operator got a core
+        parameters["await_commands"] = True
     parameters.update({key: value for key, value in scenario.controller.items() if key != "method"})
     return parameters
 

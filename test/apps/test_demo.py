@@ -84,8 +84,8 @@ def test_demo_recordings_load_back_with_the_documented_entities(demo_run):
         assert any(path.startswith(paths.JOINTS) for path in counts)
 
 
-@pytest.mark.parametrize("real_time_factor", [1.0, 5.0])  # wall clock; /clock in lockstep
-def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
+@pytest.mark.parametrize("clock", [["--wall-clock"], ["--real-time-factor", "5"]])
+def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, clock):
     """The joint servo tracks the reference positions, so they must follow what the plant was
     actually commanded: ticks are not exactly one period apart (a changed command is served at
     once, a busy timer fires late), and under /clock the hold lasts simulated time. Advancing
@@ -96,13 +96,24 @@ def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, real_time_factor):
     # default then stopped the arm mid-roll (camera 6.1 deg short in a fresh-clone CI run)
     _, rows = _short_demo(
         tmp_path, "--no-record", "--mode", "dynamic", "--methods", "dls",
-        "--real-time-factor", str(real_time_factor),
-        "--ros-args", "-p", "state_timeout:=0.5",
+        *clock, "--ros-args", "-p", "state_timeout:=0.5",
     )  # fmt: skip
     row = rows["dls"]
     assert row["final_camera_error_deg"] < 0.1
     assert row["max_base_deviation_deg"] < 5e-3
     assert row["angular_momentum_drift"] < 1e-9
+
+
+def test_the_default_demo_paced_to_real_time_gives_the_as_fast_as_possible_figures(tmp_path):
+    """By default the nodes run on /clock in lockstep, paced to real time: the figures are
+    those of the run as fast as possible, to rounding, however the processes were scheduled
+    (a run that lost motion to a late process, as on the wall clock, would differ by orders of
+    magnitude: 1e-5 to 1e-3 deg of base deviation instead of 1e-7)."""
+    _, paced = _short_demo(tmp_path, "--no-record", "--methods", "dls")
+    _, fast = _short_demo(tmp_path, "--no-record", "--methods", "dls", "--real-time-factor", "0")
+    for figure in ("max_base_deviation_deg", "final_camera_error_deg", "max_joint_speed"):
+        assert paced["dls"][figure] == pytest.approx(fast["dls"][figure], rel=1e-3, abs=1e-9)
+    assert paced["dls"]["max_base_deviation_deg"] < 2e-5
 
 
 @pytest.mark.parametrize("turns", ["--output-lead", "--no-output-lead"])
@@ -155,6 +166,8 @@ def test_conventional_with_wheels_costs_orders_of_magnitude_more_energy(tmp_path
         (["--methods", "magic"], "--methods for satellite_observation must be"),
         (["--rate", "0"], "--rate must be in"),
         (["--real-time-factor", "-1"], "--real-time-factor must be in"),
+        (["--wall-clock", "--real-time-factor", "0"], "--wall-clock runs at real-time factor 1"),
+        (["--wall-clock", "--scenario", "wall_contact"], "--wall-clock is for the inspection"),
         (["--sim-step", "0.003"], "--sim-step must divide the control period 1/rate = 0.01 s"),
         (["--sim-step", "0.2", "--rate", "1"], "and lie in [1e-05, 0.1] s, got 0.2"),
     ],

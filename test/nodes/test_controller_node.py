@@ -214,7 +214,7 @@ def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros
     references = Recorder(probe, JointTrajectory, "joint_references")
     status = Recorder(probe, DiagnosticArray, "rns_controller/status")
     diagnostics = Recorder(probe, DiagnosticArray, "/diagnostics")
-    assert ros.spin_until(lambda: diagnostics.messages, timeout=3.0)
+    assert ros.spin_until(lambda: diagnostics.messages, timeout=10.0)
     assert references.messages == []
     assert status.messages
     waiting = status.messages[-1].status[0]
@@ -339,7 +339,8 @@ def test_a_changed_command_is_served_at_once_and_restarts_the_period(ros):
     assert ros.spin_until(
         lambda: np.dot(velocities(references.messages[-1]), forward) < 0.0, timeout=5.0
     )
-    ros.spin_for(2.4)  # two more periods
+    reversed_at = len(references.messages)
+    assert ros.spin_until(lambda: len(references.messages) >= reversed_at + 2, timeout=10.0)
 
     def stamp(msg) -> float:
         return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
@@ -857,7 +858,7 @@ def test_a_plain_twist_publisher_and_two_command_sources_are_reported(ros, stack
         return "twist_stamped:=false" in message and "2 publishers on /cmd_twist" in message
 
     try:
-        assert ros.spin_until(reported, timeout=15.0)
+        assert ros.spin_until(reported, timeout=60.0)  # a Python process starting rclpy
     finally:
         process.kill()
         process.wait(timeout=5)

@@ -161,8 +161,9 @@ def test_closed_loop_achieved_follows_commanded_and_the_base_stays(ros, tmp_path
         twist_pub.publish(msg)
 
     probe.create_timer(0.02, operator)
-    assert ros.spin_until(lambda: logger.recorder.counts["status"] > 10, timeout=10.0)
-    ros.spin_for(1.5)
+    # 150 controller statuses (100 Hz) and 80 twists (50 Hz) logged, however long that takes
+    counts = logger.recorder.counts
+    assert ros.spin_until(lambda: counts["status"] > 150 and counts["twist"] > 80, timeout=60.0)
     _close(ros, logger)
 
     summary = recording_summary(rrd)

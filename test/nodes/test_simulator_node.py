@@ -290,7 +290,7 @@ def test_lockstep_clock_comes_with_the_states_and_pauses_follow_the_command_stam
         command.publish(msg)
         first_command_at = first_command_at or _seconds(state.header.stamp)
         answered += 1
-        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=2.0)
+        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=10.0)
     ros.spin_for(0.1)
     stamps = [_seconds(m.header.stamp) for m in joints.messages]
     locked = [t for t in stamps if t > first_command_at + 1.5 * period]
@@ -327,7 +327,7 @@ def test_lockstep_a_command_stamped_ahead_waits_for_its_stamp(ros):
         msg.header.stamp = stamp_from_seconds(acts * 1e-9)
         command.publish(msg)
         sent[acts] = rate
-        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=2.0)
+        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=10.0)
     ros.spin_for(0.1)
     assert node.simulator.time == pytest.approx(max(sent) * 1e-9 + period)  # paused there
     first = min(sent)

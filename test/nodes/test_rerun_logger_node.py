@@ -99,8 +99,8 @@ def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
         recording_name="sim",
         use_sim_time=True,
     )
-    assert ros.spin_until(lambda: logger.recorder.counts["joints"] > 0, timeout=10.0)
-    ros.spin_for(1.0)
+    # 100 states logged (1 s of simulated time at 100 Hz), however long that takes
+    assert ros.spin_until(lambda: logger.recorder.counts["joints"] > 100, timeout=60.0)
     # the simulator stops first and its last messages arrive before the recording closes (a
     # close between a state's base_odom and its momentum recorded 100 poses and 99 momenta)
     ros.detach(simulator)

@@ -7,6 +7,8 @@ Usage:  .venv/bin/python scripts/benchmark.py [--only core|simulator|controller|
                                               [--domain-id ID]
         .venv/bin/python scripts/benchmark.py --only cratio [--workers N]
         .venv/bin/python scripts/benchmark.py --only lockstep [--runs N] [--domain-id ID]
+        .venv/bin/python scripts/benchmark.py --only publish [--publish-rates HZ ...]
+                                              [--seconds S] [--domain-id ID]
 
 core       median / p99 of one FreeFloatingState, the DLS and SC inverses, one P_RNS projection.
 simulator  step time (median, p99) of FreeFloatingSimulator at 1 ms RK4 in kinematic and dynamic
@@ -47,6 +49,12 @@ cratio     the chapter-5 C_ratio map of the 7-DoF positioning subchain (Fig. 5.3
            theta_2 values, 625000 points) in one process and on --workers local processes
            (default: one per core), then the wall time of the full 50^4 = 6.25e6-point map on
            those processes. Goal: full map < 60 s on the 2-core dev VM. Opt-in (~30 s).
+publish    rns_simulator at real_time_factor 1 (kinematic, at rest), in this process beside a
+           recorder on one executor, as the node tests run it: the rate at which joint_states
+           arrive on the wall clock, per --publish-rates (default 100 and 500 Hz), over --seconds
+           (default 2) after 0.5 s for discovery, with the arrival intervals (p50 / p99 / max).
+           Goal: within 10 % of publish_rate. (The tests check the rate on the stamps, in
+           simulated time.) Opt-in (~3 s per rate).
 
 Latency method (measure_latency):
   * rns_controller runs as a subprocess (the installed console script, its own executor as
@@ -642,6 +650,34 @@ def lockstep(runs: int, domain_id: int) -> None:
     )
 
 
+def publish_rate(rates: Sequence[float], seconds: float, domain_id: int) -> None:
+    """See the module docstring (publish)."""
+    from rns_ros.nodes.simulator import SimulatorNode
+
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    print(
+        f"\n{'rns_simulator joint_states, wall clock':<40}{'measured [Hz]':>14}{'p50 [ms]':>10}"
+        f"{'p99 [ms]':>10}{'max [ms]':>10}"
+    )
+    for rate in rates:
+        with Harness(domain_id) as stack:
+            stack.add(SimulatorNode, {"publish_rate": float(rate)})
+            states = stack.record(JointState, "joint_states")
+            if not stack.spin_until(lambda log=states: len(log) > 10, timeout=20.0):
+                print(f"{f'publish_rate {rate:g} Hz':<40}  no joint_states within 20 s")
+                continue
+            stack.spin_for(0.5)  # discovery bursts pass
+            start = len(states.received)
+            stack.spin_for(seconds)
+        window = np.array(states.received[start:])
+        intervals = np.diff(window) * 1e3
+        measured = (len(window) - 1) / (window[-1] - window[0])
+        print(
+            f"{f'publish_rate {rate:g} Hz':<40}{measured:>14.2f}{np.median(intervals):>10.2f}"
+            f"{np.percentile(intervals, 99):>10.2f}{intervals.max():>10.2f}"
+        )
+
+
 def force_controller(samples: int) -> None:
     """rns_force_controller's step (rns_ros.control.force.controller) on the LWR wall task, one
     stroke closed around the in-process ContactSimulator, and the simulator's contact step."""
@@ -698,7 +734,8 @@ def main() -> None:
         description=__doc__.splitlines()[0],
         epilog="Without --only: core, simulator and controller. latency is opt-in (--only "
         "latency): it starts rns_controller subprocesses and takes ~0.5-2.5 min per rate. "
-        "cratio (~30 s on 2 cores) and lockstep (~20 s a run) are opt-in too.",
+        "cratio (~30 s on 2 cores), lockstep (~20 s a run) and publish (~3 s a rate) are opt-in "
+        "too.",
     )
     parser.add_argument(
         "--only",
@@ -710,6 +747,7 @@ def main() -> None:
             "latency",
             "cratio",
             "lockstep",
+            "publish",
         ),
         help="run one section (latency only this way)",
     )
@@ -732,6 +770,16 @@ def main() -> None:
     )
     parser.add_argument("--runs", type=int, default=3, help="lockstep: runs of each mode")
     parser.add_argument(
+        "--publish-rates",
+        type=float,
+        nargs="+",
+        default=[100.0, 500.0],
+        help="publish: rns_simulator publish_rate values [Hz]",
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=2.0, help="publish: measured wall time per rate [s]"
+    )
+    parser.add_argument(
         "--workers", type=int, default=None, help="cratio: local processes (default: one per core)"
     )
     args = parser.parse_args()
@@ -740,6 +788,9 @@ def main() -> None:
         return
     if args.only == "lockstep":
         lockstep(args.runs, args.domain_id)
+        return
+    if args.only == "publish":
+        publish_rate(args.publish_rates, args.seconds, args.domain_id)
         return
     robot = load_model(default_model_config())
     if args.only in (None, "core"):

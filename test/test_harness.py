@@ -223,22 +223,30 @@ def test_a_raw_recording_over_dds_matches_the_deserializing_one():
 
 @pytest.mark.parametrize("executor", ["events", "single_threaded"])
 def test_spin_until_checks_a_costly_condition_at_most_every_check_every(executor):
-    """With check_every the callbacks run in between the checks (a 2 ms timer fires many times
-    per check); without it the condition is tested after each callback; spin_for runs them for
-    its duration."""
+    """With check_every the callbacks run in between the checks (a 2 ms timer fires more often
+    than the condition is tested); without it the condition is tested after each callback;
+    spin_for runs them for its duration, at least, in one executor call. (Counts and bounds
+    that a slow machine can only move the asserted way: fewer checks, no early return.)"""
     with Harness(DOMAIN, executor=executor) as stack:
         fired = []
         stack.probe().create_timer(0.002, lambda: fired.append(time.monotonic()))
         checks = []
         assert not stack.spin_until(lambda: checks.append(1) and False, 0.3, check_every=0.1)
         assert len(checks) <= 5  # 0.3 s / 0.1 s, plus the first and the last
-        assert len(fired) > 3 * len(checks)
+        assert len(fired) > len(checks)
         fired.clear()
         checks.clear()
         assert not stack.spin_until(lambda: checks.append(1) and False, 0.1)
-        assert len(checks) >= len(fired) > 10
+        assert len(checks) >= len(fired) >= 1
         fired.clear()
+        spins = []
+        spin = stack._spin
+        stack._spin = lambda duration: (spins.append(duration), spin(duration))
         start = time.monotonic()
         stack.spin_for(0.2)
-        assert time.monotonic() - start == pytest.approx(0.2, abs=0.05)
-        assert len(fired) > 20
+        end = time.monotonic()
+        assert end - start >= 0.2
+        assert 0.0 < spins[0] <= 0.2
+        assert len(spins) <= 2  # the whole duration in one call (a second for a rounding rest)
+        assert fired
+        assert all(start <= t <= end for t in fired)

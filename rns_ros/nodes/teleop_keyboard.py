@@ -49,7 +49,7 @@ import termios
 import threading
 import time
 import tty
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
@@ -268,14 +268,20 @@ class RawTerminal:
             raise TerminalLost(f"stdout: {exc.strerror}") from None
 
 
-def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal, signals: Sequence[int] = ()) -> None:
+def run_panel(
+    node: TeleopKeyboardNode,
+    terminal: RawTerminal,
+    signals: Sequence[int] = (),
+    clock: Callable[[], float] = time.monotonic,
+) -> None:
     """Keys in, twists out, panel redrawn, until a quit key, a signal or a lost terminal.
 
     ``signals`` is read each loop: once it holds a signal number the panel ends (within
-    ``POLL`` [s]); SIGHUP means the terminal is gone.
+    ``POLL`` [s]); SIGHUP means the terminal is gone. ``clock``: monotonic time [s] of the key
+    presses and the rate ticks (``terminal.read_keys`` waits on the same clock).
     """
     teleop = node.teleop
-    next_tick = time.monotonic()
+    next_tick = clock()
     last_key: KeyEvent | None = None
     while rclpy.ok(context=node.context) and not teleop.quit_requested:
         if signals:
@@ -283,9 +289,9 @@ def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal, signals: Sequence
                 raise TerminalLost("terminal hung up (SIGHUP)")
             return
         # wake at the next tick, and at least every POLL so the status age stays fresh
-        wait = min(next_tick - time.monotonic(), POLL)
+        wait = min(next_tick - clock(), POLL)
         for key in terminal.read_keys(wait):
-            now = time.monotonic()
+            now = clock()
             last_key = teleop.press(key, now)
             if teleop.quit_requested:
                 break  # keys typed after a quit key must not move anything
@@ -293,7 +299,7 @@ def run_panel(node: TeleopKeyboardNode, terminal: RawTerminal, signals: Sequence
                 # a start, change, stop or push goes out now, not up to one period later
                 node.publish_tick(now)
                 next_tick = now + node.period
-        now = time.monotonic()
+        now = clock()
         if now >= next_tick:
             node.publish_tick(now)
             # late (a slow redraw): restart the grid instead of publishing a burst

@@ -30,6 +30,7 @@ from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.controller_parameters import PARAMETERS
+from rns_ros.nodes.robot_io import measured_state_problem
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
 
@@ -39,6 +40,8 @@ COMMAND_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
 def _node(ros, cls, **overrides):
+    if cls is ControllerNode:  # the state watchdog only trips in the tests about it
+        overrides.setdefault("state_timeout", TEST_STATE_TIMEOUT)
     parameters = [Parameter(name, value=value) for name, value in overrides.items()]
     return ros.add(cls(context=ros.context, parameter_overrides=parameters))
 
@@ -51,6 +54,7 @@ class Operator:
         self.publisher = probe.create_publisher(msg_type, "cmd_twist", COMMAND_QOS)
         self.stamped, self.probe = stamped, probe
         self.angular, self.frame, self.active = (0.0, 0.0, 0.0), "world", False
+        self.last_stamp: float | None = None  # header stamp of the newest twist sent [s]
         probe.create_timer(1.0 / rate, self._tick)
 
     def _tick(self):
@@ -62,6 +66,7 @@ class Operator:
             msg = TwistStamped(twist=twist)
             msg.header.frame_id = self.frame
             msg.header.stamp = self.probe.get_clock().now().to_msg()
+            self.last_stamp = _seconds(msg.header.stamp)
         else:
             msg = twist
         self.publisher.publish(msg)
@@ -95,49 +100,71 @@ def _latest_state(streams):
     return status_values(messages[-1])["state"] if messages else None
 
 
+def _simulated_camera(simulator) -> tuple[float, np.ndarray]:
+    """The simulator's simulated time [s] and its camera's rotation in world at that time (one
+    snapshot: the arm as the simulation has integrated it)."""
+    with simulator._lock:
+        state = simulator.simulator.snapshot()
+    robot = simulator.robot
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, state.q)
+    return state.time, data.oMf[robot.camera_frame_id].rotation.copy()
+
+
 def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
-    controller, probe, streams = stack.controller, stack.probe, stack.streams
+    """An operator streams 0.1 rad/s about world x. Over the simulated time between two
+    snapshots of the simulator the camera turns by 0.1 rad/s times that time, about x only (the
+    simulator integrates the commanded rates on its own clock: a slow machine makes the
+    simulation slower, not the turn per simulated second), and the base does not turn.
+    Released, the command stays in force for command_timeout (0.5 s) after its receipt, then
+    ramps down (0.1 rad/s at 1 rad/s^2) to zero: the zero output is stamped at least 0.5 s after
+    the last twist, and comes within that time's worth of the controller's own ticks (a slow
+    machine runs fewer ticks per second, never more)."""
+    probe, streams = stack.probe, stack.streams
     operator = Operator(probe)
     operator.angular, operator.active = (0.1, 0.0, 0.0), True
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
     start = len(streams["references"].messages)
-    t0 = time.monotonic()
-    camera_0 = _camera_rotation(controller)
+    time_0, camera_0 = _simulated_camera(stack.simulator)
     ros.spin_for(1.5)
-    elapsed = time.monotonic() - t0
+    time_1, camera_1 = _simulated_camera(stack.simulator)
     references = streams["references"].messages[start:]
-    rate = len(references) / elapsed
-    print(f"joint_references at {rate:.1f} Hz")
-    # periodic output at its rate's order; the rate itself is a timing figure, measured by
-    # scripts/benchmark.py --only latency (reference interval p50 9.9 ms at 100 Hz): in this
-    # one-process stack (simulator thread, nodes and recorders share one GIL) a slow hour of
-    # the VM gave 81-82 Hz in two consecutive fresh-clone CI runs
-    assert rate > 0.5 * 100.0
+    stamps = np.array([_seconds(m.header.stamp) for m in references])
+    # the output rate on the wall clock is a timing figure: scripts/benchmark.py --only latency
+    # prints the interval between references
+    print(f"joint_references at {(len(stamps) - 1) / (stamps[-1] - stamps[0]):.1f} Hz")
+    # one output per tick, in order, never more often than the 100 Hz rate
+    assert np.all(np.diff(stamps) > 0.0)
+    assert len(stamps) - 1 <= (stamps[-1] - stamps[0]) / 0.01 + 2
     assert np.abs(references[-1].points[0].velocities).max() > 0.01
     states = {status_values(m)["state"] for m in streams["status"].messages[-100:]}
     assert states == {"OK"}
     status = status_values(streams["status"].messages[-1])
     assert float(status["sigma_min"]) > 0.2
     assert np.abs([float(x) for x in status["coupling_momentum"].split()]).max() < 1e-9
-    # the camera turned about world x at ~0.1 rad/s; the base did not turn
-    turned = pin.log3(_camera_rotation(controller) @ camera_0.T)
-    assert turned[0] == pytest.approx(0.1 * elapsed, rel=0.3)
+    # the camera turned about world x at 0.1 rad/s of simulated time; the base did not turn
+    turned = pin.log3(camera_1 @ camera_0.T)
+    print(f"turned {turned[0]:.5f} rad in {time_1 - time_0:.4f} s of simulated time")
+    assert turned[0] == pytest.approx(0.1 * (time_1 - time_0), rel=0.05)
     assert np.abs(turned[1:]).max() < 0.2 * abs(turned[0])
     odom = streams["odom"].messages
     deviation = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
     print(f"base attitude deviation over DDS: {math.degrees(deviation):.2e} deg")
     assert math.degrees(deviation) < 1e-3
 
-    # the operator lets go: the output ramps down and stops within timeout + ramp
+    # the operator lets go: the output ramps down and stops after timeout + ramp
     operator.active = False
-    released = time.monotonic()
-    assert ros.spin_until(lambda: _latest_state(streams) == "IDLE", timeout=3.0)
-    stopped_after = time.monotonic() - released
-    assert stopped_after < 0.5 + 0.1 + 0.3  # timeout 0.5 s, ramp 0.1 rad/s / 1 rad/s^2
+    last_twist = operator.last_stamp
+    assert ros.spin_until(lambda: _latest_state(streams) == "IDLE", timeout=10.0)
     seen = [status_values(m)["state"] for m in streams["status"].messages]
     assert "DECELERATING" in seen
     ros.spin_for(0.1)
     assert np.all(np.array(streams["references"].messages[-1].points[0].velocities) == 0.0)
+    after = [m for m in streams["references"].messages if _seconds(m.header.stamp) > last_twist]
+    stop = int(np.flatnonzero(_speeds(after) == 0.0)[0])
+    print(f"zero output {_seconds(after[stop].header.stamp) - last_twist:.3f} s and {stop} ticks")
+    assert _seconds(after[stop].header.stamp) - last_twist >= 0.5  # command_timeout
+    assert stop <= (0.5 + 0.1) / 0.01 + 10  # timeout + ramp at 100 Hz, delivery slack
     idle = streams["status"].messages[-1].status[0]
     assert idle.level == idle.OK  # idle is normal, not a warning
 
@@ -187,7 +214,7 @@ def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros
     references = Recorder(probe, JointTrajectory, "joint_references")
     status = Recorder(probe, DiagnosticArray, "rns_controller/status")
     diagnostics = Recorder(probe, DiagnosticArray, "/diagnostics")
-    assert ros.spin_until(lambda: diagnostics.messages, timeout=3.0)
+    assert ros.spin_until(lambda: diagnostics.messages, timeout=10.0)
     assert references.messages == []
     assert status.messages
     waiting = status.messages[-1].status[0]
@@ -217,11 +244,16 @@ def test_status_from_start_up_and_nothing_moves_before_the_first_joint_state(ros
 def test_teleop_twist_keyboard_style_input_turns_the_camera_about_its_own_z(ros):
     """What teleop_twist_keyboard sends when 'j' is held: plain Twist, angular z, on cmd_vel,
     reliable QoS, no frame. The README's remap and twist_stamped:=false make it a camera-frame
-    yaw command; the camera turns about its own z axis and the base stays put."""
-    _node(ros, SimulatorNode)
-    controller = ros.add(
+    yaw command; the camera turns about its own z axis at 0.1 rad/s of simulated time (the
+    simulator's snapshots) and the base stays put."""
+    simulator = _node(ros, SimulatorNode)
+    ros.add(
         ControllerNode,
-        {"twist_stamped": False, "default_twist_frame": "camera"},
+        {
+            "twist_stamped": False,
+            "default_twist_frame": "camera",
+            "state_timeout": TEST_STATE_TIMEOUT,
+        },
         remappings={"cmd_twist": "cmd_vel"},
     )
     probe = ros.probe()
@@ -234,14 +266,14 @@ def test_teleop_twist_keyboard_style_input_turns_the_camera_about_its_own_z(ros)
     assert ros.spin_until(
         lambda: status.messages and status_values(status.messages[-1])["state"] == "OK"
     )
-    camera_0 = _camera_rotation(controller)
-    t0 = time.monotonic()
+    time_0, camera_0 = _simulated_camera(simulator)
     ros.spin_for(1.0)
-    elapsed = time.monotonic() - t0
+    time_1, camera_1 = _simulated_camera(simulator)
     assert status_values(status.messages[-1])["frame"] == "camera"
     # the rotation between the two camera attitudes, in the first camera's axes
-    turned = pin.log3(camera_0.T @ _camera_rotation(controller))
-    assert turned[2] == pytest.approx(0.1 * elapsed, rel=0.3)
+    turned = pin.log3(camera_0.T @ camera_1)
+    print(f"turned {turned[2]:.5f} rad in {time_1 - time_0:.4f} s of simulated time")
+    assert turned[2] == pytest.approx(0.1 * (time_1 - time_0), rel=0.05)
     assert np.abs(turned[:2]).max() < 0.05 * turned[2]
     messages = odom.messages
     deviation = max(
@@ -272,9 +304,15 @@ def test_shipped_teleop_twist_files_fit_the_controller():
 
 
 def test_a_changed_command_is_served_at_once_and_restarts_the_period(ros):
-    """immediate_reaction: at 2 Hz a new command does not wait up to 0.5 s for the next tick; it
-    gets its own reference between ticks, and the period restarts from there."""
-    _node(ros, ControllerNode, rate=2.0, command_timeout=5.0, wrist_gain=0.0)
+    """immediate_reaction: at 1 Hz a command changed ~0.3 s into a period does not wait for the
+    next tick; it gets its own reference between ticks, and the period restarts from there.
+
+    On the references' stamps: waiting for the tick, the reversed reference would come a full
+    period (or more, on a slow machine) after the one before it; served at once it comes
+    ~0.3 s after it. From the early tick on the timer runs a full period from it, so the next
+    references come at least a period apart (later, on a slow machine; on the old grid the
+    next one would have come ~0.7 s after the early one)."""
+    _node(ros, ControllerNode, rate=1.0, command_timeout=5.0, wrist_gain=0.0)
     probe = ros.probe()
     references = Recorder(probe, JointTrajectory, "joint_references")
     state_pub = probe.create_publisher(JointState, "joint_states", 10)
@@ -294,12 +332,15 @@ def test_a_changed_command_is_served_at_once_and_restarts_the_period(ros):
         timeout=10.0,
     )
     forward = velocities(references.messages[-1])
-    ros.spin_for(0.1)  # somewhere inside a period
+    count = len(references.messages)
+    assert ros.spin_until(lambda: len(references.messages) > count, timeout=5.0)  # a tick
+    ros.spin_for(0.3)  # inside the period that tick started
     operator.angular = (-0.1, 0.0, 0.0)
     assert ros.spin_until(
         lambda: np.dot(velocities(references.messages[-1]), forward) < 0.0, timeout=5.0
     )
-    ros.spin_for(1.2)  # two more periods
+    reversed_at = len(references.messages)
+    assert ros.spin_until(lambda: len(references.messages) >= reversed_at + 2, timeout=10.0)
 
     def stamp(msg) -> float:
         return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
@@ -309,9 +350,11 @@ def test_a_changed_command_is_served_at_once_and_restarts_the_period(ros):
         k for k, m in enumerate(references.messages) if np.dot(velocities(m), forward) < 0.0
     )
     early = stamps[first_reverse] - stamps[first_reverse - 1]
-    assert early < 0.45, f"the reversed command waited for the tick ({early:.3f} s)"
+    print(f"reversed reference {early:.3f} s after the tick before it")
+    assert early < 0.9, f"the reversed command waited for the tick ({early:.3f} s)"
     later = np.diff(stamps[first_reverse:])
-    assert later == pytest.approx(0.5, abs=0.05), "the period restarts at the early tick"
+    assert len(later) >= 1
+    assert np.all(later >= 0.9), f"the period restarts at the early tick ({later} s)"
 
 
 def test_linear_part_is_reported_as_unachieved(ros, stack):
@@ -405,15 +448,6 @@ def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
         )
 
 
-def _camera_rotation(controller) -> np.ndarray:
-    robot = controller.robot
-    q = robot.configuration(
-        controller._theta, controller._base_position, controller._base_orientation
-    )
-    pin.framesForwardKinematics(robot.model, robot.data, q)
-    return robot.data.oMf[robot.camera_frame_id].rotation.copy()
-
-
 def _odom_rotation(msg: Odometry) -> np.ndarray:
     o = msg.pose.pose.orientation
     return pin.Quaternion(o.w, o.x, o.y, o.z).toRotationMatrix()
@@ -498,10 +532,12 @@ def _speeds(references) -> np.ndarray:
 
 
 def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
-    """Issue 11, defect 2: the simulator dies while twists stream. Within state_timeout
-    (+ one period) the controller publishes zero and reports STALE_STATE (ERROR); it resumes only
-    with a fresh state, ramping up from rest."""
-    stack = _stack(ros, state_timeout=0.1)  # the shipped default (checked below)
+    """The simulator dies while twists stream. Once the last state is state_timeout old (not
+    before) the controller publishes zero and reports STALE_STATE (ERROR): within the ticks that
+    fit in state_timeout (a slow machine runs fewer); it resumes only with a fresh state, ramping
+    up from rest. (The age rule itself, on given times: test_a_state_is_stale_once_older_than_
+    the_timeout.)"""
+    stack = _stack(ros)  # state_timeout TEST_STATE_TIMEOUT: no trip before the loss
     probe, streams = stack.probe, stack.streams
     operator = Operator(probe)
     operator.angular, operator.active = (0.2, 0.0, 0.0), True
@@ -517,14 +553,20 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
         after = streams["references"].messages[count:]
         return bool(after) and _speeds(after[-1:])[0] == 0.0
 
-    assert ros.spin_until(stopped, timeout=2.0)
+    assert ros.spin_until(stopped, timeout=10.0)
     zero_at = time.monotonic()
-    # the loss starts at the controller's own receipt of the last state (its watchdog's clock);
-    # the probe takes that state later on a loaded executor (11 ms later once in CI)
+    # the loss starts at the controller's own receipt of the last state (its watchdog's clock)
     delay = zero_at - stack.controller._state_received
-    print(f"last joint_states -> zero command: {delay:.3f} s (state_timeout 0.1 s)")
-    assert next(spec.default for spec in PARAMETERS if spec.name == "state_timeout") == 0.1
-    assert 0.09 <= delay < 0.1 + 0.01 + 0.1  # timeout + one period + executor slack
+    print(
+        f"last joint_states -> zero command: {delay:.3f} s (state_timeout {TEST_STATE_TIMEOUT} s)"
+    )
+    assert delay >= TEST_STATE_TIMEOUT  # never before the timeout
+    # outputs after the loss until the zero: the ticks of state_timeout at 100 Hz, plus those
+    # of the last state's delivery and the outputs still on their way when the loss began
+    after = _speeds(streams["references"].messages[count:])
+    moving_ticks = int(np.flatnonzero(after == 0.0)[0])
+    print(f"{moving_ticks} moving outputs after the simulator stopped")
+    assert moving_ticks <= TEST_STATE_TIMEOUT / 0.01 + 10
     ros.spin_for(0.5)
     assert np.all(_speeds(streams["references"].messages[-40:]) == 0.0)
     status = streams["status"].messages[-1].status[0]
@@ -541,6 +583,24 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
     speeds = _speeds(streams["references"].messages[resumed:])
     first = speeds[np.flatnonzero(speeds > 0.0)[0]]
     assert first < 0.25 * moving, f"resumed at {first:.3f} rad/s, not ramped (full {moving:.3f})"
+
+
+def test_a_state_is_stale_once_older_than_the_timeout():
+    """The watchdog rule on given receipt times [s]: joint_states (and base_odom, once it came)
+    older than state_timeout make the state stale, not a moment before; two joint_states
+    publishers conflict whatever the times. (0.1 s: the shipped default.)"""
+    assert next(spec.default for spec in PARAMETERS if spec.name == "state_timeout") == 0.1
+    one, topic = ["/rns_simulator"], "/joint_states"
+    assert measured_state_problem(10.1, one, topic, 10.0, None, 0.1) is None
+    state, detail = measured_state_problem(10.1001, one, topic, 10.0, None, 0.1)
+    assert state == "STALE_STATE"
+    assert "joint_states 0.100 s old (state_timeout 0.1 s)" in detail
+    assert measured_state_problem(10.1, one, topic, 10.05, 10.0, 0.1) is None
+    state, detail = measured_state_problem(10.11, one, topic, 10.05, 10.0, 0.1)
+    assert (state, detail.split()[0]) == ("STALE_STATE", "base_odom")
+    state, detail = measured_state_problem(10.0, [*one, "/replay"], topic, 10.0, None, 0.1)
+    assert state == "CONFLICTING_STATE"
+    assert "2 publishers on /joint_states" in detail
 
 
 def test_a_jump_in_the_measured_state_restarts_the_reference_and_ramps(ros):
@@ -733,10 +793,13 @@ def test_with_await_commands_a_stalled_operator_is_waited_for_command_timeout_at
     plant.state(1.01)
     start = time.monotonic()
     plant.clock(1.01)  # waits...
-    plant.ros.spin_until(lambda: len(plant.references.messages) == 2, timeout=3.0)
+    plant.ros.spin_until(lambda: len(plant.references.messages) == 2, timeout=10.0)
     waited = time.monotonic() - start
     assert plant.output_stamps() == [1.01, 1.02]
-    assert 0.5 <= waited <= 2.0
+    # never before command_timeout; how much later depends on the machine (the give-up itself
+    # on given instants: test/control/test_ticks.py)
+    print(f"the tick waited {waited:.3f} s (command_timeout 0.6 s)")
+    assert waited >= 0.6 - 0.05  # (the wait may start just before `start`)
     plant.twist(1.02, 0.0)  # a stop after motion: the stream may end here
     plant.state(1.02)
     plant.clock(1.02)
@@ -797,7 +860,7 @@ def test_a_plain_twist_publisher_and_two_command_sources_are_reported(ros, stack
         return "twist_stamped:=false" in message and "2 publishers on /cmd_twist" in message
 
     try:
-        assert ros.spin_until(reported, timeout=15.0)
+        assert ros.spin_until(reported, timeout=60.0)  # a Python process starting rclpy
     finally:
         process.kill()
         process.wait(timeout=5)

@@ -99,13 +99,17 @@ def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
         recording_name="sim",
         use_sim_time=True,
     )
-    assert ros.spin_until(lambda: logger.recorder.counts["joints"] > 0, timeout=10.0)
-    ros.spin_for(1.0)
+    # 100 states logged (1 s of simulated time at 100 Hz), however long that takes
+    assert ros.spin_until(lambda: logger.recorder.counts["joints"] > 100, timeout=60.0)
     # the simulator stops first and its last messages arrive before the recording closes (a
     # close between a state's base_odom and its momentum recorded 100 poses and 99 momenta)
     ros.detach(simulator)
     simulator.destroy_node()
-    ros.spin_for(0.3)
+    # each state's pose and momentum are published together: wait until both have arrived
+    # (a fixed wait missed the last momentum on a busy machine)
+    recorded = logger.recorder.counts
+    ros.spin_until(lambda: recorded["odom"] == recorded["momentum"], timeout=10.0)
+    ros.spin_for(0.1)
     counts = dict(logger.recorder.counts)
     _close(ros, logger)
 
@@ -126,9 +130,12 @@ def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
     # one pose per odometry, plus the identity pose placed before the first one arrived
     assert summary[paths.BASE_POSE] - len(times) in (0, 1)
     assert times[-1] < 60.0  # sim-time stamps: a duration timeline starting near zero
-    rate = (len(times) - 1) / (times[-1] - times[0])
-    print(f"base attitude samples: {len(times)} at {rate:.1f} Hz")
-    assert rate == pytest.approx(100.0, rel=0.1)  # the simulator's publish_rate
+    # one sample per state, on the simulator's 100 Hz grid of simulated time: consecutive
+    # samples 10 ms apart, a whole number of periods where the (best-effort) logger missed one
+    periods = np.diff(times) / 0.01
+    print(f"base attitude samples: {len(times)}, {periods.max():.0f} periods at most apart")
+    assert np.allclose(periods, np.round(periods), atol=1e-3)
+    assert periods.min() == pytest.approx(1.0, abs=1e-3)
     assert np.abs(total).max() < 1e-9  # no command: the base does not turn
     assert summary[paths.MOMENTUM_ANGULAR] == len(times)
     for visual in logger.recorder.view.visual_paths()["link_3"]:
@@ -139,7 +146,9 @@ def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
 def test_closed_loop_achieved_follows_commanded_and_the_base_stays(ros, tmp_path):
     rrd = tmp_path / "loop.rrd"
     _node(ros, SimulatorNode)
-    _node(ros, ControllerNode)
+    # state_timeout 0.5 s: every node shares this process, and on a busy machine a joint state
+    # later than the 0.1 s default stopped the arm within the checked second
+    _node(ros, ControllerNode, state_timeout=0.5)
     logger = _node(ros, RerunLoggerNode, sink="save", rrd_path=str(rrd))
     probe = ros.probe()
     twist_pub = probe.create_publisher(
@@ -154,8 +163,9 @@ def test_closed_loop_achieved_follows_commanded_and_the_base_stays(ros, tmp_path
         twist_pub.publish(msg)
 
     probe.create_timer(0.02, operator)
-    assert ros.spin_until(lambda: logger.recorder.counts["status"] > 10, timeout=10.0)
-    ros.spin_for(1.5)
+    # 150 controller statuses (100 Hz) and 80 twists (50 Hz) logged, however long that takes
+    counts = logger.recorder.counts
+    assert ros.spin_until(lambda: counts["status"] > 150 and counts["twist"] > 80, timeout=60.0)
     _close(ros, logger)
 
     summary = recording_summary(rrd)
@@ -203,6 +213,7 @@ def test_ctrl_c_leaves_a_complete_file(ros, tmp_path):
     # zero stamps: the logger stamps them with its own clock
     probe.create_timer(0.02, lambda: publisher.publish(state))
     command = [sys.executable, "-m", "rns_ros.nodes.rerun_logger", "--ros-args"]
+    started = time.time()
     process = subprocess.Popen(
         [*command, "-p", "sink:=save", "-p", f"rrd_path:={rrd}"],
         env=os.environ.copy(),
@@ -233,8 +244,8 @@ def test_ctrl_c_leaves_a_complete_file(ros, tmp_path):
     assert RrdReader(rrd).store() is not None  # finalized: footer written
     assert recording_summary(rrd)[paths.joint_transform("joint_4")] > 10
     times, _ = read_scalars(rrd, paths.ACHIEVED_ANGULAR_VELOCITY_AXES[0])
-    assert times[0] > 1.6e9  # wall-clock stamps: an absolute timestamp timeline
-    assert time.time() - times[-1] < 60.0
+    # wall-clock stamps (an absolute timestamp timeline): the instants of this run
+    assert started <= times[0] <= times[-1] <= time.time()
 
 
 # --- Part II: a fixed-base arm in contact ---------------------------------------------------------

@@ -29,7 +29,6 @@ from trajectory_msgs.msg import JointTrajectory
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.controller import ControllerNode
-from rns_ros.nodes.controller_parameters import PARAMETERS
 from rns_ros.nodes.robot_io import measured_state_problem
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
@@ -588,8 +587,7 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
 def test_a_state_is_stale_once_older_than_the_timeout():
     """The watchdog rule on given receipt times [s]: joint_states (and base_odom, once it came)
     older than state_timeout make the state stale, not a moment before; two joint_states
-    publishers conflict whatever the times. (0.1 s: the shipped default.)"""
-    assert next(spec.default for spec in PARAMETERS if spec.name == "state_timeout") == 0.1
+    publishers conflict whatever the times."""
     one, topic = ["/rns_simulator"], "/joint_states"
     assert measured_state_problem(10.1, one, topic, 10.0, None, 0.1) is None
     state, detail = measured_state_problem(10.1001, one, topic, 10.0, None, 0.1)

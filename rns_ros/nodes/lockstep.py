@@ -12,7 +12,7 @@ from typing import Any, NamedTuple, Protocol
 #: A lockstep pause longer than this [s] (wall time) ends in the node's way
 #: (:meth:`SteppedSimulation.patience_over`), so a controller whose sim-time timer waits for a
 #: later /clock is never deadlocked.
-LOCKSTEP_PATIENCE = 2.0
+LOCKSTEP_PATIENCE = 5.0
 #: Largest lag [s] of the loop behind its pace (and of a state's stamp behind its publication):
 #: an overloaded simulator re-anchors its pace this far behind instead of sprinting.
 MAX_STAMP_LAG = 0.5

@@ -75,7 +75,7 @@ def _contact(msg: Float64MultiArray) -> dict[str, float]:
 def test_a_killed_controller_makes_the_simulator_release_the_push():
     """rns_force_controller (a process) pushes 10 N with rns_simulator at its contact-mode
     defaults (lockstep), then is killed (SIGKILL: no last word). The paused simulator waits
-    LOCKSTEP_PATIENCE (2 s, wall clock) for the next torque, then brakes the joints and runs on
+    LOCKSTEP_PATIENCE (wall clock) for the next torque, then brakes the joints and runs on
     in real time: the push ends (normal force < 0.5 N) and the arm comes to rest; nothing
     non-finite is published."""
     with ProcessStack(DOMAIN + 1) as processes, Harness(DOMAIN + 1) as stack:

@@ -46,43 +46,89 @@ def _wrist_rates(t: float, speed: float) -> list[float]:
     return rates.tolist()
 
 
+#: Lockstep period of the test's "controller" [s]: one state, one wheel torque and one
+#: joint_references per period, each computed from the state it acts on.
+LOCKSTEP = 0.01
+#: States answered at rest before the motion starts.
+WARM_UP = 5
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
 def _drive(ros, speed: float, attitude: bool) -> tuple[float, list[dict]]:
     """One wrist period on rns_simulator with wheels (and rns_attitude_control); returns the
-    max base deviation [deg] and the attitude statuses."""
-    _node(ros, SimulatorNode, reaction_wheels=True)
+    max base deviation [deg] and the attitude statuses.
+
+    Everything runs on simulated time, in lockstep: the simulator pauses one LOCKSTEP past the
+    newest joint_references, and the test answers each state only once rns_attitude_control's
+    torque for that state has reached the simulator. So every torque and reference acts from
+    the state it was computed from, and the figures do not depend on the machine's load."""
+    simulator = _node(
+        ros,
+        SimulatorNode,
+        reaction_wheels=True,
+        real_time_factor=0.0,
+        publish_clock=True,
+        lockstep_period=LOCKSTEP,
+    )
     if attitude:
-        # the hold is measured here, not the watchdog (own test): a loaded machine delayed a
-        # state by more than the default 0.1 s
-        _node(ros, AttitudeControlNode, state_timeout=0.5)
+        # a paused simulation is not a dead one on however loaded a machine
+        _node(ros, AttitudeControlNode, use_sim_time=True, clock_timeout=30.0)
     probe = ros.probe()
-    odom = Recorder(probe, Odometry, "base_odom")
-    status = Recorder(probe, DiagnosticArray, "rns_attitude_control/status")
+    joints = Recorder(probe, JointState, "joint_states", qos=1000)
+    odom = Recorder(probe, Odometry, "base_odom", qos=1000)
+    status = Recorder(probe, DiagnosticArray, "rns_attitude_control/status", qos=1000)
+    torque = Recorder(probe, Vector3Stamped, "wheel_torque", qos=1000)
     command = probe.create_publisher(JointTrajectory, "joint_references", COMMAND_QOS)
 
     def ready():
+        if not joints.messages:
+            return False
         if not attitude:
-            return bool(odom.messages)
+            return True
         return bool(status.messages) and status_values(status.messages[-1])["state"] == "OK"
 
+    def torque_applied(stamp: float) -> bool:
+        """rns_attitude_control's torque for the state at ``stamp`` [s] reached the simulator."""
+        if not attitude:
+            return True
+        return bool(torque.messages) and (
+            _seconds(torque.messages[-1].header.stamp) >= stamp - 1e-9
+            and simulator._commands._wheel_command_sim_time >= stamp - 1e-9
+        )
+
     assert ros.spin_until(ready, timeout=10.0)
-    clock = probe.get_clock()
-    start = clock.now().nanoseconds * 1e-9
-    while (t := clock.now().nanoseconds * 1e-9 - start) < PERIOD:
+    # the simulation runs free until the first command: answering WARM_UP states at rest locks
+    # it to the test's answers before the motion starts
+    start = None
+    answered = 0
+    while True:
+        state = joints.messages[-1]
+        stamp = _seconds(state.header.stamp)
+        assert ros.spin_until(lambda s=stamp: torque_applied(s), timeout=30.0)
+        answered += 1
+        if answered == WARM_UP:
+            start = stamp
+        t = stamp - start if start is not None else 0.0
+        if t >= PERIOD:
+            break
         point = JointTrajectoryPoint(velocities=_wrist_rates(t, speed))
         msg = JointTrajectory(joint_names=JOINTS, points=[point])
-        msg.header.stamp = clock.now().to_msg()  # as rns_controller stamps its references
+        msg.header.stamp = state.header.stamp  # the instant this "controller" sampled
+        count = len(joints.messages)
         command.publish(msg)
-        ros.spin_for(0.01)
-    ros.spin_for(0.3)
-    first = _rotation(odom.messages[0])
-    deviation = max(attitude_deviation(first, _rotation(m)) for m in odom.messages)
+        assert ros.spin_until(lambda c=count: len(joints.messages) > c, timeout=30.0)
+    locked = [m for m in odom.messages if _seconds(m.header.stamp) >= start - 1e-9]
+    first = _rotation(locked[0])
+    deviation = max(attitude_deviation(first, _rotation(m)) for m in locked)
     return math.degrees(deviation), [status_values(m) for m in status.messages]
 
 
 def test_wheels_hold_the_base_during_a_slow_wrist_motion(ros):
-    """0.004 rad/s wrist motion needs < 0.1 N m: the base stays within 3e-4 deg (1.7-1.8e-5
-    seen; 1.2e-4 on a CI machine loaded by other jobs: the feed-forward is a numerical rate of
-    the references), against 7.6e-4 deg with idle wheels (next test)."""
+    """0.004 rad/s wrist motion needs < 0.1 N m: the base stays within 3e-4 deg (9.5e-6 in
+    lockstep, whatever the load), against 7.6e-4 deg with idle wheels (next test)."""
     held, statuses = _drive(ros, 0.004, attitude=True)
     print(f"base deviation with rns_attitude_control: {held:.3e} deg")
     assert held < 3e-4

@@ -145,9 +145,11 @@ def test_connect_streams_to_a_running_rerun_server(robot, tmp_path):
         env={**os.environ, "RERUN_APP_ONLY": "true"},
     )
     try:
-        deadline = time.monotonic() + 10.0
+        # hang-sized bounds: the server's start and exit take seconds on a loaded machine
+        deadline = time.monotonic() + 60.0
         while _listening_addresses(port) != {"0100007F"} and time.monotonic() < deadline:
             time.sleep(0.05)
+        assert _listening_addresses(port) == {"0100007F"}, "rerun server not listening after 60 s"
         urdf, _ = load_model_config(default_model_config())
         url = f"rerun+http://127.0.0.1:{port}/proxy"
         recorder = TelemetryRecorder(robot, urdf, SinkSettings(kind="connect", connect_url=url))
@@ -164,7 +166,7 @@ def test_connect_streams_to_a_running_rerun_server(robot, tmp_path):
         time.sleep(0.5)
     finally:
         server.send_signal(signal.SIGINT)  # the server writes what it received and exits
-        server.wait(timeout=10.0)
+        server.wait(timeout=60.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # an interrupted `rerun --save` writes no footer
         summary = recording_summary(received)

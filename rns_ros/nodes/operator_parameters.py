@@ -66,8 +66,8 @@ PARAMETERS = (
     ParameterSpec(
         "lead",
         0.0,
-        "Under use_sim_time, twist scenarios: publish each sample this long before its instant, "
-        "stamped with the instant",
+        "use_sim_time: publish each sample (twist, force setpoint) this long before its "
+        "instant, stamped with the instant",
         "[s]",
         0.0,
         1.0,

@@ -22,7 +22,7 @@ the instant they are for): the sample is evaluated at exactly that stamp (the co
 differentiates consecutive twist stamps for its acceleration feed-forward). After the profile:
 zero twists for ``zero_duration`` and the force setpoint held at its final value for the same
 time, then nothing (the controller holds the last setpoint). The profile starts once
-``cmd_twist`` and ``force_setpoint`` both have a subscriber (``wait_for_subscriber``). With
+``cmd_twist`` and ``force_setpoint`` both have ``min_subscribers`` (``wait_for_subscriber``). With
 ``lead`` (rns_force_controller's ``await_commands``) only zero twists go out from the start
 condition until the profile starts (no force setpoint: it would start the force task); the
 setpoint of a sample goes out before its twist, so a controller that awaits the twist stream
@@ -162,10 +162,13 @@ class OperatorNode(Node):
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
     def _subscribed(self) -> bool:
-        if self._publisher.get_subscription_count() < self._min_subscribers:
-            return False
-        force = self._force_publisher
-        return force is None or force.get_subscription_count() > 0
+        """cmd_twist (motion_force: and force_setpoint) has ``min_subscribers`` subscribers."""
+        publishers = (self._publisher, self._force_publisher)
+        return all(
+            publisher.get_subscription_count() >= self._min_subscribers
+            for publisher in publishers
+            if publisher is not None
+        )
 
     def _on_tick(self) -> None:
         self._play(self.get_clock().now())

@@ -48,8 +48,8 @@ PARAMETERS = (
     ParameterSpec(
         "min_subscribers",
         1,
-        "With wait_for_subscriber: start once cmd_twist has at least this many subscribers "
-        "(a controller and recorders)",
+        "With wait_for_subscriber: start once cmd_twist (motion_force: and force_setpoint) has "
+        "this many subscribers",
         "[-]",
         1,
         100,

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -70,6 +70,9 @@ OPERATOR_RATE = 500.0
 #: profile: zero twists the controller awaits meanwhile, so the profile starts in the lockstep.
 OPERATOR_LEAD = 2.0 / OPERATOR_RATE
 OPERATOR_START_DELAY = 0.5
+#: Subscribers of cmd_twist and force_setpoint the operator waits for: the controller and this
+#: process (the logger's cmd_twist subscription is not waited for).
+OPERATOR_SUBSCRIBERS = 2
 #: Simulated time after the operator finished, before the run ends [s].
 SETTLE = 0.3
 ERRORS_TOPIC = "rns_force_controller/errors"
@@ -190,6 +193,9 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)
         setpoints = stack.record(WrenchStamped, "force_setpoint")
+        # the operator starts once the controller and this process subscribe to both of its
+        # topics (OPERATOR_SUBSCRIBERS): its first force setpoint is the task's start
+        stack.record(TwistStamped, "cmd_twist", raw=True)
         recording, _ = start_logger(
             processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
         )
@@ -210,6 +216,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 "zero_duration": SETTLE,
                 "lead": OPERATOR_LEAD,
                 "start_delay": OPERATOR_START_DELAY,
+                "min_subscribers": OPERATOR_SUBSCRIBERS,
                 **timing,
             },
             ros_args=ros_args,
@@ -323,10 +330,14 @@ def _figures(
     Raises:
         RnsError: the recording starts after the task, or missed its first force setpoint.
     """
-    first = setpoints.messages[0].wrench.force
-    if abs(np.linalg.norm([first.x, first.y, first.z]) - scenario.setup.force(0.0)) > 1e-9:
+    first = setpoints.messages[0]
+    force = first.wrench.force
+    size = float(np.linalg.norm([force.x, force.y, force.z]))
+    if abs(size - scenario.setup.force(0.0)) > 1e-9:
         raise RnsError(
-            f"{label}: the recording missed the operator's first force setpoint (the task's start)"
+            f"{label}: the recording missed the operator's first force setpoint (the task's "
+            f"start): the first recorded, at {_seconds(first.header.stamp):.3f} s, is "
+            f"{size:.6g} N, not f_des(0) = {scenario.setup.force(0.0):g} N"
         )
     columns = _error_columns(errors)
     task_start = _seconds(setpoints.messages[0].header.stamp)

@@ -397,6 +397,23 @@ def test_motion_force_waits_for_both_subscribers(ros, tmp_path):
     assert ros.spin_until(lambda: operator.started, timeout=5.0)
 
 
+def test_motion_force_waits_for_min_subscribers_on_both_topics(ros, tmp_path):
+    """min_subscribers counts on force_setpoint too: a recorder of the task's first setpoint
+    matched late would miss it (best effort)."""
+    path = tmp_path / "wall.yaml"
+    path.write_text(yaml.safe_dump(SHORT_WALL))
+    operator = ros.add(
+        OperatorNode, {"scenario": str(path), "start_delay": 0.0, "min_subscribers": 2}
+    )
+    ros.record(TwistStamped, "cmd_twist")
+    ros.record(TwistStamped, "cmd_twist")
+    ros.record(WrenchStamped, "force_setpoint")
+    ros.spin_for(0.3)
+    assert not operator.started  # one force_setpoint subscriber of two
+    ros.record(WrenchStamped, "force_setpoint")
+    assert ros.spin_until(lambda: operator.started, timeout=5.0)
+
+
 def test_shipped_contact_scenarios_are_motion_force(ros):
     operator = ros.add(OperatorNode, {"scenario": "wall_contact", "wait_for_subscriber": False,
                                       "start_delay": 60.0})  # fmt: skip

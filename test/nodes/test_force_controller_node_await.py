@@ -1,7 +1,8 @@
 """rns_force_controller with ``await_commands`` over DDS without a simulator or an operator: the
 test publishes /clock, the wrist wrench, joint_states and the operator's stamped cmd_twist and
-force_setpoint itself, so it decides what has arrived when a state comes (docs/part2_ros.md,
-"The operator in the lockstep"). Simulated time is the test's; nothing here asserts a rate."""
+force_setpoint itself, so it decides what has arrived when a state comes
+(docs/nodes/rns_force_controller.md, "The operator in the lockstep"). Simulated time is the
+test's; nothing here asserts a rate."""
 
 from __future__ import annotations
 

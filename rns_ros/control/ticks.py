@@ -1,12 +1,14 @@
 """Control ticks on the node clock: the instant each tick serves and the command in force there.
 
-Pure logic (no ROS), used by the ``rns_controller`` node:
+Pure logic (no ROS), used by the ``rns_controller`` and ``rns_force_controller`` nodes:
 
 * :class:`TickInstants` keeps the last tick served (the hold it ended) and, with ``output_lead``
   (lockstep side by side on simulated time), moves a late tick to the state's instant.
-* :class:`CommandSchedule` holds twists stamped ahead of simulated time until their stamps, and
-  says when a tick knows which twist is in force; :class:`AwaitedTicks` keeps the ticks that wait
-  for it (``await_commands``), under a wall-clock watchdog.
+* :class:`CommandSchedule` holds one stream of commands stamped ahead of simulated time until
+  their stamps, and says when a tick knows which command is in force; :class:`AwaitedTicks` keeps
+  the ticks that wait for it (``await_commands``) on one stream or several (a twist and a force
+  setpoint: a tick is served once the command in force is known on every stream), under a
+  wall-clock watchdog.
 * :func:`next_tick_in` checks a timer's time to its next call.
 
 Instants are integer nanoseconds of the node clock (the stamps the node publishes, exactly);
@@ -15,10 +17,11 @@ durations are seconds. Clocks and timers are injected.
 
 from __future__ import annotations
 
+import heapq
 import math
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Generic, NamedTuple, Protocol, TypeVar
 
 from rns_ros.core.errors import ConfigError
@@ -28,6 +31,8 @@ from rns_ros.core.errors import ConfigError
 MAX_LEAD_CATCH_UP = 1.0
 #: A timer's next call farther than this many periods away is not on its grid [-].
 MAX_TIMER_DELAY = 1.5
+#: The stream of a single-stream :class:`AwaitedTicks` (rns_controller's cmd_twist).
+COMMANDS = "commands"
 
 Item = TypeVar("Item")
 
@@ -162,9 +167,13 @@ class CommandSchedule(Generic[Item]):
     def due(self, tick: int) -> list[Item]:
         """The commands stamped at or before ``tick`` [ns], oldest first, taken off the
         schedule (the last one is in force at ``tick``)."""
+        return [item for _, item in self.due_stamped(tick)]
+
+    def due_stamped(self, tick: int) -> list[tuple[int, Item]]:
+        """:meth:`due` with each command's stamp [ns]: (stamp, command), oldest first."""
         items = []
         while self._waiting and self._waiting[0][0] <= tick:
-            items.append(self._waiting.popleft()[1])
+            items.append(self._waiting.popleft())
         return items
 
     def ready(self, tick: int) -> bool:
@@ -194,11 +203,12 @@ class Watchdog(Protocol):
 
 
 class ServedTick(NamedTuple, Generic[Item]):
-    """A tick whose command in force is known.
+    """A tick whose command in force is known (on every stream).
 
     Attributes:
         instant: the tick [ns].
-        commands: the commands stamped up to it, oldest first, to apply before serving it.
+        commands: the commands stamped up to it (of every stream, merged by stamp), oldest
+            first, to apply before serving it.
     """
 
     instant: int
@@ -206,61 +216,124 @@ class ServedTick(NamedTuple, Generic[Item]):
 
 
 class AwaitedTicks(Generic[Item]):
-    """Ticks that wait for the command in force (``await_commands``), oldest first.
+    """Ticks that wait for the commands in force (``await_commands``), oldest first.
 
-    A tick is served once its command in force is known (:meth:`CommandSchedule.ready`), in
-    order: a tick waits while an older one does. The ``watchdog`` runs while ticks wait; it
-    restarts with each command that arrives (the operator is alive) and its alarm
-    (:meth:`give_up`) serves the waiting ticks with the newest command.
+    Each of ``streams`` (e.g. ``("cmd_twist", "force_setpoint")``) is a
+    :class:`CommandSchedule` of its own; a tick is served once the command in force is known on
+    every stream (:meth:`CommandSchedule.ready`), in order: a tick waits while an older one does.
+    It is served with the commands stamped up to it from all streams, merged by stamp (equal
+    stamps in the order of ``streams``).
+
+    The ``watchdog`` runs while ticks wait. It restarts when the oldest waiting tick changes and
+    when a command comes on a stream that tick waits for (the operator is alive); commands on
+    the other streams do not restart it, so one stream stalled while another goes on is still
+    given up on. Its alarm (:meth:`give_up`) stops waiting for the streams the oldest tick
+    waits for and serves the waiting ticks with the newest commands there are.
+
+    Args:
+        watchdog: the wall-clock alarm (:class:`Watchdog`), started and stopped here.
+        max_waiting: commands each stream holds at most (:class:`CommandSchedule`).
+        streams: the names of the command streams, at least one, distinct; the default is the
+            single stream :data:`COMMANDS`.
+
+    Raises:
+        ConfigError: no stream, or a name twice.
     """
 
-    def __init__(self, watchdog: Watchdog, max_waiting: int = 1000) -> None:
-        self.schedule: CommandSchedule[Item] = CommandSchedule(max_waiting)
+    def __init__(
+        self,
+        watchdog: Watchdog,
+        max_waiting: int = 1000,
+        streams: Sequence[str] = (COMMANDS,),
+    ) -> None:
+        streams = tuple(streams)
+        if not streams or len(set(streams)) != len(streams):
+            raise ConfigError(f"streams must be at least one distinct name, got {list(streams)}")
+        self.schedules: dict[str, CommandSchedule[Item]] = {
+            name: CommandSchedule(max_waiting) for name in streams
+        }
         self._waiting: deque[int] = deque()
         self._watchdog = watchdog
+
+    @property
+    def schedule(self) -> CommandSchedule[Item]:
+        """The schedule of the first stream (of a single-stream user, its only one)."""
+        return next(iter(self.schedules.values()))
 
     @property
     def oldest_waiting(self) -> int | None:
         """The oldest tick waiting [ns], None when none waits."""
         return self._waiting[0] if self._waiting else None
 
+    def ready(self, instant: int) -> bool:
+        """True when the command in force at ``instant`` [ns] is known on every stream."""
+        return all(schedule.ready(instant) for schedule in self.schedules.values())
+
+    def awaited_streams(self) -> list[str]:
+        """The streams the oldest waiting tick waits for (none when no tick waits)."""
+        if not self._waiting:
+            return []
+        oldest = self._waiting[0]
+        return [name for name, schedule in self.schedules.items() if not schedule.ready(oldest)]
+
     def tick(self, instant: int) -> list[ServedTick[Item]]:
         """The tick of ``instant`` [ns]: served now (one entry) or waiting ([])."""
-        if self._waiting or not self.schedule.ready(instant):
+        if self._waiting or not self.ready(instant):
             if not self._waiting:
                 self._watchdog.reset()
             self._waiting.append(instant)
             return []
-        return [ServedTick(instant, self.schedule.due(instant))]
+        return [ServedTick(instant, self._due(instant))]
 
-    def push(self, stamp: int, item: Item, moving: bool) -> list[ServedTick[Item]]:
-        """A command stamped ``stamp`` [ns] (see :meth:`CommandSchedule.push`); returns the
-        waiting ticks it makes ready, in order."""
-        self.schedule.push(stamp, item, moving)
-        return self._ready()
+    def push(
+        self, stamp: int, item: Item, moving: bool, stream: str = COMMANDS
+    ) -> list[ServedTick[Item]]:
+        """A command stamped ``stamp`` [ns] on ``stream`` (see :meth:`CommandSchedule.push`);
+        returns the waiting ticks it makes ready, in order.
+
+        Raises:
+            KeyError: ``stream`` is not one of the streams.
+        """
+        schedule = self.schedules[stream]
+        awaited = bool(self._waiting) and not schedule.ready(self._waiting[0])
+        schedule.push(stamp, item, moving)
+        return self._ready(restart=awaited)
 
     def give_up(self) -> list[ServedTick[Item]]:
-        """The watchdog's alarm: no command came for its time while ticks waited; the waiting
-        ticks are served with the newest command."""
+        """The watchdog's alarm: no command came for its time on a stream the oldest waiting
+        tick waits for; those streams are waited on no longer (until their next command) and
+        the ticks they held are served with the newest commands."""
         self._watchdog.cancel()
         if not self._waiting:
             return []
-        self.schedule.release_all()
-        return self._ready()
+        for name in self.awaited_streams():
+            self.schedules[name].release_all()
+        return self._ready(restart=True)
 
-    def _ready(self) -> list[ServedTick[Item]]:
+    def _due(self, instant: int) -> list[Item]:
+        """The commands of every stream stamped at or before ``instant`` [ns], by stamp."""
+        due = [schedule.due_stamped(instant) for schedule in self.schedules.values()]
+        if len(due) == 1:
+            return [item for _, item in due[0]]
+        # heapq.merge is stable: equal stamps come in the order of the streams
+        return [item for _, item in heapq.merge(*due, key=lambda entry: entry[0])]
+
+    def _ready(self, restart: bool) -> list[ServedTick[Item]]:
+        """Serve the waiting ticks that are ready; the watchdog restarts when ``restart`` or
+        when the oldest waiting tick changed, and stops when none waits."""
         served = []
-        while self._waiting and self.schedule.ready(self._waiting[0]):
+        while self._waiting and self.ready(self._waiting[0]):
             instant = self._waiting.popleft()
-            served.append(ServedTick(instant, self.schedule.due(instant)))
-        if self._waiting:
-            self._watchdog.reset()
-        else:
+            served.append(ServedTick(instant, self._due(instant)))
+        if not self._waiting:
             self._watchdog.cancel()
+        elif restart or served:
+            self._watchdog.reset()
         return served
 
 
 __all__ = [
+    "COMMANDS",
     "MAX_LEAD_CATCH_UP",
     "AwaitedTicks",
     "CommandSchedule",

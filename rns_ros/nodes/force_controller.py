@@ -5,14 +5,27 @@ the surface from the operator twist, force along its normal from the force setpo
 :class:`rns_ros.control.force.controller.ForceTeleopController`; this node converts messages and
 runs one step per received ``joint_states`` (event-driven). Contract: docs/part2_ros.md.
 
+With ``await_commands`` (``use_sim_time`` only: lockstep with the simulator) the operator is in
+the lockstep too: it publishes its samples ahead of simulated time, stamped with their instants
+(``rns_operator``'s ``lead``), and the step of a state stamped t waits until the commands in
+force at t are known on both streams (a cmd_twist and a force_setpoint stamped at or after t, or
+a stream that has sent nothing yet), then applies the commands stamped up to t and runs
+(:class:`rns_ros.control.ticks.AwaitedTicks`). A lockstep simulator waits for that step's
+torque, so which command a step sees no longer depends on when the operator's process got a
+core. A steady-clock watchdog of ``command_timeout`` gives up waiting (an operator that stopped
+or stalled): the step runs with the newest commands, whose ages (simulated time) then stop the
+motion as without ``await_commands``.
+
 Subscribes:
     joint_states    sensor_msgs/JointState (by name; position, velocity, effort = the torque held
                     over the step that ended there); reliable, depth 10; triggers the step
     wrist_wrench    geometry_msgs/WrenchStamped, EE axes (frame_id the EE frame, "" or "ee";
                     world_frame also accepted), the wrench the EE exerts on the environment;
                     reliable, depth 10; matched to the state of the same stamp
-    cmd_twist       geometry_msgs/TwistStamped (world or EE axes); best effort, depth 1
+    cmd_twist       geometry_msgs/TwistStamped (world or EE axes); best effort, depth 1 (50 with
+                    ``await_commands``)
     force_setpoint  geometry_msgs/WrenchStamped (world or EE axes, "" = EE); best effort, depth 1
+                    (50 with ``await_commands``)
 Publishes:
     joint_efforts   std_msgs/Float64MultiArray, torques [N m] in the ``joints`` order, one per
                     state; one zero torque when the state goes stale and at shutdown
@@ -34,10 +47,12 @@ from __future__ import annotations
 import time
 from collections import deque
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -56,11 +71,12 @@ from rns_ros.control.force.commands import (
 from rns_ros.control.force.controller import ForceTeleopController
 from rns_ros.control.force.settings import CommandFrame, ForceControlSettings
 from rns_ros.control.force.status import ForceControlState, ForceStep
+from rns_ros.control.ticks import AwaitedTicks, ServedTick
 from rns_ros.core.commands import joint_order
-from rns_ros.core.errors import InputError, RnsError
+from rns_ros.core.errors import ConfigError, InputError, RnsError
 from rns_ros.core.fixed_base import load_fixed_base_model
 from rns_ros.nodes import force_controller_parameters
-from rns_ros.nodes.force_controller_parameters import DEFAULT_MODEL
+from rns_ros.nodes.force_controller_parameters import DEFAULT_MODEL, await_commands_problem
 from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.runner import publish_last, run_node
@@ -72,6 +88,16 @@ from rns_ros.resources import config_dir
 WATCHDOG_PERIOD, DIAGNOSTICS_PERIOD = 0.05, 1.0
 #: Window of the step-time statistics [s] (wall clock: they measure the CPU cost of a step).
 STEP_TIME_WINDOW = 1.0
+#: The command streams a step waits for under await_commands (equal stamps apply in this order).
+TWIST_STREAM, FORCE_STREAM = "cmd_twist", "force_setpoint"
+#: cmd_twist and force_setpoint under await_commands: best effort (matches the operators'
+#: best-effort publishers), deep enough for the samples an operator publishes ahead (each is one
+#: instant of its profile: none may be overwritten before it is read).
+SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: await_commands: states waiting for their commands beyond this many are a simulation that no
+#: longer waits for the torques (in lockstep one state waits: the simulator pauses for its
+#: torque); waiting on would only pile up steps on old states, so it is given up at once.
+MAX_WAITING_STEPS = 50
 _ERROR = {
     ForceControlState.INVALID_COMMAND,
     ForceControlState.WRENCH_LIMIT,
@@ -119,11 +145,17 @@ class ForceControllerNode(Node):
         self._ee_frame = self.robot.model.frames[self.robot.ee_frame_id].name
         self._frames = command_frames(params["world_frame"], self._ee_frame)
         self._state_timeout = params["state_timeout"]
+        problem = await_commands_problem(
+            params["await_commands"], bool(self.get_parameter("use_sim_time").value)
+        )
+        if problem is not None:
+            raise ConfigError(problem)
         self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
         # receipt time of the newest joint state [s] on the input clock (simulated time under
         # use_sim_time), and monotonic [s] (the /clock watch)
         self._state_received: float | None = None
         self._state_received_wall = -np.inf
+        self._stepped_wall = -np.inf  # monotonic time of the newest control step [s]
         self._stale = False  # the zero torque of a stale state was published
         self._published = False  # any torque published (then shutdown publishes zero)
         self._step: ForceStep | None = None
@@ -132,8 +164,15 @@ class ForceControllerNode(Node):
         self._last_status: DiagnosticStatus | None = None
         self._last_state: ForceControlState | None = None
 
+        # await_commands: the steps waiting for their commands, and the states they step on
+        self._awaited = self._awaited_steps(params)
+        self._pending: deque[JointMeasurement] = deque()
+        self._moving_twist = False  # the newest cmd_twist scheduled asks for motion
+
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        if self._awaited is not None:
+            command_qos = SCHEDULED_COMMAND_QOS
         self.create_subscription(JointState, "joint_states", self._on_joint_state, reliable)
         self.create_subscription(WrenchStamped, "wrist_wrench", self._on_wrench, reliable)
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, command_qos)
@@ -145,6 +184,7 @@ class ForceControllerNode(Node):
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
         )
         self.create_service(Trigger, "~/reset", self._on_reset)
+        self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(WATCHDOG_PERIOD, self._on_watchdog, clock=steady)
@@ -154,12 +194,44 @@ class ForceControllerNode(Node):
         self.get_logger().info(
             f"{self.settings.method.value} motion/force control of {self.robot.name} "
             f"(task {list(self.settings.task_axes)}, normal {self.settings.normal_mode.value}, "
-            f"force {self.settings.force_measurement.value}, k_f {self.settings.k_f:g}); "
+            f"force {self.settings.force_measurement.value}, k_f {self.settings.k_f:g}"
+            f"{', awaiting the commands' if self._awaited is not None else ''}); "
             f"waiting for {self._state_topic}"
         )
 
+    def _awaited_steps(self, params: dict) -> AwaitedTicks[Any] | None:
+        """await_commands: the steps waiting for both command streams, at most command_timeout
+        of wall time after the operator's last sample; None when not used."""
+        if not params["await_commands"]:
+            return None
+        watchdog = self.create_timer(
+            params["command_timeout"],
+            self._on_await_timeout,
+            clock=Clock(clock_type=ClockType.STEADY_TIME),
+        )
+        watchdog.cancel()
+        return AwaitedTicks(watchdog, streams=(TWIST_STREAM, FORCE_STREAM))
+
     # --- inputs ---------------------------------------------------------------------------------
     def _on_twist(self, msg: TwistStamped) -> None:
+        if self._awaited is not None:
+            self._moving_twist = any(
+                value != 0.0
+                for vector in (msg.twist.linear, msg.twist.angular)
+                for value in (vector.x, vector.y, vector.z)
+            )
+            self._schedule(TWIST_STREAM, msg)
+            return
+        self._take_twist(msg, self._input_clock.now())
+
+    def _on_setpoint(self, msg: WrenchStamped) -> None:
+        if self._awaited is not None:
+            self._schedule(FORCE_STREAM, msg)
+            return
+        self._take_setpoint(msg, self._input_clock.now())
+
+    def _take_twist(self, msg: TwistStamped, now: float) -> None:
+        """A cmd_twist received (taken to act) at ``now`` [s] on the input clock."""
         lin, ang = msg.twist.linear, msg.twist.angular
         self._command(
             "cmd_twist",
@@ -170,13 +242,14 @@ class ForceControllerNode(Node):
                 self._frames,
                 self.settings.default_twist_frame,
                 _stamp_ns(msg.header.stamp),
-                self._input_clock.now(),
+                now,
             ),
             self.controller.set_twist,
             self.controller.reject_twist,
         )
 
-    def _on_setpoint(self, msg: WrenchStamped) -> None:
+    def _take_setpoint(self, msg: WrenchStamped, now: float) -> None:
+        """A force_setpoint received (taken to act) at ``now`` [s] on the input clock."""
         f, m = msg.wrench.force, msg.wrench.torque
         self._command(
             "force_setpoint",
@@ -185,11 +258,59 @@ class ForceControllerNode(Node):
                 [m.x, m.y, m.z],
                 msg.header.frame_id,
                 self._frames,
-                self._input_clock.now(),
+                now,
             ),
             self.controller.set_force,
             self.controller.reject_force,
         )
+
+    def _schedule(self, stream: str, msg: TwistStamped | WrenchStamped) -> None:
+        """await_commands: a command held until its stamp; runs the steps it makes ready.
+
+        Every command counts as moving (:meth:`CommandSchedule.ready`): nothing ends a
+        motion/force stream but its silence (a held force setpoint is an order, and a zero
+        twist between two strokes is a sample like any other), so each is waited for and the
+        end of a scenario is found by the watchdog, once."""
+        dropped = sum(schedule.dropped for schedule in self._awaited.schedules.values())
+        ready = self._awaited.push(_stamp_ns(msg.header.stamp), msg, moving=True, stream=stream)
+        if sum(schedule.dropped for schedule in self._awaited.schedules.values()) > dropped:
+            self.get_logger().warn(
+                f"too many {stream} stamped ahead are waiting for their stamps: the oldest was "
+                "dropped (stamps far ahead of the clock?)",
+                throttle_duration_sec=1.0,
+            )
+        self._serve_ready(ready)
+
+    def _on_await_timeout(self) -> None:
+        """await_commands: no command came for command_timeout (wall clock) on a stream a step
+        waits for: the operator stopped (its scenario ended) or stalled; the waiting steps run
+        with the newest commands (whose ages then stop the motion as usual)."""
+        waiting = self._awaited.oldest_waiting
+        if waiting is not None:
+            streams = " / ".join(self._awaited.awaited_streams())
+            text = (
+                f"no {streams} stamped at or after {waiting * 1e-9:.3f} s within command_timeout "
+                f"({self._params['command_timeout']} s wall clock): stepping on with the newest"
+            )
+            if self._moving_twist:
+                self.get_logger().warn(f"{text} (the operator stalled?)", throttle_duration_sec=1.0)
+            else:
+                self.get_logger().info(f"{text} (the operator's twists ended at rest)")
+        self._serve_ready(self._awaited.give_up())
+
+    def _serve_ready(self, steps: list[ServedTick[Any]]) -> None:
+        """await_commands: the steps whose commands in force are known, in order, each after
+        the commands stamped up to its state, taken to act at its stamp (the simulated instant
+        the torque acts at in lockstep; a command's age then counts from there)."""
+        for served in steps:
+            measurement = self._pending.popleft()
+            now = served.instant * 1e-9
+            for msg in served.commands:
+                if isinstance(msg, TwistStamped):
+                    self._take_twist(msg, now)
+                else:
+                    self._take_setpoint(msg, now)
+            self._control_step(measurement, now)
 
     def _command(self, topic: str, validate, accept, reject) -> None:
         """``accept(validate())``; an InputError goes to ``reject`` (the status) and the log."""
@@ -243,15 +364,32 @@ class ForceControllerNode(Node):
             return
         stamp = _stamp_ns(msg.header.stamp)
         now = self._input_clock.receipt_time(stamp * 1e-9)
-        wall = time.monotonic()
         if self._stale:
             self.get_logger().info("joint_states resumed: reference re-latched at the pose")
             self.controller.resync()
         self._stale = False
-        self._state_received, self._state_received_wall = now, wall
+        self._state_received, self._state_received_wall = now, time.monotonic()
+        measurement = JointMeasurement(stamp, q[order], v[order], effort)
+        if self._awaited is None:
+            self._control_step(measurement, now)
+            return
+        self._pending.append(measurement)
+        self._serve_ready(self._awaited.tick(stamp))
+        if len(self._pending) > MAX_WAITING_STEPS:
+            self.get_logger().warn(
+                f"{len(self._pending)} joint_states wait for their commands: the simulation "
+                "does not wait for the torques (no lockstep?); stepping on with the newest",
+                throttle_duration_sec=1.0,
+            )
+            self._serve_ready(self._awaited.give_up())
+
+    def _control_step(self, measurement: JointMeasurement, now: float) -> None:
+        """One control step on ``measurement``: the torque, ~/errors, the step time; ``now``
+        [s] on the input clock (command ages)."""
+        wall = self._stepped_wall = time.monotonic()
         started = time.perf_counter()
         try:
-            step = self.controller.step(JointMeasurement(stamp, q[order], v[order], effort), now)
+            step = self.controller.step(measurement, now)
         except RnsError as exc:
             self._status_override = (ForceControlState.CONTROL_ERROR, str(exc))
             self.get_logger().error(f"control step failed: {exc}", throttle_duration_sec=1.0)
@@ -317,10 +455,16 @@ class ForceControllerNode(Node):
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint
-        state came for as long either (a dead simulator) after torques were published, the
+        state came and no step ran for as long either (a dead simulator) after torques were
+        published, the
         motors go off as on a stale state: with simulated time standing still, the state's age
-        does not grow. Later calls while it stands still only update the status."""
-        quiet = time.monotonic() - self._state_received_wall
+        does not grow. Later calls while it stands still only update the status. A step that
+        waits for the operator's commands (await_commands) holds the clock itself: that wait
+        has its own watchdog, and the quiet counts from its end (the simulator has not had the
+        step's torque before)."""
+        if self._awaited is not None and self._awaited.oldest_waiting is not None:
+            return
+        quiet = time.monotonic() - max(self._state_received_wall, self._stepped_wall)
         if not self._published or quiet < self._input_clock.timeout:
             return
         reason = (
@@ -333,6 +477,18 @@ class ForceControllerNode(Node):
         override = self._status_override
         if override is not None and override[1].startswith("/clock"):
             self._status_override = (override[0], f"{reason}: motors off")
+
+    def _validate_parameters(self, parameters) -> SetParametersResult:
+        """On set: refuse a use_sim_time (or await_commands) that leaves await_commands on the
+        wall clock (the reason says why)."""
+        values = {parameter.name: parameter.value for parameter in parameters}
+        problem = await_commands_problem(
+            bool(values.get("await_commands", self._params["await_commands"])),
+            bool(values.get("use_sim_time", self.get_parameter("use_sim_time").value)),
+        )
+        if problem is not None:
+            return SetParametersResult(successful=False, reason=problem)
+        return SetParametersResult(successful=True)
 
     def _apply_parameters(self, parameters) -> None:
         """After a set: the run-time parameters (clock_timeout) take their new values."""

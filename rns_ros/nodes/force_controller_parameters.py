@@ -126,7 +126,12 @@ PARAMETERS = (
         "Axes of a cmd_twist with an empty frame_id: ee or world",
         choices=choices_of(CommandFrame),
     ),
-    _timeout("command_timeout", 0.5, "A cmd_twist older than this (receipt) decelerates to rest"),
+    _timeout(
+        "command_timeout",
+        0.5,
+        "A cmd_twist older than this (receipt) decelerates to rest; await_commands: longest wait "
+        "(wall)",
+    ),
     _timeout("force_timeout", 0.5, "A force_setpoint older than this: f_des held, status WARN"),
     ParameterSpec(
         "state_timeout",
@@ -138,6 +143,12 @@ PARAMETERS = (
         10.0,
     ),
     CLOCK_TIMEOUT,
+    ParameterSpec(
+        "await_commands",
+        False,
+        "use_sim_time only: each step waits for the cmd_twist and force_setpoint in force at its "
+        "state's stamp",
+    ),
     ParameterSpec(
         "max_linear_speed", 0.5, "Twists faster than this are scaled down", "[m/s]", 1e-6, 10.0
     ),
@@ -198,3 +209,18 @@ PARAMETERS = (
     ParameterSpec("status_rate", 50.0, "Rate of ~/status", "[Hz]", 0.1, 1000.0),
 )
 SPECS = specs_by_name(PARAMETERS)
+
+
+def await_commands_problem(await_commands: bool, use_sim_time: bool) -> str | None:
+    """Why ``await_commands`` cannot be on with this ``use_sim_time``, or None when it can.
+
+    The steps wait for commands stamped ahead of the simulated clock (a scripted operator's
+    ``lead``), which only a simulation in lockstep can wait for: on the wall clock the arm would
+    be left without torques while the operator's next sample is on its way.
+    """
+    if await_commands and not use_sim_time:
+        return (
+            "await_commands needs use_sim_time: true (the steps wait for commands stamped ahead "
+            "of the simulated clock; on the wall clock commands act on receipt)"
+        )
+    return None

@@ -14,14 +14,19 @@ condition until the profile starts).
 
 Part II scenario files (``kind: motion_force``, :mod:`rns_ros.control.contact_scenarios`,
 docs/part2_ros.md): at ``rate`` (500 Hz suggested: the force controller runs at 1 kHz) BOTH
-``cmd_twist`` (``frame_id`` = ``world_frame``, linear = the EE reference velocity p_dot_des(t) of
-(6.33), angular = 0) and ``force_setpoint`` (geometry_msgs/WrenchStamped, ``frame_id`` =
-``world_frame``, force = f_des(t) n(t), n the contact normal at the reference point, torque 0),
-both stamped with the node clock at publication: the sample is evaluated at exactly that stamp
-(the controller differentiates consecutive twist stamps for its acceleration feed-forward). After
-the profile: zero twists for ``zero_duration`` and the force setpoint held at its final value for
-the same time, then nothing (the controller holds the last setpoint). The profile starts once
-``cmd_twist`` and ``force_setpoint`` both have a subscriber (``wait_for_subscriber``).
+``force_setpoint`` (geometry_msgs/WrenchStamped, ``frame_id`` = ``world_frame``, force =
+f_des(t) n(t), n the contact normal at the reference point, torque 0) and ``cmd_twist``
+(``frame_id`` = ``world_frame``, linear = the EE reference velocity p_dot_des(t) of (6.33),
+angular = 0), in that order, both stamped with the node clock at publication (with ``lead``: with
+the instant they are for): the sample is evaluated at exactly that stamp (the controller
+differentiates consecutive twist stamps for its acceleration feed-forward). After the profile:
+zero twists for ``zero_duration`` and the force setpoint held at its final value for the same
+time, then nothing (the controller holds the last setpoint). The profile starts once
+``cmd_twist`` and ``force_setpoint`` both have ``min_subscribers`` (``wait_for_subscriber``). With
+``lead`` (rns_force_controller's ``await_commands``) only zero twists go out from the start
+condition until the profile starts (no force setpoint: it would start the force task); the
+setpoint of a sample goes out before its twist, so a controller that awaits the twist stream
+and has the twist stamped t has been sent the force task's first setpoint of t too.
 
 Stopped while it plays (Ctrl-C, SIGTERM, ``destroy_node``), it publishes :data:`FINAL_ZEROS` zero
 twists :data:`FINAL_ZERO_GAP` apart before it goes: the controller stops at once instead of
@@ -94,11 +99,12 @@ class OperatorNode(Node):
         self._start_delay = params["start_delay"]
         sim_time = bool(self.get_parameter("use_sim_time").value)
         # [ns] each sample goes out ahead of its instant (lockstep with an awaiting controller)
-        self._lead = round(params["lead"] * 1e9) if sim_time and not self.motion_force else 0
+        self._lead = round(params["lead"] * 1e9) if sim_time else 0
         if params["lead"] and not self._lead:
-            self.get_logger().warn("lead is for twist scenarios under use_sim_time only: not used")
+            self.get_logger().warn("lead is for use_sim_time only: not used")
         self._period_ns = round(1e9 / params["rate"])
-        # lead: the newest sample's instant [ns], and whether a sample asked for motion yet
+        # lead: the newest sample's instant [ns], and whether a sample asked for motion (or, in
+        # a motion/force scenario, started the force task) yet
         self._last_instant: int | None = None
         self._moved = False
         self._zero_duration = params["zero_duration"]
@@ -156,10 +162,13 @@ class OperatorNode(Node):
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
     def _subscribed(self) -> bool:
-        if self._publisher.get_subscription_count() < self._min_subscribers:
-            return False
-        force = self._force_publisher
-        return force is None or force.get_subscription_count() > 0
+        """cmd_twist (motion_force: and force_setpoint) has ``min_subscribers`` subscribers."""
+        publishers = (self._publisher, self._force_publisher)
+        return all(
+            publisher.get_subscription_count() >= self._min_subscribers
+            for publisher in publishers
+            if publisher is not None
+        )
 
     def _on_tick(self) -> None:
         self._play(self.get_clock().now())
@@ -235,8 +244,16 @@ class OperatorNode(Node):
         self._publisher.publish(msg)
 
     def _publish_motion_force(self, sample: OperatorSample | None, force, stamp: Time) -> None:
-        """One TwistStamped (the sample's linear/angular velocity, zeros for None) and one
-        WrenchStamped (``force`` [N] (3,), torque 0), both world-framed, both at ``stamp``."""
+        """One WrenchStamped (``force`` [N] (3,), torque 0) and then one TwistStamped (the
+        sample's linear/angular velocity, zeros for None), both world-framed, both at ``stamp``.
+
+        The setpoint first: a controller awaiting both streams (``await_commands``) waits on
+        the twists from the start condition on but cannot wait on a force stream that has not
+        started; the twist of an instant, published after its setpoint, then makes the
+        controller wait until that setpoint has been sent."""
+        if self._lead:
+            # the force task is on from here: a stall is no longer a shift of a robot at rest
+            self._last_instant, self._moved = stamp.nanoseconds, True
         twist = TwistStamped()
         twist.header.stamp = stamp.to_msg()
         twist.header.frame_id = self._frame_id
@@ -252,8 +269,8 @@ class OperatorNode(Node):
             float(f) for f in force
         )
         self._force = np.array(force, dtype=float)
-        self._publisher.publish(twist)
         self._force_publisher.publish(wrench)
+        self._publisher.publish(twist)
 
     def destroy_node(self) -> None:
         """Stop the camera / EE when the profile is playing: zero twists first (motion_force:

@@ -48,8 +48,8 @@ PARAMETERS = (
     ParameterSpec(
         "min_subscribers",
         1,
-        "With wait_for_subscriber: start once cmd_twist has at least this many subscribers "
-        "(a controller and recorders)",
+        "With wait_for_subscriber: start once cmd_twist (motion_force: and force_setpoint) has "
+        "this many subscribers",
         "[-]",
         1,
         100,
@@ -66,8 +66,8 @@ PARAMETERS = (
     ParameterSpec(
         "lead",
         0.0,
-        "Under use_sim_time, twist scenarios: publish each sample this long before its instant, "
-        "stamped with the instant",
+        "use_sim_time: publish each sample (twist, force setpoint) this long before its "
+        "instant, stamped with the instant",
         "[s]",
         0.0,
         1.0,

@@ -8,13 +8,17 @@ flange z axis), ``rns_force_controller`` with that method, ``rns_operator`` play
 ``config/scenarios/wall_contact.yaml`` (twist and force setpoint) and ``rns_rerun_logger`` (one
 ``.rrd`` per run). The simulator runs in lockstep with the controller (``lockstep_period`` = the
 1 ms step): every torque is computed from the state it acts on, as in the in-process loop of
-``rns_reproduce``, at whatever speed the machine allows.
+``rns_reproduce``, at whatever speed the machine allows. The operator is in the lockstep too: it
+publishes each sample ahead of simulated time (``lead``), stamped with its instant, and the
+controller's step of each state waits for the twist and force setpoint in force at its stamp
+(``await_commands``), so the figures do not depend on when the operator's process got a core.
 
-The table gives, from the recorded topics (:mod:`rns_ros.analysis.recorded_contact`), the largest
-in-plane position error, the largest force error (whole run, and once the 10 N are reached), the
-peak joint speed next to the in-process run of the same task (``run_closed_loop``), the residual
-joint speed at the end, the torque-loop rate reached (control steps per wall second) and the
-controller's step time (median / p99).
+The table gives, from the topics recorded up to the end of the task (the operator's first force
+setpoint, which marks the profile's start, plus the scenario's duration and twice ``SETTLE``;
+:mod:`rns_ros.analysis.recorded_contact`), the largest in-plane position error, the largest force
+error (whole run, and once the 10 N are reached), the peak joint speed next to the in-process run
+of the same task (``run_closed_loop``), the residual joint speed at the end, the torque-loop rate
+reached (control steps per wall second) and the controller's step time (median / p99).
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -61,6 +65,14 @@ TASK_PARAMS = {
 #: Simulator step = control period [s], operator rate [Hz].
 CONTACT_STEP = 1e-3
 OPERATOR_RATE = 500.0
+#: How far ahead of its instant [s] the operator publishes each sample (two samples, as the
+#: inspection demo's operator), and the simulated time [s] from its start condition to the
+#: profile: zero twists the controller awaits meanwhile, so the profile starts in the lockstep.
+OPERATOR_LEAD = 2.0 / OPERATOR_RATE
+OPERATOR_START_DELAY = 0.5
+#: Subscribers of cmd_twist and force_setpoint the operator waits for: the controller and this
+#: process (the logger's cmd_twist subscription is not waited for).
+OPERATOR_SUBSCRIBERS = 2
 #: Simulated time after the operator finished, before the run ends [s].
 SETTLE = 0.3
 ERRORS_TOPIC = "rns_force_controller/errors"
@@ -180,7 +192,10 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         joints = stack.record(JointState, "joint_states")
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)
-        twists = stack.record(TwistStamped, "cmd_twist")
+        setpoints = stack.record(WrenchStamped, "force_setpoint")
+        # the operator starts once the controller and this process subscribe to both of its
+        # topics (OPERATOR_SUBSCRIBERS): its first force setpoint is the task's start
+        stack.record(TwistStamped, "cmd_twist", raw=True)
         recording, _ = start_logger(
             processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
         )
@@ -199,13 +214,16 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 "scenario": str(path),
                 "rate": OPERATOR_RATE,
                 "zero_duration": SETTLE,
+                "lead": OPERATOR_LEAD,
+                "start_delay": OPERATOR_START_DELAY,
+                "min_subscribers": OPERATOR_SUBSCRIBERS,
                 **timing,
             },
             ros_args=ros_args,
         )
 
         done = stack.spin_until(
-            lambda: _finished(twists, errors, scenario.duration), timeout=budget
+            lambda: _finished(setpoints, errors, joints, scenario.duration), timeout=budget
         )
         wall = time.perf_counter() - start
         values = _status_values(status)
@@ -216,7 +234,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 f"{values.get('state')}){processes.exit_report()}"
             )
     _check_states(label, states, values)
-    figures = _figures(label, errors, joints, twists)
+    figures = _figures(label, errors, joints, setpoints, scenario)
     return ContactDemoRow(
         method=method,
         label=label,
@@ -231,14 +249,20 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
     )
 
 
-def _finished(twists: TopicLog, errors: TopicLog, duration: float) -> bool:
-    """The controller's errors reached the end of the task: ``duration`` [s] plus twice the
-    settling time after the operator's first twist."""
-    if not len(twists) or not len(errors):
+def _task_end(setpoints: TopicLog, duration: float) -> float:
+    """The end of the task on the stamps' clock [s]: the operator's first force setpoint (its
+    profile's start; before it only zero twists go out) plus ``duration`` [s] and twice the
+    settling time (the operator's zeros, then as long again)."""
+    return _seconds(setpoints.messages[0].header.stamp) + duration + 2 * SETTLE
+
+
+def _finished(setpoints: TopicLog, errors: TopicLog, joints: TopicLog, duration: float) -> bool:
+    """The controller's errors and the joint states reached the end of the task
+    (:func:`_task_end`)."""
+    if not len(setpoints) or not len(errors) or not len(joints):
         return False
-    # the operator's first twist is stamped when its profile starts (sim time)
-    end = _seconds(twists.messages[0].header.stamp) + duration + 2 * SETTLE
-    return _latest_time(errors) >= end
+    end = _task_end(setpoints, duration)
+    return _latest_time(errors) >= end and joints.latest_stamp() >= end
 
 
 def _check_states(label: str, states: set[str], values: dict[str, str]) -> None:
@@ -260,8 +284,9 @@ def _start_plant(
     args: argparse.Namespace,
     ros_args: list[str],
 ) -> None:
-    """Start rns_force_controller with ``method`` and rns_simulator in contact mode, in lockstep
-    on sim time, with the params files of ``scenario``'s task."""
+    """Start rns_force_controller with ``method`` (awaiting the operator's commands) and
+    rns_simulator in contact mode, in lockstep on sim time, with the params files of
+    ``scenario``'s task."""
     controller, variant, _ = CONTACT_METHODS[method]
     setup = scenario.setup
     simulator_file, controller_file = (config_dir() / name for name in TASK_PARAMS[scenario.task])
@@ -273,6 +298,8 @@ def _start_plant(
             "method": controller,
             "os_variant": variant,
             "use_sim_time": True,
+            # each step waits for the operator's commands in force at its state's stamp
+            "await_commands": True,
         },
         params_file=controller_file,
         ros_args=ros_args,
@@ -294,23 +321,38 @@ def _start_plant(
     )
 
 
-def _figures(label: str, errors: TopicLog, joints: TopicLog, twists: TopicLog) -> ContactRunFigures:
-    """The run's figures from the recorded topics, from the task's start (the operator's first
-    twist) on.
+def _figures(
+    label: str, errors: TopicLog, joints: TopicLog, setpoints: TopicLog, scenario
+) -> ContactRunFigures:
+    """The run's figures from the recorded topics, up to the end of the task
+    (:func:`_task_end`): the same stretch of simulated time however long the recording ran on.
 
     Raises:
-        RnsError: the recording starts after the task.
+        RnsError: the recording starts after the task, or missed its first force setpoint.
     """
+    first = setpoints.messages[0]
+    force = first.wrench.force
+    size = float(np.linalg.norm([force.x, force.y, force.z]))
+    if abs(size - scenario.setup.force(0.0)) > 1e-9:
+        raise RnsError(
+            f"{label}: the recording missed the operator's first force setpoint (the task's "
+            f"start): the first recorded, at {_seconds(first.header.stamp):.3f} s, is "
+            f"{size:.6g} N, not f_des(0) = {scenario.setup.force(0.0):g} N"
+        )
     columns = _error_columns(errors)
-    task_start = _seconds(twists.messages[0].header.stamp)
+    task_start = _seconds(setpoints.messages[0].header.stamp)
     if columns["time"][0] > task_start:
         raise RnsError(
             f"{label}: the recording starts {columns['time'][0] - task_start:.3f} s after the "
             "task; its figures would miss the start"
         )
-    return contact_run_figures(
-        columns, joints.stamps(), joints.array(lambda m: m.velocity), tail=SETTLE
-    )
+    end = _task_end(setpoints, scenario.duration)
+    within = columns["time"] <= end + 1e-9
+    columns = {name: column[within] for name, column in columns.items()}
+    times = joints.stamps()
+    states = times <= end + 1e-9
+    velocities = joints.array(lambda m: m.velocity)[states]
+    return contact_run_figures(columns, times[states], velocities, tail=SETTLE)
 
 
 def _seconds(stamp) -> float:

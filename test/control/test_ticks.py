@@ -9,6 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from rns_ros.control.ticks import (
+    COMMANDS,
     AwaitedTicks,
     CommandSchedule,
     ServedTick,
@@ -159,6 +160,143 @@ def test_the_awaited_schedule_counts_the_commands_dropped():
     for stamp in range(3):
         awaited.push(10**18 + stamp, stamp, moving=True)
     assert awaited.schedule.dropped == 1
+
+
+# --- AwaitedTicks on several streams: every command in force known --------------------------
+
+TWIST, FORCE = "cmd_twist", "force_setpoint"
+
+
+def test_a_tick_waits_for_the_command_in_force_on_every_stream_then_gets_them_by_stamp():
+    """A twist and a force setpoint stream: the tick at 20 is served once both streams hold a
+    command stamped at or after it, with the commands of both merged by stamp (equal stamps in
+    the order of the streams)."""
+    watchdog = FakeWatchdog()
+    awaited = AwaitedTicks(watchdog, streams=(TWIST, FORCE))
+    assert awaited.tick(10) == [ServedTick(10, [])]  # no operator: nothing to wait for
+    assert awaited.push(10, "v10", moving=True, stream=TWIST) == []
+    assert awaited.push(10, "f10", moving=True, stream=FORCE) == []
+    assert awaited.tick(20) == []
+    assert awaited.awaited_streams() == [TWIST, FORCE]
+    assert awaited.push(20, "v20", moving=True, stream=TWIST) == []  # the force is not known
+    assert awaited.awaited_streams() == [FORCE]
+    assert awaited.push(30, "f30", moving=True, stream=FORCE) == [
+        ServedTick(20, ["v10", "f10", "v20"])
+    ]
+    assert not watchdog.running
+    assert awaited.push(30, "v30", moving=True, stream=TWIST) == []
+    assert awaited.tick(30) == [ServedTick(30, ["v30", "f30"])]
+
+
+def test_a_stream_without_commands_yet_is_not_waited_for():
+    """An operator that sends twists before its force task starts: the force stream holds no
+    command, so nothing is waited for there (no force setpoint is in force)."""
+    awaited = AwaitedTicks(FakeWatchdog(), streams=(TWIST, FORCE))
+    awaited.push(20, "zero", moving=True, stream=TWIST)
+    assert awaited.tick(20) == [ServedTick(20, ["zero"])]
+    assert awaited.tick(30) == []
+    assert awaited.push(30, "f30", moving=True, stream=FORCE) == []  # the twist is awaited
+    assert awaited.push(40, "v40", moving=True, stream=TWIST) == [ServedTick(30, ["f30"])]
+
+
+def test_the_watchdog_restarts_only_for_the_streams_waited_on_and_gives_up_on_them():
+    """A force stream that stalls while twists keep coming is given up on: the twists do not
+    restart the watchdog; the alarm releases the force stream alone (the twists are still
+    awaited at the next tick) and serves the tick with the newest setpoint."""
+    watchdog = FakeWatchdog()
+    awaited = AwaitedTicks(watchdog, streams=(TWIST, FORCE))
+    awaited.push(10, "v10", moving=True, stream=TWIST)
+    awaited.push(10, "f10", moving=True, stream=FORCE)
+    assert awaited.tick(20) == []
+    assert watchdog.resets == 1
+    awaited.push(20, "v20", moving=True, stream=TWIST)  # awaited: restarts
+    assert watchdog.resets == 2
+    awaited.push(30, "v30", moving=True, stream=TWIST)  # the tick waits for the force only
+    assert watchdog.resets == 2
+    assert awaited.give_up() == [ServedTick(20, ["v10", "f10", "v20"])]
+    assert not watchdog.running
+    assert awaited.tick(30) == [ServedTick(30, ["v30"])]  # the force stream is released
+    assert awaited.tick(40) == []  # the twist stream is not
+    assert awaited.awaited_streams() == [TWIST]
+    assert watchdog.running
+    assert awaited.push(40, "f40", moving=True, stream=FORCE) == []  # not awaited: no restart
+    assert watchdog.resets == 3
+    assert awaited.push(40, "v40", moving=True, stream=TWIST) == [ServedTick(40, ["v40", "f40"])]
+
+
+def test_streams_are_named_once_each_and_a_single_stream_is_the_default():
+    assert list(AwaitedTicks(FakeWatchdog()).schedules) == [COMMANDS]
+    awaited = AwaitedTicks(FakeWatchdog(), streams=(TWIST, FORCE))
+    assert awaited.schedule is awaited.schedules[TWIST]
+    with pytest.raises(KeyError):
+        awaited.push(10, "x", moving=True, stream="joy")
+    for streams in ((), (TWIST, TWIST)):
+        with pytest.raises(ConfigError, match="streams"):
+            AwaitedTicks(FakeWatchdog(), streams=streams)
+
+
+@given(
+    gaps=st.lists(st.integers(1, 40), min_size=1, max_size=40),
+    leads=st.lists(st.integers(0, 60), min_size=40, max_size=40),
+    interleave=st.lists(st.booleans(), min_size=80, max_size=80),
+    period=st.integers(1, 30),
+)
+def test_two_streams_every_served_tick_has_the_newest_command_of_each_stamped_before_it(
+    gaps, leads, interleave, period
+):
+    """One operator publishes a twist and a force setpoint per sample, each on its own topic:
+    each topic's messages arrive in stamp order, but how the two topics interleave is drawn at
+    random (one may run samples ahead of the other). Once each stream has a command (stamped
+    0 here, before the first tick: a stream that has sent nothing is not waited for), each
+    served tick gets, on both streams, the newest command stamped at or before it, whatever
+    the arrivals."""
+    stamps = [int(stamp) for stamp in np.cumsum(gaps)]
+    # the instant of the operator's clock each sample goes out at, in stamp order
+    published = np.maximum.accumulate(
+        [stamp - lead for stamp, lead in zip(stamps, leads, strict=False)]
+    ).tolist()
+    pending = {TWIST: list(zip(published, stamps, strict=True)), FORCE: []}
+    pending[FORCE] = list(pending[TWIST])
+    arrivals = []  # (published at, stream, stamp), in the order they reach the controller
+    for twist_next in interleave:
+        stream = TWIST if twist_next else FORCE
+        if not pending[stream]:
+            stream = FORCE if stream == TWIST else TWIST
+        if pending[stream]:
+            arrivals.append((pending[stream][0][0], stream, pending[stream].pop(0)[1]))
+    arrivals += [
+        (when, stream, stamp) for stream in (TWIST, FORCE) for when, stamp in pending[stream]
+    ]
+    awaited = AwaitedTicks(FakeWatchdog(), streams=(TWIST, FORCE))
+    for stream in (TWIST, FORCE):
+        awaited.push(0, (stream, 0), moving=True, stream=stream)
+    stamps.insert(0, 0)
+    served: list[ServedTick] = []
+    k = 0
+
+    def deliver() -> None:
+        nonlocal k
+        _, stream, stamp = arrivals[k]
+        served.extend(awaited.push(stamp, (stream, stamp), moving=True, stream=stream))
+        k += 1
+
+    ticks = list(range(0, stamps[-1] + 2 * period, period))
+    for tick in ticks:
+        while k < len(arrivals) and arrivals[k][0] <= tick:
+            deliver()  # what the operator published before the clock reached the tick
+        served.extend(awaited.tick(tick))
+        while awaited.oldest_waiting is not None:  # the tick waits: messages still come in
+            if k == len(arrivals):
+                served.extend(awaited.give_up())  # the streams ended (the watchdog's alarm)
+                break
+            deliver()
+    assert [tick.instant for tick in served] == ticks
+    in_force = {TWIST: None, FORCE: None}
+    for tick in served:
+        for stream, stamp in tick.commands:
+            in_force[stream] = stamp
+        expected = max((stamp for stamp in stamps if stamp <= tick.instant), default=None)
+        assert in_force == {TWIST: expected, FORCE: expected}
 
 
 # --- CommandSchedule: twists stamped ahead, released at their stamps -------------------------

@@ -161,6 +161,7 @@ def test_config_files_load_through_rcl(ros):
             r"needs k_f < 1, got k_f = 5: .*diverges",
         ),
         (["-p", "task_axes:=[x, q]"], r"task_axes must be distinct names"),
+        (["-p", "await_commands:=true"], r"await_commands needs use_sim_time: true"),
     ],
 )
 def test_startup_errors_are_one_line_and_exit_2(args, pattern, tmp_path):

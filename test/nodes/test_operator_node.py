@@ -304,6 +304,60 @@ def test_motion_force_profile_integrates_to_the_reference_and_pushes_f_des_n(
     assert (len(twists), len(wrenches)) == counts
 
 
+def test_motion_force_with_lead_both_streams_go_out_ahead_the_setpoints_from_the_start(
+    ros, tmp_path
+):
+    """Under use_sim_time with ``lead`` (lockstep with rns_force_controller's
+    ``await_commands``): at each /clock instant c the operator publishes the sample of
+    c + lead, force setpoint and twist both stamped c + lead. From the start condition until the
+    profile starts only zero twists go out (a force setpoint would start the controller's force
+    task): the first force setpoint is stamped at the profile's start, max(start_delay, lead)
+    after the start condition, and from there every twist has its setpoint of the same stamp."""
+    path = tmp_path / "short_wall.yaml"
+    path.write_text(yaml.safe_dump({**SHORT_WALL, "stroke": 0.1, "force_ramp": 0.05}))
+    scenario = load_motion_force_scenario(path)
+    twists = ros.record(TwistStamped, "cmd_twist")
+    wrenches = ros.record(WrenchStamped, "force_setpoint")
+    operator = ros.add(
+        OperatorNode,
+        {
+            "scenario": str(path),
+            "rate": 500.0,
+            "start_delay": 0.01,
+            "zero_duration": 0.02,
+            "lead": 0.004,
+            "use_sim_time": True,
+        },
+    )
+    clock = ros.probe().create_publisher(Clock, "/clock", 10)
+    ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
+    ahead = []
+    for k in range(200):  # 500 Hz for 0.4 s of simulated time
+        t = 10.0 + 0.002 * k
+        count = len(twists)
+        clock.publish(Clock(clock=stamp_from_seconds(t)))
+        if ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0):
+            ahead.append(twists.stamps()[-1] - t)
+        if operator.finished:
+            break
+    assert operator.finished
+    ros.spin_for(0.1)
+    assert ahead == pytest.approx([0.004] * len(ahead), abs=1e-9)  # each sample a lead early
+    twist_times, force_times = _profile_times(twists, operator), _profile_times(wrenches, operator)
+    assert twist_times[0] == pytest.approx(-0.006, abs=1e-9)  # from the start condition on
+    assert np.all(twists.array(_linear)[twist_times < 0.0] == 0.0)  # zeros before the profile
+    assert force_times[0] == pytest.approx(0.0, abs=1e-9)  # the setpoints from the profile on
+    np.testing.assert_allclose(force_times, twist_times[twist_times >= -1e-9], atol=1e-9)
+    duration = scenario.duration
+    for tau, force in zip(force_times, wrenches.array(_force), strict=True):
+        sample = operator_sample(scenario.setup, min(max(tau, 0.0), duration))
+        np.testing.assert_allclose(force, sample.force_vector, atol=1e-12)
+    moving = twist_times[np.any(twists.array(_linear) != 0.0, axis=1)]
+    assert moving.size > 0
+    assert moving[0] > 0.0
+    assert moving[-1] < duration
+
+
 def test_motion_force_destroyed_mid_profile_sends_zero_twists_and_keeps_the_force(ros, tmp_path):
     path = tmp_path / "long_wall.yaml"
     path.write_text(yaml.safe_dump({**SHORT_WALL, "stroke": 30.0, "force_ramp": 0.2}))
@@ -339,6 +393,23 @@ def test_motion_force_waits_for_both_subscribers(ros, tmp_path):
     ros.record(TwistStamped, "cmd_twist")
     ros.spin_for(0.3)
     assert not operator.started  # no force_setpoint subscriber yet
+    ros.record(WrenchStamped, "force_setpoint")
+    assert ros.spin_until(lambda: operator.started, timeout=5.0)
+
+
+def test_motion_force_waits_for_min_subscribers_on_both_topics(ros, tmp_path):
+    """min_subscribers counts on force_setpoint too: a recorder of the task's first setpoint
+    matched late would miss it (best effort)."""
+    path = tmp_path / "wall.yaml"
+    path.write_text(yaml.safe_dump(SHORT_WALL))
+    operator = ros.add(
+        OperatorNode, {"scenario": str(path), "start_delay": 0.0, "min_subscribers": 2}
+    )
+    ros.record(TwistStamped, "cmd_twist")
+    ros.record(TwistStamped, "cmd_twist")
+    ros.record(WrenchStamped, "force_setpoint")
+    ros.spin_for(0.3)
+    assert not operator.started  # one force_setpoint subscriber of two
     ros.record(WrenchStamped, "force_setpoint")
     assert ros.spin_until(lambda: operator.started, timeout=5.0)
 

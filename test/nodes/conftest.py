@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 
 import pytest
@@ -10,11 +11,27 @@ import pytest
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", "43")
 
+from rns_ros.cli import DOMAIN_ID_RANGE
 from rns_ros.harness import Harness
+
+#: Consecutive tests run on DOMAINS different domains from ROS_DOMAIN_ID on: whatever a test
+#: leaves behind a while (a process still exiting, a message still in flight) is not on the
+#: next tests' domain.
+DOMAINS = 8
+_tests = itertools.count()
+
+
+def _test_domain(base: int, k: int) -> int:
+    """The domain of the ``k``-th test: ``base`` + k mod DOMAINS, below the range's top."""
+    offset = k % DOMAINS
+    return base + offset if base + DOMAINS - 1 <= DOMAIN_ID_RANGE[1] else base - offset
 
 
 @pytest.fixture
-def ros():
-    """A :class:`rns_ros.harness.Harness`; every node added is destroyed at teardown."""
-    with Harness() as harness:
+def ros(monkeypatch):
+    """A :class:`rns_ros.harness.Harness` on this test's domain (also ROS_DOMAIN_ID of the
+    processes the test starts); every node added is destroyed at teardown."""
+    domain = _test_domain(int(os.environ["ROS_DOMAIN_ID"]), next(_tests))
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
+    with Harness(domain) as harness:
         yield harness

@@ -166,7 +166,12 @@ def test_connect_streams_to_a_running_rerun_server(robot, tmp_path):
         time.sleep(0.5)
     finally:
         server.send_signal(signal.SIGINT)  # the server writes what it received and exits
-        server.wait(timeout=60.0)
+        try:
+            server.wait(timeout=60.0)
+        finally:
+            if server.poll() is None:  # never left running past the test
+                server.kill()
+                server.wait()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # an interrupted `rerun --save` writes no footer
         summary = recording_summary(received)

@@ -59,8 +59,10 @@ from rns_ros.core.errors import ConfigError
 DISCOVERY_RANGE = "LOCALHOST"
 #: Executors a :class:`Harness` can spin its nodes on.
 EXECUTORS = ("single_threaded", "events")
-#: Recording QoS: best effort matches reliable and best-effort publishers alike.
-RECORD_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: Recording QoS: best effort matches reliable and best-effort publishers alike; the history
+#: keeps what arrives while this process waits for a core (10 000 messages: 20 s of a 500 Hz
+#: stream), so a stalled recorder misses nothing.
+RECORD_QOS = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
 def ros_environment(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:

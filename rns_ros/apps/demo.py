@@ -39,6 +39,7 @@ from rns_ros.runs.inspection import (
     run_method,
 )
 from rns_ros.runs.ptp import PTP_METHODS, PTP_SCENARIOS, PtpScenario, run_ptp_method
+from rns_ros.runs.recorded import PartialRecordingError
 from rns_ros.runs.report import (
     contact_summary,
     format_contact_table,
@@ -50,6 +51,8 @@ from rns_ros.runs.report import (
 )
 
 ETS_VII_ALLOWED_DEVIATION_DEG = 0.05  # thesis chapter 4, footnote 1
+#: Runs again of a method whose recording came out partial (the run in lockstep is repeatable).
+PARTIAL_RETRIES = 2
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -230,16 +233,30 @@ def _main_inspection(args: argparse.Namespace) -> int:
 
 def _run_methods(args: argparse.Namespace, run: Callable, label: str = "") -> list | None:
     """``run(method)`` for each of ``--methods`` in turn, announced (``label`` after the method);
-    None, the error on stderr, when one fails."""
+    a run whose recording came out partial is run again (up to PARTIAL_RETRIES times); None,
+    the error on stderr, when one fails."""
     rows = []
     try:
         for method in args.methods:
             print(f"running {method}{label} ...", flush=True)
-            rows.append(run(method))
+            rows.append(_run_complete(run, method))
     except RnsError as exc:
         print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return None
     return rows
+
+
+def _run_complete(run: Callable, method: str):
+    """``run(method)``, again after a :class:`PartialRecordingError` (at most PARTIAL_RETRIES)."""
+    retries = 0
+    while True:
+        try:
+            return run(method)
+        except PartialRecordingError as exc:
+            retries += 1
+            if retries > PARTIAL_RETRIES:
+                raise
+            print(f"  {one_line(exc)}: running {method} again", flush=True)
 
 
 def _report(args, rows, table: str, problems: list[str], epilogue: str, summary: list) -> int:

@@ -33,7 +33,13 @@ from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import start_logger
-from rns_ros.runs.recorded import EnergyFigures, energy_figures, robot_arrays
+from rns_ros.runs.recorded import (
+    EnergyFigures,
+    PartialRecordingError,
+    energy_figures,
+    missed_samples,
+    robot_arrays,
+)
 
 #: ``conventional+wheels``: the conventional controller with rns_attitude_control holding the
 #: base with reaction wheels (thesis chapter 5's comparison); the simulator gets wheels.
@@ -156,6 +162,7 @@ def run_method(
                 f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
                 f"the operator's profile started at {task:.3f} s"
             )
+        _check_complete(data, method, sim_time)
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
@@ -331,6 +338,24 @@ def _moving(twist: TwistStamped | None) -> bool:
         return False
     w = twist.twist.angular
     return (w.x, w.y, w.z) != (0.0, 0.0, 0.0)
+
+
+def _check_complete(data: dict[str, np.ndarray], method: str, sim_time: bool) -> None:
+    """Figures only from a complete recording: this process missed no robot state in the task
+    (nor, on simulated time, where the operator's stamps are on a fixed grid, any twist).
+
+    Raises:
+        PartialRecordingError: samples are missing: the figures would come from a part of the run.
+    """
+    missing = [(missed_samples(data["times"]), "robot states")]
+    if sim_time:
+        missing.append((missed_samples(data["command_times"]), "cmd_twist samples"))
+    lost = [f"{count} {what}" for count, what in missing if count]
+    if lost:
+        raise PartialRecordingError(
+            f"{method}: this process missed {' and '.join(lost)} of the task (it waited for a "
+            "core longer than DDS holds them); no figures from a partial recording"
+        )
 
 
 def profile_start(commands: TopicLog, scenario: Scenario, rate: float) -> float:

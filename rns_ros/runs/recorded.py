@@ -100,6 +100,26 @@ def robot_arrays(
     }
 
 
+class PartialRecordingError(RnsError):
+    """A run's recording misses samples: this process waited for a core longer than DDS held
+    them. In lockstep the run itself is complete and repeatable, so it can be run again."""
+
+
+def missed_samples(stamps: np.ndarray) -> int:
+    """How many samples of a periodic stream are missing between ``stamps`` [s], shape (k,),
+    increasing: a gap of more than 1.5 periods (the median spacing) misses round(gap / period)
+    - 1 of them. 0 for fewer than three stamps."""
+    stamps = np.asarray(stamps, dtype=float)
+    if len(stamps) < 3:
+        return 0
+    gaps = np.diff(stamps)
+    period = float(np.median(gaps))
+    if not period > 0.0:
+        return 0
+    long = gaps[gaps > 1.5 * period]
+    return int(np.sum(np.round(long / period) - 1))
+
+
 def _within(log: TopicLog, since: float, until: float) -> TopicLog:
     """``log`` without the messages stamped after ``until`` or before ``since`` [s] (messages
     without a header are kept)."""

@@ -297,3 +297,26 @@ def test_bad_runs_are_rejected(argv, capsys):
         main([*argv, "--no-record", "--domain-id", DOMAIN])
     assert exit_info.value.code == 2
     assert "--runs" in capsys.readouterr().err
+
+
+def test_a_method_whose_recording_came_out_partial_is_run_again(capsys):
+    """In lockstep a run is repeatable: a partial recording (this process stalled) runs that
+    method again, up to PARTIAL_RETRIES times, then fails with the reason."""
+    from rns_ros.apps import demo
+    from rns_ros.runs.recorded import PartialRecordingError
+
+    calls = []
+
+    def flaky(method, fails):
+        calls.append(method)
+        if len(calls) <= fails:
+            raise PartialRecordingError(f"{method}: this process missed 2 robot states")
+        return method
+
+    assert demo._run_complete(lambda m: flaky(m, 1), "dls") == "dls"
+    assert calls == ["dls", "dls"]
+    assert "missed 2 robot states: running dls again" in capsys.readouterr().out
+    calls.clear()
+    with pytest.raises(PartialRecordingError):
+        demo._run_complete(lambda m: flaky(m, demo.PARTIAL_RETRIES + 1), "sc")
+    assert len(calls) == demo.PARTIAL_RETRIES + 1

@@ -46,3 +46,24 @@ def test_a_profile_that_starts_moving_starts_at_its_first_twist(tmp_path):
     assert profile_start(log, load_scenario(path), 50.0) == pytest.approx(3.0, abs=1e-9)
     with pytest.raises(RnsError, match="asks for motion"):
         profile_start(_twists([(3.0, 0.0)]), load_scenario(path), 50.0)
+
+
+def test_a_partial_recording_is_an_error_naming_what_was_missed():
+    """Figures never come from a recording with holes: robot states always, and on simulated
+    time the operator's twists (on their fixed grid) too."""
+    import numpy as np
+
+    from rns_ros.runs.inspection import _check_complete
+    from rns_ros.runs.recorded import PartialRecordingError
+
+    times = 0.01 * np.arange(300)
+    commands = 0.002 * np.arange(1500)
+    _check_complete({"times": times, "command_times": commands}, "dls", sim_time=True)
+    with pytest.raises(PartialRecordingError, match=r"dls: this process missed 3 robot states"):
+        _check_complete(
+            {"times": np.delete(times, [7, 8, 9]), "command_times": commands}, "dls", True
+        )
+    holes = {"times": times, "command_times": np.delete(commands, [100])}
+    with pytest.raises(PartialRecordingError, match=r"missed 1 cmd_twist samples"):
+        _check_complete(holes, "sc", sim_time=True)
+    _check_complete(holes, "sc", sim_time=False)  # wall-clock twists jitter: not checked

@@ -34,3 +34,26 @@ def test_figures_cover_the_run_up_to_the_settling_time_on_the_stamps_clock():
     assert len(data["times"]) == len(data["angular_momentum"]) == 51
     assert data["command_times"].max() <= 0.5
     assert len(robot_arrays(logs)["times"]) == 100
+
+
+@pytest.mark.parametrize(
+    ("dropped", "missed"), [((), 0), ((5,), 1), ((5, 6, 7), 3), ((5, 9), 2), ((1, 98), 2)]
+)
+def test_missed_samples_counts_the_holes_in_a_periodic_stream(dropped, missed):
+    """A 500 Hz grid of stamps with the samples ``dropped`` (indices) taken out."""
+    from rns_ros.runs.recorded import missed_samples
+
+    stamps = [100.0 + 0.002 * k for k in range(100) if k not in dropped]
+    assert missed_samples(stamps) == missed
+
+
+def test_missed_samples_reads_a_jittered_stream_as_complete():
+    """Spacings within 1.5 periods are no hole (stamps off their grid by up to 20 %)."""
+    import numpy as np
+
+    from rns_ros.runs.recorded import missed_samples
+
+    rng = np.random.default_rng(0)
+    stamps = 0.01 * np.arange(200) + rng.uniform(-0.002, 0.002, 200)
+    assert missed_samples(stamps) == 0
+    assert missed_samples(np.delete(stamps, [50, 51])) == 2

@@ -61,6 +61,48 @@ def _stack(ros, simulator=None, **ptp_overrides):
     )
 
 
+#: rns_simulator in lockstep on simulated time: it publishes /clock and pauses one PERIOD of
+#: simulated time past rns_ptp's newest command, so each command acts for one period however late
+#: a loaded machine runs rns_ptp (up to 3x real time while the machine keeps up).
+LOCKSTEP = {"publish_clock": True, "real_time_factor": 3.0, "lockstep_period": 0.01}
+#: rns_ptp's playback period at its default rate, and the lockstep period [s].
+PERIOD = 0.01
+
+
+def _lockstep_stack(ros, simulator=None, **ptp_overrides):
+    """:func:`_stack` in lockstep on simulated time. rns_ptp's /clock watch at a hang-sized
+    clock_timeout: a simulation paused for a late rns_ptp is not a dead one."""
+    ptp_overrides.setdefault("clock_timeout", 30.0)
+    return _stack(
+        ros, simulator={**LOCKSTEP, **(simulator or {})}, use_sim_time=True, **ptp_overrides
+    )
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
+def _first_stamp(stack, state: str) -> float:
+    """The stamp [s] of the first status in ``state``: the tick that reached it."""
+    return next(
+        _seconds(m.header.stamp)
+        for m in stack.status.messages
+        if status_values(m)["state"] == state
+    )
+
+
+def _state_after(ros, stack, stamp: float) -> np.ndarray:
+    """The joint angles [rad] of the first joint state stamped one PERIOD after ``stamp`` [s] or
+    later (lockstep): the command of the tick at ``stamp`` has acted for its whole period."""
+
+    def arrived() -> bool:
+        joints = stack.joints.messages
+        return bool(joints) and _seconds(joints[-1].header.stamp) >= stamp + PERIOD - 1e-6
+
+    assert ros.spin_until(arrived, timeout=30.0)
+    return np.array(stack.joints.messages[-1].position)
+
+
 def _state(stack) -> str | None:
     return status_values(stack.status.messages[-1])["state"] if stack.status.messages else None
 
@@ -79,17 +121,18 @@ def _odom_rotation(msg: Odometry) -> np.ndarray:
 
 
 def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
-    stack = _stack(ros, method="joint_space", duration=2.0)
+    """Lockstep on simulated time: the playback over DDS holds each command for one period, as
+    the core run does, so the base's turn matches it on however loaded a machine."""
+    stack = _lockstep_stack(ros, method="joint_space", duration=2.0)
     _ready(ros, stack)
     goal = START + SMALL_STEP
     _send(stack, reversed(JOINTS), goal[::-1])  # matched by name, not by order
-    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
+    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=10.0)
     moving = status_values(stack.status.messages[-1])
     assert moving["method"] == "joint_space"
     assert moving["phase"] == "JS-C"
-    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
-    ros.spin_for(0.3)
-    final = np.array(stack.joints.messages[-1].position)
+    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=30.0)
+    final = _state_after(ros, stack, _first_stamp(stack, "DONE"))
     error = np.degrees(np.abs(final - goal)).max()
     print(f"final joint error {error:.2e} deg")
     assert error < 0.1
@@ -199,31 +242,51 @@ def test_bad_goals_are_rejected_and_nothing_moves(ros, names, positions, message
 
 
 def test_cancel_decelerates_to_rest_without_a_velocity_jump(ros):
-    stack = _stack(ros, method="joint_space", duration=3.0, cancel_deceleration=2.0)
+    """Lockstep on simulated time: the playback rate ramps down by cancel_deceleration * PERIOD
+    per simulated period, which is what the steps between commands are compared with."""
+    deceleration = 2.0
+    stack = _lockstep_stack(
+        ros, method="joint_space", duration=3.0, cancel_deceleration=deceleration
+    )
     _ready(ros, stack)
     _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
-    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=5.0)
-    ros.spin_for(1.2)  # around the middle of the quintic: fastest
+    references = stack.references.messages
+
+    def played(duration: float) -> bool:
+        """The plan has played ``duration`` [s] of simulated time."""
+        return bool(references) and (
+            _seconds(references[-1].header.stamp) - _seconds(references[0].header.stamp) >= duration
+        )
+
+    assert ros.spin_until(lambda: played(1.2), timeout=30.0)  # mid-quintic: fastest
     client = stack.probe.create_client(Trigger, "rns_ptp/cancel")
-    assert client.wait_for_service(timeout_sec=5.0)
-    before = len(stack.references.messages)
+    assert client.wait_for_service(timeout_sec=10.0)
+    before = len(references)
     future = client.call_async(Trigger.Request())
-    assert ros.spin_until(future.done, timeout=5.0)
+    assert ros.spin_until(future.done, timeout=30.0)
     assert future.result().success
-    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=3.0)
-    ros.spin_for(0.2)
+    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=30.0)
     seen = [status_values(m)["state"] for m in stack.status.messages]
     assert "CANCELLING" in seen
-    velocities = np.array([m.points[0].velocities for m in stack.references.messages])
+    velocities = np.array([m.points[0].velocities for m in references])
+    stamps = np.array([_seconds(m.header.stamp) for m in references])
     assert np.all(velocities[-1] == 0.0)
     speed = np.abs(velocities[before - 1]).max()
     assert speed > 0.01
-    steps = np.abs(np.diff(velocities[before - 5 :], axis=0)).max(axis=1)
-    # rate falls by 2/s * 10 ms = 2 % per tick (plus the plan's own change, and late ticks): no jump
-    print(f"speed at cancel {speed:.3f} rad/s, largest step {steps.max():.2e} rad/s per tick")
+    periods = np.diff(stamps[before - 5 :]) / PERIOD
+    assert np.all(periods > 0.5)  # one command per tick
+    steps = np.abs(np.diff(velocities[before - 5 :], axis=0)).max(axis=1) / periods
+    # the rate falls by 2/s * 10 ms = 2 % of the speed per period (plus the plan's own change):
+    # no jump
+    print(
+        f"speed at cancel {speed:.3f} rad/s, largest step {steps.max():.2e} rad/s per "
+        f"simulated period ({periods.min():.3g}-{periods.max():.3g} periods apart)"
+    )
     assert steps.max() < 0.1 * speed
-    stopped_after = len(stack.references.messages) - before
-    assert stopped_after < 0.5 / 0.01 + 10  # 1 / cancel_deceleration plus slack
+    # at rest 1 / cancel_deceleration after the first decelerating tick (simulated time)
+    stopping = stamps[-1] - _first_stamp(stack, "CANCELLING")
+    print(f"at rest {stopping:.3f} s after the cancel (1 / cancel_deceleration)")
+    assert abs(stopping - 1.0 / deceleration) <= 2 * PERIOD
 
 
 def test_stale_state_stops_the_arm_and_abandons_the_plan(ros):

@@ -15,9 +15,9 @@ from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rns_testing import Recorder, SimClock, status_values
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
+from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
-from trajectory_msgs.msg import JointTrajectory
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.analysis.ptp_runs import run_plan
 from rns_ros.control.ptp_planner import plan_ptp
@@ -47,6 +47,7 @@ def _node(ros, cls, **overrides):
 
 
 def _stack(ros, simulator=None, **ptp_overrides):
+    """rns_ptp driving rns_simulator on the wall clock."""
     _node(ros, SimulatorNode, **(simulator or {}))
     ptp = _node(ros, PtpNode, **ptp_overrides)
     probe = ros.probe()
@@ -58,24 +59,115 @@ def _stack(ros, simulator=None, **ptp_overrides):
         status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
         joints=Recorder(probe, JointState, "joint_states"),
         odom=Recorder(probe, Odometry, "base_odom"),
+        run_until=ros.spin_until,
     )
 
 
-#: rns_simulator in lockstep on simulated time: it publishes /clock and pauses one PERIOD of
-#: simulated time past rns_ptp's newest command, so each command acts for one period however late
-#: a loaded machine runs rns_ptp (up to 3x real time while the machine keeps up).
-LOCKSTEP = {"publish_clock": True, "real_time_factor": 3.0, "lockstep_period": 0.01}
+#: rns_simulator in lockstep on simulated time, as fast as the machine runs it: it publishes
+#: /clock and pauses one period past each command it is given.
+LOCKSTEP = {"publish_clock": True, "real_time_factor": 0.0, "lockstep_period": 0.01}
 #: rns_ptp's playback period at its default rate, and the lockstep period [s].
 PERIOD = 0.01
 
 
-def _lockstep_stack(ros, simulator=None, **ptp_overrides):
-    """:func:`_stack` in lockstep on simulated time. rns_ptp's /clock watch at a hang-sized
-    clock_timeout: a simulation paused for a late rns_ptp is not a dead one."""
-    ptp_overrides.setdefault("clock_timeout", 30.0)
-    return _stack(
-        ros, simulator={**LOCKSTEP, **(simulator or {})}, use_sim_time=True, **ptp_overrides
-    )
+class _Lockstep:
+    """rns_ptp (use_sim_time) driving rns_simulator (LOCKSTEP) with the test in between:
+    rns_simulator takes its commands on lockstep/<topic>, and the test answers the state at t
+    it pauses at once rns_ptp's tick at t is over, with that tick's command or, while rns_ptp
+    commands nothing (idle, planning), with zero velocity (what rns_ptp's last command, a stop,
+    held).
+
+    So rns_ptp ticks at every /clock and each command acts for exactly one period from its tick,
+    from the first state on, however late a loaded machine runs either node. (On its own a
+    lockstep rns_simulator runs in real time until its first command, and an rns_ptp that lags
+    behind it starts its plan on ticks several periods apart.)
+
+    Attributes as :func:`_stack`'s; ``commands`` records rns_ptp's output (``references`` too on
+    the trajectory interface); :meth:`run_until` steps the loop.
+    """
+
+    def __init__(self, ros, simulator=None, **ptp_overrides) -> None:
+        simulator = {**LOCKSTEP, **(simulator or {})}
+        self.velocity = simulator.get("command_interface") == "velocity"
+        topic, msg_type = (
+            ("joint_velocities", Float64MultiArray)
+            if self.velocity
+            else ("joint_references", JointTrajectory)
+        )
+        self.simulator = ros.add(SimulatorNode, simulator, remappings={topic: f"lockstep/{topic}"})
+        # a simulation paused for a late rns_ptp is not a dead one: /clock watch hang-sized
+        ptp_overrides.setdefault("clock_timeout", 30.0)
+        self.ptp = _node(ros, PtpNode, use_sim_time=True, **ptp_overrides)
+        self.ros = ros
+        self.probe = probe = ros.probe()
+        self.goal = probe.create_publisher(JointState, "ptp_goal", 10)
+        self.commands = Recorder(probe, msg_type, topic)
+        self.references = self.commands
+        self.status = Recorder(probe, DiagnosticArray, "rns_ptp/status")
+        self.joints = Recorder(probe, JointState, "joint_states")
+        self.odom = Recorder(probe, Odometry, "base_odom")
+        self._relay = probe.create_publisher(msg_type, f"lockstep/{topic}", 10)
+        assert ros.spin_until(lambda: self._relay.get_subscription_count() > 0, timeout=10.0)
+        self._answered = -math.inf  # stamp of the last state answered [s]
+        self._forwarded = 0  # rns_ptp commands forwarded
+        self._moving = False  # the last command forwarded has non-zero velocities
+
+    def step(self) -> None:
+        """Answer the next state (each wait up to 30 s: a hang guard)."""
+        joints, status, commands = self.joints.messages, self.status.messages, self.commands
+
+        def paused_state() -> bool:
+            """A state after the last one answered, at which the simulation stands (paused):
+            answered while it runs on, it would anchor the command at a later period. The first
+            answer starts the lockstep wherever the free run is."""
+            if not joints:
+                return False
+            t = _seconds(joints[-1].header.stamp)
+            if t <= self._answered + 1e-6:
+                return False
+            return self._answered == -math.inf or abs(self.simulator.simulator.time - t) < 1e-6
+
+        assert self.ros.spin_until(paused_state, timeout=30.0)
+        state = joints[-1]
+        t = _seconds(state.header.stamp)
+
+        def ticked() -> bool:
+            """rns_ptp's tick at t is over, its command (if any) here: a playing tick commands,
+            and so does the one after a moving command (the stop, at the end or a new goal)."""
+            if not status or _seconds(status[-1].header.stamp) < t - 1e-6:
+                return False
+            playing = _state(self) in ("MOVING", "CANCELLING")
+            return len(commands.messages) > self._forwarded or not (playing or self._moving)
+
+        assert self.ros.spin_until(ticked, timeout=30.0), f"no rns_ptp tick at t = {t:.2f} s"
+        if len(commands.messages) > self._forwarded:
+            command = commands.messages[-1]
+            self._forwarded = len(commands.messages)
+        elif self.velocity:
+            command = Float64MultiArray(data=[0.0] * len(JOINTS))
+        else:
+            zero = JointTrajectoryPoint(velocities=[0.0] * len(JOINTS))
+            command = JointTrajectory(joint_names=JOINTS, points=[zero])
+        if self.velocity:
+            velocities = command.data
+        else:
+            # acts from this state on (a stop for a new goal carries the stamp it was sent at)
+            command = JointTrajectory(
+                header=Header(stamp=state.header.stamp),
+                joint_names=command.joint_names,
+                points=command.points,
+            )
+            velocities = command.points[0].velocities
+        self._moving = bool(np.any(np.asarray(velocities) != 0.0))
+        self._relay.publish(command)
+        self._answered = t
+
+    def run_until(self, condition, timeout: float = 30.0) -> bool:
+        """Step until ``condition()`` holds or ``timeout`` [s] of wall time passes."""
+        deadline = time.monotonic() + timeout
+        while not condition() and time.monotonic() < deadline:
+            self.step()
+        return bool(condition())
 
 
 def _seconds(stamp) -> float:
@@ -91,15 +183,15 @@ def _first_stamp(stack, state: str) -> float:
     )
 
 
-def _state_after(ros, stack, stamp: float) -> np.ndarray:
-    """The joint angles [rad] of the first joint state stamped one PERIOD after ``stamp`` [s] or
-    later (lockstep): the command of the tick at ``stamp`` has acted for its whole period."""
+def _state_after(stack, stamp: float) -> np.ndarray:
+    """The joint angles [rad] of the first joint state stamped one PERIOD after ``stamp`` [s]
+    (lockstep): the command of the tick at ``stamp`` has acted for its whole period."""
 
     def arrived() -> bool:
         joints = stack.joints.messages
         return bool(joints) and _seconds(joints[-1].header.stamp) >= stamp + PERIOD - 1e-6
 
-    assert ros.spin_until(arrived, timeout=30.0)
+    assert stack.run_until(arrived)
     return np.array(stack.joints.messages[-1].position)
 
 
@@ -108,7 +200,8 @@ def _state(stack) -> str | None:
 
 
 def _ready(ros, stack):
-    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=10.0)
+    run_until = getattr(stack, "run_until", ros.spin_until)  # a _Lockstep steps its loop
+    assert run_until(lambda: _state(stack) == "IDLE", timeout=10.0)
 
 
 def _send(stack, names, positions):
@@ -121,18 +214,18 @@ def _odom_rotation(msg: Odometry) -> np.ndarray:
 
 
 def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
-    """Lockstep on simulated time: the playback over DDS holds each command for one period, as
-    the core run does, so the base's turn matches it on however loaded a machine."""
-    stack = _lockstep_stack(ros, method="joint_space", duration=2.0)
+    """In lockstep on simulated time: each command over DDS acts for one period, as in the core
+    run, so the base turns as there on however loaded a machine."""
+    stack = _Lockstep(ros, method="joint_space", duration=2.0)
     _ready(ros, stack)
     goal = START + SMALL_STEP
     _send(stack, reversed(JOINTS), goal[::-1])  # matched by name, not by order
-    assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=10.0)
+    assert stack.run_until(lambda: _state(stack) == "MOVING")
     moving = status_values(stack.status.messages[-1])
     assert moving["method"] == "joint_space"
     assert moving["phase"] == "JS-C"
-    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=30.0)
-    final = _state_after(ros, stack, _first_stamp(stack, "DONE"))
+    assert stack.run_until(lambda: _state(stack) == "DONE")
+    final = _state_after(stack, _first_stamp(stack, "DONE"))
     error = np.degrees(np.abs(final - goal)).max()
     print(f"final joint error {error:.2e} deg")
     assert error < 0.1
@@ -150,15 +243,16 @@ def test_joint_space_goal_is_reached_and_the_base_turns_as_in_the_core_run(ros):
 
 
 def test_a_partial_goal_keeps_the_other_joints(ros):
-    stack = _stack(ros, method="joint_space", duration=1.0)
+    stack = _Lockstep(ros, method="joint_space", duration=1.0)  # open loop: in lockstep
     _ready(ros, stack)
     _send(stack, ["joint_4"], [START[3] + math.radians(3.0)])
-    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=10.0)
-    ros.spin_for(0.2)
-    final = np.array(stack.joints.messages[-1].position)
+    assert stack.run_until(lambda: _state(stack) == "DONE")
+    final = _state_after(stack, _first_stamp(stack, "DONE"))
     expected = START.copy()
     expected[3] += math.radians(3.0)
-    assert np.degrees(np.abs(final - expected)).max() < 0.1
+    error = np.degrees(np.abs(final - expected)).max()
+    print(f"partial goal: final joint error {error:.2e} deg")
+    assert error < 0.1
 
 
 def test_three_phase_goal_is_reached_under_sim_time(ros):
@@ -245,9 +339,7 @@ def test_cancel_decelerates_to_rest_without_a_velocity_jump(ros):
     """Lockstep on simulated time: the playback rate ramps down by cancel_deceleration * PERIOD
     per simulated period, which is what the steps between commands are compared with."""
     deceleration = 2.0
-    stack = _lockstep_stack(
-        ros, method="joint_space", duration=3.0, cancel_deceleration=deceleration
-    )
+    stack = _Lockstep(ros, method="joint_space", duration=3.0, cancel_deceleration=deceleration)
     _ready(ros, stack)
     _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
     references = stack.references.messages
@@ -258,14 +350,14 @@ def test_cancel_decelerates_to_rest_without_a_velocity_jump(ros):
             _seconds(references[-1].header.stamp) - _seconds(references[0].header.stamp) >= duration
         )
 
-    assert ros.spin_until(lambda: played(1.2), timeout=30.0)  # mid-quintic: fastest
+    assert stack.run_until(lambda: played(1.2))  # mid-quintic: fastest
     client = stack.probe.create_client(Trigger, "rns_ptp/cancel")
     assert client.wait_for_service(timeout_sec=10.0)
     before = len(references)
     future = client.call_async(Trigger.Request())
-    assert ros.spin_until(future.done, timeout=30.0)
+    assert stack.run_until(future.done)
     assert future.result().success
-    assert ros.spin_until(lambda: _state(stack) == "IDLE", timeout=30.0)
+    assert stack.run_until(lambda: _state(stack) == "IDLE")
     seen = [status_values(m)["state"] for m in stack.status.messages]
     assert "CANCELLING" in seen
     velocities = np.array([m.points[0].velocities for m in references])
@@ -385,33 +477,25 @@ def test_deploy_goal_runs_the_reactionless_deployment(ros):
 
 def test_velocity_interface_and_a_planned_closed_loop_method(ros):
     """output_interface velocity (joints reversed at both ends) with inverse_jacobian, which is
-    integrated offline while the node reports PLANNING; the arm ends at the plan's goal."""
+    integrated offline while the node reports PLANNING; the arm ends at the plan's goal (open
+    loop: in lockstep on simulated time, each command anchored where it is received)."""
     order = list(reversed(JOINTS))
-    _node(ros, SimulatorNode, command_interface="velocity", joints=order)
-    ptp = _node(
+    stack = _Lockstep(
         ros,
-        PtpNode,
+        simulator={"command_interface": "velocity", "joints": order},
         method="inverse_jacobian",
         duration=2.0,
         output_interface="velocity",
         joints=order,
     )
-    probe = ros.probe()
-    stack = SimpleNamespace(
-        goal=probe.create_publisher(JointState, "ptp_goal", 10),
-        status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
-        joints=Recorder(probe, JointState, "joint_states"),
-        velocities=Recorder(probe, Float64MultiArray, "joint_velocities"),
-    )
     _ready(ros, stack)
     _send(stack, JOINTS, START + SMALL_STEP)
-    assert ros.spin_until(lambda: _state(stack) == "DONE", timeout=20.0)
-    ros.spin_for(0.3)
+    assert stack.run_until(lambda: _state(stack) == "DONE")
+    final = _state_after(stack, _first_stamp(stack, "DONE"))
     seen = {status_values(m)["state"] for m in stack.status.messages}
     assert {"PLANNING", "MOVING", "DONE"} <= seen
-    assert np.all(np.array(stack.velocities.messages[-1].data) == 0.0)
-    final = np.array(stack.joints.messages[-1].position)
-    error = np.degrees(np.abs(final - ptp.plan.goal)).max()
+    assert np.all(np.array(stack.commands.messages[-1].data) == 0.0)
+    error = np.degrees(np.abs(final - stack.ptp.plan.goal)).max()
     print(f"inverse_jacobian over the velocity interface: error {error:.2e} deg")
     assert error < 0.1
 

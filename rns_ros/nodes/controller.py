@@ -84,6 +84,7 @@ from rns_ros.nodes.controller_parameters import (
 from rns_ros.nodes.controller_status import (
     DIAGNOSTICS_PERIOD,
     InputPublishers,
+    JointLimitStop,
     StatusReporter,
     joint_limit_text,
     step_values,
@@ -165,6 +166,7 @@ class ControllerNode(Node):
         )
         self._output = self._joint_output.publisher  # destroy_node waits for its acks
         self._reporter = StatusReporter(self, self.robot.name)
+        self._limit_stop = JointLimitStop(self._period)
         self._sources = InputPublishers(self, self._topics, self._command_type)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -437,7 +439,7 @@ class ControllerNode(Node):
             return
         self._publish_output(step.reference_positions, velocities, tick, self._lead)
         self._reporter.report(
-            self._controller_state(step, gate, state),
+            self._controller_state(step, gate, state, self._period if hold is None else hold),
             gate.detail,
             lambda: step_values(self.controller.settings.method.value, step, gate),
         )
@@ -508,6 +510,7 @@ class ControllerNode(Node):
         None: now."""
         if self._reporter.last_state is not state:
             self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
+        self._limit_stop.end()
         self._gate.stop()
         self._stopped = True
         self._served = None
@@ -555,13 +558,16 @@ class ControllerNode(Node):
         return start.theta, hold
 
     def _controller_state(
-        self, step: ControllerStep, gate: GateOutput, state: FreeFloatingState
+        self, step: ControllerStep, gate: GateOutput, state: FreeFloatingState, hold: float
     ) -> ControllerState:
+        """The state of a served tick whose output is held ``hold`` [s]."""
         if gate.state not in (ControllerState.OK, ControllerState.RAMPING):
+            self._limit_stop.end()
             return gate.state
-        if step.output.position_limited:
-            if self._reporter.last_state is not ControllerState.JOINT_LIMIT:
-                self.get_logger().warn(joint_limit_text(self.robot, state.theta))  # on entering it
+        stopped, began = self._limit_stop.update(step.output.position_limited, hold)
+        if stopped:
+            if began:
+                self.get_logger().warn(joint_limit_text(self.robot, state.theta))
             return ControllerState.JOINT_LIMIT
         if step.output.sigma_min < self.controller.settings.gains.epsilon:
             return ControllerState.SINGULAR_REGION

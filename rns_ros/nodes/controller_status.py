@@ -63,6 +63,48 @@ def joint_limit_text(robot: FreeFloatingModel, theta: np.ndarray) -> str:
     )
 
 
+class JointLimitStop:
+    """Whether the served outputs are in a joint-limit stop, judged over their holds.
+
+    A stop begins with an output that a position limit scaled (the node warns then, once) and
+    lasts until the outputs have run free of the limits for one control period of hold time,
+    or until :meth:`end` (another state took over: the command ended, a fault). A late tick
+    is followed by one on the timer's grid, so its output is held for a fraction of the period;
+    over so short a hold the limit may not bind although the operator still pushes into it,
+    and that is the same stop going on, not its end and a new one.
+
+    Args:
+        period: control period T [s], > 0.
+    """
+
+    def __init__(self, period: float) -> None:
+        self._period = period
+        # [s] of hold since the newest limited output, or None outside a stop
+        self._free: float | None = None
+
+    def update(self, limited: bool, hold: float) -> tuple[bool, bool]:
+        """One served output held ``hold`` [s]; ``limited``: a position limit scaled it.
+
+        Returns:
+            (in a stop, the stop begins with this output).
+        """
+        if limited:
+            began = self._free is None
+            self._free = 0.0
+            return True, began
+        if self._free is None:
+            return False, False
+        self._free += hold
+        if self._free < self._period:
+            return True, False
+        self._free = None
+        return False, False
+
+    def end(self) -> None:
+        """Another state than the limit's was reported: a stop after it is a new one."""
+        self._free = None
+
+
 class StatusReporter:
     """The newest status of ``node``: published on ~/status to a subscriber at each report, and
     on /diagnostics by :meth:`publish_diagnostics` (hardware_id = ``hardware_id``).

@@ -8,7 +8,12 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rns_ros.control.controller import ControllerSettings, ReactionlessController, TwistFrame
 from rns_ros.control.teleop import ControllerState, GateOutput
 from rns_ros.core import FreeFloatingState, load_model
-from rns_ros.nodes.controller_status import STATE_LEVELS, joint_limit_text, step_values
+from rns_ros.nodes.controller_status import (
+    STATE_LEVELS,
+    JointLimitStop,
+    joint_limit_text,
+    step_values,
+)
 from rns_ros.resources import default_model_config
 
 ROBOT = load_model(default_model_config())
@@ -49,3 +54,28 @@ def test_the_joint_limit_text_names_the_joint_nearest_its_limit():
     text = joint_limit_text(ROBOT, theta)
     assert text.startswith(f"JOINT_LIMIT: {ROBOT.joint_names[6]} at ")
     assert "0.0001 rad from its limit" in text
+
+
+def test_a_joint_limit_stop_goes_on_through_a_short_hold_free_of_the_limit():
+    """A late tick's output, held for a fraction of the period, may not reach the limit: the
+    stop goes on (no second warning); a period free of it ends the stop."""
+    period = 0.01
+    stop = JointLimitStop(period)
+    assert stop.update(False, period) == (False, False)
+    assert stop.update(True, period) == (True, True)  # the stop begins: warned once
+    assert stop.update(True, 0.0045) == (True, False)
+    assert stop.update(False, 0.0005) == (True, False)  # a late tick's short hold
+    assert stop.update(False, 0.0045) == (True, False)  # 5 ms free in all
+    assert stop.update(True, period) == (True, False)  # the same stop
+    assert stop.update(False, 0.006) == (True, False)
+    assert stop.update(False, 0.006) == (False, False)  # 12 ms free: over
+    assert stop.update(True, period) == (True, True)  # a new stop
+
+
+def test_a_joint_limit_stop_ends_with_another_state():
+    period = 0.01
+    stop = JointLimitStop(period)
+    assert stop.update(True, period) == (True, True)
+    stop.end()  # the command ended, a fault
+    assert stop.update(True, period) == (True, True)
+    assert stop.update(False, period) == (False, False)  # a full period free at once

@@ -35,6 +35,8 @@ START = np.radians([20.0, -20.0, 0.0, 100.0, 0.0, 10.0, 0.0])
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 ZERO7 = np.zeros(7)
 PUSH = np.array([0.0, 0.0, 3.0])  # the wrench the EE exerts, EE axes [N]
+#: Wall-clock bound [s] of a wait that only a hang exceeds.
+HANG_TIMEOUT = 30.0
 
 
 class _Arm:
@@ -213,6 +215,15 @@ class _SimArm(_Arm):
             self.sent += 1
         self.ros.spin_for(0.01)
 
+    def steps(self, count: int, torques) -> None:
+        """``count`` steps, each once the torque of the one before came (a simulator in lockstep
+        waits so): no state waits in the controller's queue (depth 10: the oldest would be
+        dropped, its torque never sent) however slowly a busy machine runs the controller."""
+        for _ in range(count):
+            expected = len(torques) + 1
+            self.step()
+            assert self.ros.spin_until(lambda n=expected: len(torques) >= n, HANG_TIMEOUT)
+
 
 def _sim_time_start(ros, **overrides):
     """rns_force_controller under use_sim_time, stepped 20 times on the test's /clock."""
@@ -223,9 +234,8 @@ def _sim_time_start(ros, **overrides):
     assert ros.spin_until(
         lambda: arm.states.get_subscription_count() and arm.wrench.get_subscription_count(), 10.0
     )
-    for _ in range(20):
-        arm.step()
-    assert ros.spin_until(lambda: len(torques) >= 20, 5.0)
+    arm.steps(20, torques)
+    assert len(torques) == 20
     return node, arm, torques, status
 
 
@@ -238,9 +248,7 @@ def test_sim_time_a_wall_clock_pause_of_the_simulation_does_not_stop_the_motors(
     of wall time (4 state_timeouts, below clock_timeout) age nothing: no zero torque."""
     node, arm, torques, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=10.0)
     ros.spin_for(1.0)  # the simulation pauses: no /clock, no joint_states
-    for _ in range(20):
-        arm.step()
-    assert ros.spin_until(lambda: len(torques) >= 40, 5.0)
+    arm.steps(20, torques)
     ros.spin_for(0.1)
     assert len(torques) == 40  # one per state, no zero torque of a stale state between them
     assert not node._stale
@@ -254,23 +262,27 @@ def test_sim_time_a_stopped_clock_turns_the_motors_off(ros):
     node, arm, torques, status = _sim_time_start(ros, state_timeout=0.25, clock_timeout=30.0)
     result = node.set_parameters([Parameter("clock_timeout", value=1.0)])
     assert result[0].successful
-    for _ in range(50):  # the watch sees /clock move at its new checks
-        arm.step()
-    assert ros.spin_until(lambda: len(torques) >= 70, 5.0)
+    # the watch must see /clock move between two of its new checks (clock_timeout / 4 apart,
+    # from the change): steps for three such periods of wall time at least
+    changed = time.monotonic()
+    arm.steps(50, torques)
+    while time.monotonic() - changed < 0.75:
+        arm.steps(1, torques)
     assert ros.spin_until(
         lambda: (
             status.latest() is not None
             and "/clock stood still" in status.latest().status[0].message
         ),
-        15.0,
+        HANG_TIMEOUT,
     )
     assert _last_state(status) == "STALE_STATE"
     assert "(clock_timeout 1.0 s wall time)" in status.latest().status[0].message
-    assert len(torques) == 71  # the torques of the states, then exactly one zero
+    assert len(torques) == arm.sent + 1  # the torques of the states, then exactly one zero
     assert torques.latest().data.tolist() == [0.0] * 7
-    arm.step()
-    assert ros.spin_until(lambda: len(torques) >= 72, 5.0)
-    assert ros.spin_until(lambda: _last_state(status) != "STALE_STATE", 5.0)
+    arm.step()  # a state on a moving clock: its torque after the zero
+    assert ros.spin_until(lambda: len(torques) >= arm.sent + 1, HANG_TIMEOUT)
+    assert torques.latest().data.tolist() != [0.0] * 7
+    assert ros.spin_until(lambda: _last_state(status) != "STALE_STATE", HANG_TIMEOUT)
 
 
 def test_sim_time_a_state_stale_in_simulated_time_turns_the_motors_off(ros):

@@ -3,6 +3,7 @@ interval for in-process stacks."""
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import pytest
@@ -16,6 +17,13 @@ from rns_ros.resources import default_model_config
 # simulation thread could delay each log call by seconds. 1 ms keeps the executor responsive,
 # as separate processes (ros2 run) are.
 sys.setswitchinterval(0.001)
+
+# The tests press Ctrl-C (SIGINT) on the processes they start, as a terminal would. A test run
+# started in the background by a non-interactive shell (`make test &`, nohup) inherits SIGINT
+# ignored, and so would every executable it starts: the default disposition is restored here,
+# so what the tests see does not depend on how the run was started.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")

@@ -11,6 +11,13 @@ Each namespace gets its own /dev/shm (bind-mounted per process), as each real co
 Fast DDS uses shared memory between the processes of one namespace and UDP over the veth
 between the two. (With one /dev/shm for both, Fast DDS treats the other namespace's
 participants as local and the link fails.) See docs/two_hosts.md.
+
+The closed loop runs as rns_demo's do, on simulated time in lockstep: the simulator in A
+publishes /clock (the only one) and waits for each control period's output, the controller and
+the operator in B step on that /clock, and the operator's twists go out ahead of their stamps
+for a controller that serves each tick with the twist in force then. A process that a busy
+machine delays stops the simulated world instead of losing motion, so the figures checked do not
+depend on the load.
 """
 
 from __future__ import annotations
@@ -35,6 +42,11 @@ DOMAIN = int(os.environ.get("ROS_DOMAIN_ID", "43"))
 #: Private /24 only ever assigned inside our own namespaces (the third octet varies per run).
 SUBNET = "10.231.{}"
 SIMULATOR_READY = "kinematic simulation of"  # the simulator's first log line
+#: Control period [s] (rns_controller's 100 Hz): the simulator's lockstep period and the
+#: controller's output lead, as in rns_demo.
+PERIOD = 0.01
+#: How far ahead of its instant the operator publishes each sample [s] (rns_demo's).
+OPERATOR_LEAD = 0.04
 
 
 def _ip(*args: str, check: bool = True) -> subprocess.CompletedProcess:
@@ -164,7 +176,10 @@ def _environment(peers: list[str]) -> dict[str, str]:
 def _start_robot(hosts: TwoHosts, processes: Processes, peers: list[str]) -> None:
     """The simulator in A, waited for: the robot computer is up before the operator's side."""
     env = _environment(peers)
-    processes.start("simulator", hosts.a, env, "rns_ros.nodes.simulator")
+    processes.start(
+        "simulator", hosts.a, env, "rns_ros.nodes.simulator",
+        "--ros-args", "-p", "publish_clock:=true", "-p", f"lockstep_period:={PERIOD}",
+    )  # fmt: skip
     assert processes.wait_for_line("simulator", SIMULATOR_READY, timeout=30.0), processes.outputs()
 
 
@@ -185,11 +200,16 @@ def _run(hosts: TwoHosts, scenario: Path, report_file: Path) -> dict:
         env_b = _environment([hosts.addr_a])
         observer = processes.start(
             "observer", hosts.b, env_b, "rns_ros.apps.observer", "--scenario", str(scenario),
-            "--json", str(report_file), "--wait", "8", "--timeout", "35",
+            "--json", str(report_file), "--wait", "8", "--timeout", "60",
         )  # fmt: skip
+        # on the simulator's /clock, its outputs a period ahead, each tick served with the
+        # operator's twist in force then; a paused simulation is not a dead one however busy
+        # the machine (clock_timeout)
         processes.start(
             "controller", hosts.b, env_b, "rns_ros.nodes.controller",
-            "--ros-args", "-p", "wrist_gain:=0.0",
+            "--ros-args", "-p", "wrist_gain:=0.0", "-p", "use_sim_time:=true",
+            "-p", f"output_lead:={PERIOD}", "-p", "await_commands:=true",
+            "-p", "clock_timeout:=30.0",
         )  # fmt: skip
         # The operator starts once the observer has the robot (its first recorded state
         # precedes the motion) and the controller publishes (it has the robot's joint states).
@@ -201,8 +221,9 @@ def _run(hosts: TwoHosts, scenario: Path, report_file: Path) -> dict:
         processes.start(
             "operator", hosts.b, env_b, "rns_ros.nodes.operator",
             "--ros-args", "-p", f"scenario:={scenario}", "-p", "start_delay:=3.5",
+            "-p", "use_sim_time:=true", "-p", f"lead:={OPERATOR_LEAD}",
         )  # fmt: skip
-        observer.wait(timeout=40)
+        observer.wait(timeout=70)
         after = hosts.counters()
         assert observer.returncode == 0, processes.outputs()
         report = json.loads(report_file.read_text())

@@ -286,6 +286,7 @@ def _run_task(
         raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
     # the end on the stamps' clock: a lockstep run goes on at its own pace,
     # so a wall-time settle would let figures depend on this machine's speed
+    _check_recorded_from_the_start(commands.messages[0], args, method)
     task = profile_start(commands, scenario, OPERATOR_RATE)
     task_started = time.perf_counter()
     end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
@@ -331,6 +332,23 @@ OPERATOR_ZERO_DURATION = 1.0
 #: publishes each sample (two samples), the first at the start condition (its start_delay).
 OPERATOR_RATE = 50.0
 OPERATOR_LEAD = 0.04
+
+
+def _check_recorded_from_the_start(
+    first: TwistStamped, args: argparse.Namespace, method: str
+) -> None:
+    """Leading on simulated time, the operator sends zeros before its profile: a ``first``
+    recorded twist that moves means this process's recorder matched after the profile started
+    (the operator counted a subscriber that was not this one, e.g. one of a run just ended).
+
+    Raises:
+        PartialRecordingError: it did.
+    """
+    if lockstep(args) and args.output_lead and _moving(first):
+        raise PartialRecordingError(
+            f"{method}: this process recorded cmd_twist only from {header_seconds(first):.3f} "
+            "s, after the operator's profile started"
+        )
 
 
 def _moving(twist: TwistStamped | None) -> bool:

@@ -66,7 +66,10 @@ def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
     assert ros.spin_until(
         lambda: logger.recorder.counts["ptp_status"] > 0 and ptp.plan is not None, timeout=10.0
     )
-    ros.spin_for(2.0)  # the 1 s motion and its end
+    # the 1 s motion and its end, however long the machine takes; then a status after it
+    assert ros.spin_until(lambda: ptp.plan is None, timeout=30.0)
+    statuses = logger.recorder.counts["ptp_status"]
+    assert ros.spin_until(lambda: logger.recorder.counts["ptp_status"] > statuses, timeout=10.0)
     _close(ros, logger)
 
     goal = theta.copy()
@@ -137,7 +140,8 @@ def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):
     assert np.allclose(periods, np.round(periods), atol=1e-3)
     assert periods.min() == pytest.approx(1.0, abs=1e-3)
     assert np.abs(total).max() < 1e-9  # no command: the base does not turn
-    assert summary[paths.MOMENTUM_ANGULAR] == len(times)
+    # every momentum received is in the file (the best-effort logger may miss one of a pair)
+    assert summary[paths.MOMENTUM_ANGULAR] >= counts["momentum"] > 0
     for visual in logger.recorder.view.visual_paths()["link_3"]:
         assert visual in summary  # URDF geometry
     assert paths.CAMERA_POINTING in summary

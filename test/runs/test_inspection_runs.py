@@ -67,3 +67,25 @@ def test_a_partial_recording_is_an_error_naming_what_was_missed():
     with pytest.raises(PartialRecordingError, match=r"missed 1 cmd_twist samples"):
         _check_complete(holes, "sc", sim_time=True)
     _check_complete(holes, "sc", sim_time=False)  # wall-clock twists jitter: not checked
+
+
+def test_a_twist_stream_recorded_from_mid_profile_is_a_partial_recording():
+    """Leading on simulated time the operator's stream opens with zeros: a first recorded twist
+    that moves means the recorder missed the profile's start. Off lockstep, or without the lead,
+    a profile may move from its first sample."""
+    import argparse
+
+    from rns_ros.runs.inspection import _check_recorded_from_the_start
+    from rns_ros.runs.recorded import PartialRecordingError
+
+    moving, resting = TwistStamped(), TwistStamped()
+    moving.header.stamp = stamp_from_seconds(3.25)
+    moving.twist.angular.x = 0.1
+    lockstep = argparse.Namespace(wall_clock=False, real_time_factor=1.0, output_lead=True)
+    with pytest.raises(PartialRecordingError, match=r"dls: .* only from 3\.250 s, after the"):
+        _check_recorded_from_the_start(moving, lockstep, "dls")
+    _check_recorded_from_the_start(resting, lockstep, "dls")
+    for other in ({"output_lead": False}, {"wall_clock": True}):
+        _check_recorded_from_the_start(
+            moving, argparse.Namespace(**{**vars(lockstep), **other}), "dls"
+        )

@@ -100,6 +100,7 @@ class OperatorNode(Node):
         sim_time = bool(self.get_parameter("use_sim_time").value)
         # [ns] each sample goes out ahead of its instant (lockstep with an awaiting controller)
         self._lead = round(params["lead"] * 1e9) if sim_time else 0
+        self._start_grid = round(params["start_grid"] * 1e9) if sim_time else 0
         if params["lead"] and not self._lead:
             self.get_logger().warn("lead is for use_sim_time only: not used")
         self._period_ns = round(1e9 / params["rate"])
@@ -180,7 +181,7 @@ class OperatorNode(Node):
             if self._wait and not self._subscribed():
                 return
             delay = max(self._start_delay, self._lead * 1e-9)
-            self._start = now + Duration(nanoseconds=round(delay * 1e9))
+            self._start = self._on_grid(now + Duration(nanoseconds=round(delay * 1e9)))
             self.get_logger().info(f"starting in {delay} s")
         if self._lead:
             now = now + Duration(nanoseconds=self._lead)
@@ -210,6 +211,15 @@ class OperatorNode(Node):
         moving = t <= self.scenario.duration
         self._publish_motion_force(sample if moving else None, sample.force_vector, now)
 
+    def _on_grid(self, start: Time) -> Time:
+        """``start`` rounded up to a multiple of ``start_grid`` (simulated time): the profile's
+        samples then fall on the same instants of the controller's period in every run, however
+        late the start condition was met."""
+        if not self._start_grid:
+            return start
+        ns = -(-start.nanoseconds // self._start_grid) * self._start_grid
+        return Time(nanoseconds=ns, clock_type=start.clock_type)
+
     def _resume_after_a_stall(self, instant: Time) -> None:
         """lead: samples skipped before any motion (this process waited for a core while the
         simulation ran on, before an awaiting controller had a sample to wait on) shift the
@@ -220,7 +230,7 @@ class OperatorNode(Node):
             return
         skipped = instant.nanoseconds - self._last_instant - self._period_ns
         if skipped > self._period_ns // 2:
-            self._start += Duration(nanoseconds=skipped)
+            self._start = self._on_grid(self._start + Duration(nanoseconds=skipped))
             self.get_logger().warn(
                 f"waited {skipped * 1e-9:.3f} s (simulated) for a core before the profile "
                 "moved: it starts that much later"

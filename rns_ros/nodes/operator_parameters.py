@@ -72,6 +72,15 @@ PARAMETERS = (
         0.0,
         1.0,
     ),
+    ParameterSpec(
+        "start_grid",
+        0.0,
+        "use_sim_time: the profile starts on a multiple of this in simulated time (the "
+        "controller's period); 0: off",
+        "[s]",
+        0.0,
+        1.0,
+    ),
     WORLD_FRAME,
     BASE_FRAME,
     CAMERA_FRAME,

@@ -235,7 +235,11 @@ def _start_nodes(
         listeners.append(NODE_NAMES["logger"])
     operator_timing = dict(timing)
     if sim_time and args.output_lead:
-        operator_timing.update(lead=OPERATOR_LEAD, start_delay=OPERATOR_LEAD)
+        # the profile on the controller's period grid: the same samples in each tick, however
+        # late the operator's start condition was met
+        operator_timing.update(
+            lead=OPERATOR_LEAD, start_delay=OPERATOR_LEAD, start_grid=1.0 / args.rate
+        )
     processes.start(
         "rns_operator",
         {

@@ -15,7 +15,7 @@ from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rns_testing import Recorder, SimClock, status_values
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray, Header
+from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -70,17 +70,21 @@ LOCKSTEP = {"publish_clock": True, "real_time_factor": 0.0, "lockstep_period": 0
 PERIOD = 0.01
 
 
+#: rns_ptp's states in which each tick commands the joints.
+PLAYING = ("MOVING", "CANCELLING")
+
+
 class _Lockstep:
     """rns_ptp (use_sim_time) driving rns_simulator (LOCKSTEP) with the test in between:
-    rns_simulator takes its commands on lockstep/<topic>, and the test answers the state at t
-    it pauses at once rns_ptp's tick at t is over, with that tick's command or, while rns_ptp
-    commands nothing (idle, planning), with zero velocity (what rns_ptp's last command, a stop,
-    held).
+    rns_simulator takes its commands on lockstep/<topic>, and the test answers each tick of
+    rns_ptp, in order, with the command rns_ptp sent for it or, while rns_ptp commands nothing
+    (idle, planning), with zero velocity (what its last command, a stop, held). Each answer lets
+    the simulation run one period, to the /clock of rns_ptp's next tick.
 
-    So rns_ptp ticks at every /clock and each command acts for exactly one period from its tick,
-    from the first state on, however late a loaded machine runs either node. (On its own a
-    lockstep rns_simulator runs in real time until its first command, and an rns_ptp that lags
-    behind it starts its plan on ticks several periods apart.)
+    So rns_ptp ticks at every period and each of its commands acts for exactly one period,
+    however late a loaded machine runs either node. (On its own a lockstep rns_simulator runs in
+    real time until its first command, and an rns_ptp that lags behind it starts its plan on
+    ticks several periods apart.)
 
     Attributes as :func:`_stack`'s; ``commands`` records rns_ptp's output (``references`` too on
     the trajectory interface); :meth:`run_until` steps the loop.
@@ -108,59 +112,66 @@ class _Lockstep:
         self.odom = Recorder(probe, Odometry, "base_odom")
         self._relay = probe.create_publisher(msg_type, f"lockstep/{topic}", 10)
         assert ros.spin_until(lambda: self._relay.get_subscription_count() > 0, timeout=10.0)
-        self._answered = -math.inf  # stamp of the last state answered [s]
+        self._ticks = 0  # rns_ptp ticks (status messages) answered or passed over
         self._forwarded = 0  # rns_ptp commands forwarded
-        self._moving = False  # the last command forwarded has non-zero velocities
+        self._answered = -math.inf  # stamp of the tick answered last [s]
+        self._pacer = self.simulator._pacer
+        self._receipt = self._pacer.last_command  # before the last answer (wall time) [s]
+        # the simulation runs free until its first command, and takes an answer that reaches it
+        # a period or more after its tick a period late (then rns_ptp ticks ahead of the
+        # answers): answer until one is taken within its period (from then on each is)
+        while True:
+            self.step()
+            self._taken()
+            if 0.0 <= self._pacer.command_sim_time - self._answered < PERIOD - 1e-6:
+                break
+
+    def _taken(self) -> None:
+        """Wait (up to 30 s, a hang guard) until rns_simulator has taken the last answer: its
+        receipt time changes, its lockstep period counts from where it took it."""
+        if self._answered > -math.inf:
+            taken = self.ros.spin_until(lambda: self._pacer.last_command != self._receipt, 30.0)
+            assert taken
+
+    def _commands_at(self, tick: int) -> bool:
+        """rns_ptp sent a command for the ``tick``-th tick: it plays, or it played at the tick
+        before (the stop: at the end, at a cancel's end, for a new goal)."""
+        status = self.status.messages
+        return _tick_state(status[tick]) in PLAYING or (
+            tick > 0 and _tick_state(status[tick - 1]) in PLAYING
+        )
 
     def step(self) -> None:
-        """Answer the next state (each wait up to 30 s: a hang guard)."""
-        joints, status, commands = self.joints.messages, self.status.messages, self.commands
-
-        def paused_state() -> bool:
-            """A state after the last one answered, at which the simulation stands (paused):
-            answered while it runs on, it would anchor the command at a later period. The first
-            answer starts the lockstep wherever the free run is."""
-            if not joints:
-                return False
-            t = _seconds(joints[-1].header.stamp)
-            if t <= self._answered + 1e-6:
-                return False
-            return self._answered == -math.inf or abs(self.simulator.simulator.time - t) < 1e-6
-
-        assert self.ros.spin_until(paused_state, timeout=30.0)
-        state = joints[-1]
-        t = _seconds(state.header.stamp)
+        """Answer rns_ptp's next tick (each wait up to 30 s: a hang guard)."""
+        status, commands = self.status.messages, self.commands.messages
+        self._taken()
+        # rns_ptp's tick at the /clock the simulation stands at (the state grid, at or before
+        # the pause); before the first answer it runs free, and any tick will do
+        clock = -math.inf
+        if self._answered > -math.inf:
+            clock = math.floor(self.simulator.simulator.time / PERIOD + 1e-6) * PERIOD
 
         def ticked() -> bool:
-            """rns_ptp's tick at t is over, its command (if any) here: a playing tick commands,
-            and so does the one after a moving command (the stop, at the end or a new goal)."""
-            if not status or _seconds(status[-1].header.stamp) < t - 1e-6:
-                return False
-            playing = _state(self) in ("MOVING", "CANCELLING")
-            return len(commands.messages) > self._forwarded or not (playing or self._moving)
+            return len(status) > self._ticks and _seconds(status[-1].header.stamp) > clock - 1e-6
 
-        assert self.ros.spin_until(ticked, timeout=30.0), f"no rns_ptp tick at t = {t:.2f} s"
-        if len(commands.messages) > self._forwarded:
-            command = commands.messages[-1]
-            self._forwarded = len(commands.messages)
+        assert self.ros.spin_until(ticked, timeout=30.0), f"no rns_ptp tick at {clock:.2f} s"
+        # ticks that command nothing need no answer of their own: the newest answers for them
+        while len(status) > self._ticks + 1 and not self._commands_at(self._ticks):
+            self._ticks += 1
+        if self._commands_at(self._ticks):
+            assert self.ros.spin_until(lambda: len(commands) > self._forwarded, timeout=30.0)
+            command = commands[self._forwarded]
+            self._forwarded += 1
         elif self.velocity:
             command = Float64MultiArray(data=[0.0] * len(JOINTS))
         else:
             zero = JointTrajectoryPoint(velocities=[0.0] * len(JOINTS))
             command = JointTrajectory(joint_names=JOINTS, points=[zero])
-        if self.velocity:
-            velocities = command.data
-        else:
-            # acts from this state on (a stop for a new goal carries the stamp it was sent at)
-            command = JointTrajectory(
-                header=Header(stamp=state.header.stamp),
-                joint_names=command.joint_names,
-                points=command.points,
-            )
-            velocities = command.points[0].velocities
-        self._moving = bool(np.any(np.asarray(velocities) != 0.0))
+            command.header.stamp = status[self._ticks].header.stamp
+        self._answered = _seconds(status[self._ticks].header.stamp)
+        self._ticks += 1
+        self._receipt = self._pacer.last_command
         self._relay.publish(command)
-        self._answered = t
 
     def run_until(self, condition, timeout: float = 30.0) -> bool:
         """Step until ``condition()`` holds or ``timeout`` [s] of wall time passes."""
@@ -203,8 +214,12 @@ def _state_after(stack, stamp: float) -> np.ndarray:
     return np.array(stack.joints.messages[-1].position)
 
 
+def _tick_state(msg: DiagnosticArray) -> str:
+    return status_values(msg)["state"]
+
+
 def _state(stack) -> str | None:
-    return status_values(stack.status.messages[-1])["state"] if stack.status.messages else None
+    return _tick_state(stack.status.messages[-1]) if stack.status.messages else None
 
 
 def _ready(ros, stack):
@@ -284,7 +299,7 @@ def test_three_phase_goal_is_reached_under_sim_time(ros):
         return _state(stack) == "DONE"
 
     started = time.monotonic()
-    # a hang guard: the 3300 lockstep periods take 11-40 s of wall time here, quiet to loaded
+    # a hang guard: the 3300 lockstep periods take 11-55 s of wall time here, quiet to loaded
     assert stack.run_until(done, timeout=240.0), _state(stack)
     wall = time.monotonic() - started
     assert {"I", "II", "III"} <= phases
@@ -507,8 +522,10 @@ def test_a_new_goal_replaces_the_current_plan(ros):
 
 def test_two_joint_state_sources_stop_the_arm_and_a_second_commander_is_reported(ros):
     """The graph is read once a second (wall clock): the plan (10 s) is long enough to be
-    moving when a loaded machine gets to it."""
-    stack = _stack(ros, method="joint_space", duration=10.0)
+    moving when a loaded machine gets to it, and the state watchdog (5 s) rides out the build
+    of the second simulator in this process, which holds the GIL long enough on a loaded
+    machine to age the first one's states past 0.5 s."""
+    stack = _stack(ros, method="joint_space", duration=10.0, state_timeout=5.0)
     _ready(ros, stack)
     commander = ros.probe("other_commander")
     other = commander.create_publisher(JointTrajectory, "joint_references", 1)

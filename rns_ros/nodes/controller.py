@@ -89,7 +89,7 @@ from rns_ros.nodes.controller_status import (
     joint_limit_text,
     step_values,
 )
-from rns_ros.nodes.input_clock import InputClock
+from rns_ros.nodes.input_clock import InputClock, awaited_commands
 from rns_ros.nodes.parameters import declare_parameters
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
@@ -192,13 +192,7 @@ class ControllerNode(Node):
                 "await_commands needs use_sim_time, output_lead > 0 and twist_stamped: not used"
             )
             return None
-        watchdog = self.create_timer(
-            params["command_timeout"],
-            self._on_await_timeout,
-            clock=Clock(clock_type=ClockType.STEADY_TIME),
-        )
-        watchdog.cancel()
-        return AwaitedTicks(watchdog)
+        return awaited_commands(self, params["command_timeout"], self._on_await_timeout)
 
     def _create_inputs(self, params: dict) -> None:
         """cmd_twist, joint_states and base_odom subscriptions."""

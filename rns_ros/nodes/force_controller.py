@@ -77,7 +77,7 @@ from rns_ros.core.errors import ConfigError, InputError, RnsError
 from rns_ros.core.fixed_base import load_fixed_base_model
 from rns_ros.nodes import force_controller_parameters
 from rns_ros.nodes.force_controller_parameters import DEFAULT_MODEL, await_commands_problem
-from rns_ros.nodes.input_clock import InputClock
+from rns_ros.nodes.input_clock import InputClock, awaited_commands
 from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import status_text
@@ -204,13 +204,12 @@ class ForceControllerNode(Node):
         of wall time after the operator's last sample; None when not used."""
         if not params["await_commands"]:
             return None
-        watchdog = self.create_timer(
+        return awaited_commands(
+            self,
             params["command_timeout"],
             self._on_await_timeout,
-            clock=Clock(clock_type=ClockType.STEADY_TIME),
+            streams=(TWIST_STREAM, FORCE_STREAM),
         )
-        watchdog.cancel()
-        return AwaitedTicks(watchdog, streams=(TWIST_STREAM, FORCE_STREAM))
 
     # --- inputs ---------------------------------------------------------------------------------
     def _on_twist(self, msg: TwistStamped) -> None:

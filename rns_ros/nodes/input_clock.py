@@ -11,11 +11,12 @@ long it has stood still. On the wall clock, ages are monotonic wall time.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
+from rns_ros.control.ticks import COMMANDS, AwaitedTicks
 from rns_ros.control.watchdog import ClockWatch
 
 #: Checks of /clock per clock_timeout [-].
@@ -81,3 +82,20 @@ class InputClock:
         still = self._watch.check(self._node.get_clock().now().nanoseconds)
         if still is not None:
             self._on_stopped(still)
+
+
+def awaited_commands(
+    node: Node,
+    command_timeout: float,
+    on_timeout: Callable[[], None],
+    streams: Sequence[str] = (COMMANDS,),
+) -> AwaitedTicks:
+    """``await_commands``: ticks that wait for the commands in force on ``streams``, given up
+    after ``command_timeout`` [s] of wall time without a sample (``on_timeout``): a stalled or
+    dead operator is caught however the simulation runs. The watchdog is a steady-clock timer,
+    created stopped; :class:`AwaitedTicks` starts it while a tick waits."""
+    watchdog = node.create_timer(
+        command_timeout, on_timeout, clock=Clock(clock_type=ClockType.STEADY_TIME)
+    )
+    watchdog.cancel()
+    return AwaitedTicks(watchdog, streams=streams)

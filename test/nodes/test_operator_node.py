@@ -60,6 +60,25 @@ def test_operator_publishes_the_profile_then_zeros(ros, tmp_path):
     assert t[-1] <= SCENARIO["duration"] + 0.3
 
 
+def _play_on_clock(ros, operator, twists, period: float, ticks: int) -> list[float]:
+    """Publish /clock from 10 s on every ``period`` [s] (at most ``ticks`` instants) until the
+    operator finished; returns, for each instant that brought a twist, how far the newest
+    twist's stamp is ahead of it [s]."""
+    clock = ros.probe().create_publisher(Clock, "/clock", 10)
+    ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
+    ahead = []
+    for k in range(ticks):
+        t = 10.0 + period * k
+        count = len(twists)
+        clock.publish(Clock(clock=stamp_from_seconds(t)))
+        if ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0):
+            ahead.append(twists.stamps()[-1] - t)
+        if operator.finished:
+            break
+    assert operator.finished
+    return ahead
+
+
 @pytest.mark.parametrize(("start_delay", "profile_start"), [(0.0, 10.04), (0.1, 10.1)])
 def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
     ros, tmp_path, start_delay, profile_start
@@ -81,18 +100,7 @@ def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
             "use_sim_time": True,
         },
     )
-    clock = ros.probe().create_publisher(Clock, "/clock", 10)
-    ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
-    ahead = []
-    for k in range(100):  # 50 Hz for 2 s of simulated time
-        t = 10.0 + 0.02 * k
-        count = len(twists)
-        clock.publish(Clock(clock=stamp_from_seconds(t)))
-        if ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0):
-            ahead.append(twists.stamps()[-1] - t)
-        if operator.finished:
-            break
-    assert operator.finished
+    ahead = _play_on_clock(ros, operator, twists, period=0.02, ticks=100)  # 2 s at 50 Hz
     assert ahead == pytest.approx([0.04] * len(ahead), abs=1e-9)  # each sample a lead early
     rates = twists.array(_angular)
     stamps = twists.stamps()
@@ -336,18 +344,7 @@ def test_motion_force_with_lead_both_streams_go_out_ahead_the_setpoints_from_the
             "use_sim_time": True,
         },
     )
-    clock = ros.probe().create_publisher(Clock, "/clock", 10)
-    ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
-    ahead = []
-    for k in range(200):  # 500 Hz for 0.4 s of simulated time
-        t = 10.0 + 0.002 * k
-        count = len(twists)
-        clock.publish(Clock(clock=stamp_from_seconds(t)))
-        if ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0):
-            ahead.append(twists.stamps()[-1] - t)
-        if operator.finished:
-            break
-    assert operator.finished
+    ahead = _play_on_clock(ros, operator, twists, period=0.002, ticks=200)  # 0.4 s at 500 Hz
     ros.spin_for(0.1)
     assert ahead == pytest.approx([0.004] * len(ahead), abs=1e-9)  # each sample a lead early
     twist_times, force_times = _profile_times(twists, operator), _profile_times(wrenches, operator)

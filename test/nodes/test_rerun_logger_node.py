@@ -27,7 +27,7 @@ from rns_ros.control.contact_topics import CONTACT_LABELS, ERROR_LABELS
 from rns_ros.core import ConfigError
 from rns_ros.core.fixed_base import FixedBaseState, load_fixed_base_model
 from rns_ros.nodes.controller import ControllerNode
-from rns_ros.nodes.ptp import PtpNode
+from rns_ros.nodes.ptp import PtpNode, PtpState
 from rns_ros.nodes.rerun_logger import RerunLoggerNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.viz import paths
@@ -67,7 +67,7 @@ def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
         lambda: logger.recorder.counts["ptp_status"] > 0 and ptp.plan is not None, timeout=10.0
     )
     # the 1 s motion and its end, however long the machine takes; then a status after it
-    assert ros.spin_until(lambda: ptp.plan is None, timeout=30.0)
+    assert ros.spin_until(lambda: ptp._mode is PtpState.DONE, timeout=30.0)
     statuses = logger.recorder.counts["ptp_status"]
     assert ros.spin_until(lambda: logger.recorder.counts["ptp_status"] > statuses, timeout=10.0)
     _close(ros, logger)

@@ -66,10 +66,12 @@ def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
     assert ros.spin_until(
         lambda: logger.recorder.counts["ptp_status"] > 0 and ptp.plan is not None, timeout=10.0
     )
-    # the 1 s motion and its end, however long the machine takes; then a status after it
+    # the 1 s motion and its end, however long the machine takes; then until the logger has
+    # taken a DONE status (any later status is not enough: a moving one may still be in flight
+    # when rns_ptp finishes)
     assert ros.spin_until(lambda: ptp._mode is PtpState.DONE, timeout=30.0)
-    statuses = logger.recorder.counts["ptp_status"]
-    assert ros.spin_until(lambda: logger.recorder.counts["ptp_status"] > statuses, timeout=10.0)
+    done = (PtpState.DONE.value, "done")
+    assert ros.spin_until(lambda: logger.recorder._ptp_step == done, timeout=10.0)
     _close(ros, logger)
 
     goal = theta.copy()

@@ -50,16 +50,16 @@ def next_tick_in(until_next_call: int | None, period: float) -> float | None:
 class TickInstants:
     """The instants of the control ticks served, and the catch-up of late ticks.
 
-    With ``output_lead`` (lockstep side by side) the simulator runs at most the lead past a
-    tick before that tick's output arrives. A state stamped later than that (by half a period
-    more) means the simulation got ahead of the ticks (a first command reaching it while it ran
-    in real time, a patience step): the tick's output would start late, and every later one
-    too, each letting the simulation run one more period (the lockstep period counts from the
-    newest command), so the lag would last the whole run and the base would turn by the motion
-    made up after the controller had predicted it. Such a tick is served at the state's instant
-    (its output acts a lead later, as usual), and the ticks up to that instant are skipped. A
-    clock that went back (a reset) starts over, and a state received before it, or more than
-    ``max_catch_up`` ahead, is not caught up to.
+    With ``output_lead`` (lockstep side by side) the simulator runs at most the lead past a tick
+    before that tick's output arrives. A state stamped later than that (by half a period more)
+    means the simulation got ahead of the ticks (a command reaching it while it ran in real time
+    after a reset or a dropped command, a patience step): the tick's output would start late,
+    and every later one too, each letting the simulation run one more period (the lockstep
+    period counts from the newest command), so the lag would last the whole run and the base
+    would turn by the motion made up after the controller had predicted it. Such a tick is
+    served at the state's instant (its output acts a lead later, as usual), and the ticks up to
+    that instant are skipped. A clock that went back (a reset) starts over, and a state received
+    before it, or more than ``max_catch_up`` ahead, is not caught up to.
 
     Args:
         period: control period T [s], > 0.

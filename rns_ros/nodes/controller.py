@@ -383,8 +383,8 @@ class ControllerNode(Node):
         None to skip it (:meth:`TickInstants.lead_instant`)."""
         instant = self._instants.lead_instant(tick, self._theta_stamp, self._state_received_wall)
         if instant is not None and instant != tick:
-            # expected once at the start: the first command reaches a simulation that still
-            # runs in real time
+            # the simulation ran on without this controller (after a reset or a dropped
+            # command it runs in real time until commands come back; a patience step)
             self.get_logger().info(
                 f"late tick {tick * 1e-9:.3f} s: the simulation is at {instant * 1e-9:.3f} s; "
                 "served there (the ticks in between are skipped)",

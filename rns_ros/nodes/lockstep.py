@@ -13,6 +13,10 @@ from typing import Any, NamedTuple, Protocol
 #: (:meth:`SteppedSimulation.patience_over`), so a controller whose sim-time timer waits for a
 #: later /clock is never deadlocked.
 LOCKSTEP_PATIENCE = 5.0
+#: Lockstep before the first command: a wait this long [s] (wall time) moves the pause one
+#: ``lockstep_period`` on, with a state and /clock there, so a controller that subscribed after
+#: the last one gets a tick to answer.
+START_PATIENCE = 0.25
 #: Largest lag [s] of the loop behind its pace (and of a state's stamp behind its publication):
 #: an overloaded simulator re-anchors its pace this far behind instead of sprinting.
 MAX_STAMP_LAG = 0.5
@@ -71,7 +75,12 @@ class LockstepPacer:
     Real time: steps follow a :class:`Pace` (anchored anew after every pause, reset, change of
     the real-time factor, or lag beyond :data:`MAX_STAMP_LAG`). Lockstep (``lockstep_period`` >
     0): the simulation pauses once it is ``lockstep_period`` of simulated time past the newest
-    command; before the first command it runs in real time.
+    command. Before the first command it stands one ``lockstep_period`` in (its first state and
+    /clock out) until a controller answers, one period on every :data:`START_PATIENCE`, so
+    simulated time, and a scripted operator's profile on it, cannot run ahead of a controller
+    that joins late. A dropped command (the node's
+    :meth:`SteppedSimulation.patience_over` returned False, a stale one, a reset) leaves it
+    running in real time until commands come back.
 
     Args:
         simulator: the stepped simulator; read: ``time`` [s], ``dt`` [s].
@@ -109,6 +118,8 @@ class LockstepPacer:
         self.clock = clock
         self.idle_poll = idle_poll
         self.last_command: float | None = None  # wall receipt time of the newest command [s]
+        # lockstep: no command yet since the start, so the simulation stands a period in
+        self.awaiting_first = True
         self.command_sim_time = 0.0  # simulated time its lockstep period counts from [s]
         self.paused_since: float | None = None  # wall start of a lockstep pause [s]
         self.reanchor = True
@@ -132,9 +143,11 @@ class LockstepPacer:
         )
 
     def pauses_here(self) -> bool:
-        """Lockstep: the simulation has reached ``lockstep_period`` past the newest command.
-        Caller holds the lock."""
-        if self.period <= 0.0 or self.last_command is None:
+        """Lockstep: the simulation has reached ``lockstep_period`` past the newest command (or,
+        awaiting the first one, past the start). Caller holds the lock."""
+        if self.period <= 0.0:
+            return False
+        if self.last_command is None and not self.awaiting_first:
             return False
         sim = self.simulator
         return sim.time + 0.5 * sim.dt - self.command_sim_time >= self.period
@@ -163,6 +176,7 @@ class LockstepPacer:
         time). Caller holds the lock."""
         if self.last_command is None and self.period > 0.0:
             self.reanchor = True  # lockstep starts: leave the real-time pace of the wait
+        self.awaiting_first = False
         self.last_command = self.clock()
         self.command_sim_time = sim_anchor
 
@@ -175,7 +189,8 @@ class LockstepPacer:
         return self.clock() - received
 
     def reset(self) -> None:
-        """The simulation was reset: no command, a new pace. Caller holds the lock."""
+        """The simulation was reset: no command (real time until the next one), a new pace.
+        Caller holds the lock."""
         self.last_command = None
         self.command_sim_time = 0.0
         self.reanchor = True
@@ -208,6 +223,11 @@ class LockstepPacer:
         now = self.clock()
         if self.paused_since is None:
             self.paused_since = now
+        elif self.awaiting_first and now - self.paused_since > START_PATIENCE:
+            # no controller yet: the next period instant, for one that joined late
+            self.command_sim_time += self.period
+            self.paused_since = None
+            return None
         elif now - self.paused_since > LOCKSTEP_PATIENCE:
             if sim.patience_over():
                 self.paused_since = now

@@ -299,8 +299,9 @@ class CommandIntake:
         time (a controller ticking on this clock stamps the instant it sampled or, with a lead,
         the instant its output starts): the stamp itself when it lies within the period before
         now or waits ahead (:meth:`_ahead`); a later point of its grid, stamp + k
-        ``lockstep_period``, the last one not after now, when the command is older (the first
-        one reaches a simulation still running in real time a few periods late), so the next
+        ``lockstep_period``, the last one not after now, when the command is older (one that
+        reaches a simulation running in real time after a reset or a dropped command comes a
+        few periods late), so the next
         pause falls on that controller's next tick whatever the latency. Else (no stamp, a
         wall-clock stamp, one older than ``MAX_GRID_AGE``) the simulated time of receipt.
         Caller holds the lock."""

@@ -10,6 +10,7 @@ from rns_ros.nodes.lockstep import (
     LOCKSTEP_PATIENCE,
     MAX_STAMP_LAG,
     PAUSE_POLL,
+    START_PATIENCE,
     LockstepPacer,
     Pace,
     pace_lead,
@@ -146,15 +147,45 @@ def test_a_loop_far_behind_its_pace_reanchors_instead_of_sprinting():
     assert pacer.pace.sim_anchor == pytest.approx(9 * DT)
 
 
-def test_lockstep_runs_in_real_time_before_the_first_command():
-    pacer = _pacer(lockstep_period=0.05, real_time_factor=0.0)
+def test_lockstep_stands_one_period_in_until_the_first_command():
+    """Before the first command the simulation steps in real time to one lockstep period and
+    stands there (its state and /clock out) until a controller answers, one period on after
+    each START_PATIENCE (a controller that subscribed late gets a tick): simulated time cannot
+    run ahead of a controller that joins late."""
+    pacer = _pacer(lockstep_period=0.03, real_time_factor=0.0)
     assert pacer.factor() == 1.0
-    sim = FakeSimulation(pacer, steps=5)
+    sim = FakeSimulation(pacer, steps=6)
     pacer.run(sim)
-    assert sim.times == pytest.approx([sim.times[0] + k * DT for k in range(5)])
+    times = sim.times
+    for first in (0, 3):  # one period in real time, then the wait
+        assert times[first : first + 3] == pytest.approx([times[first] + k * DT for k in range(3)])
+    # the third step's period of real time, then the wait
+    assert START_PATIENCE < times[3] - times[2] - DT <= START_PATIENCE + 2 * PAUSE_POLL
+    assert pacer.command_sim_time == pytest.approx(0.03)  # the pause moved one period on
+    assert sim.patience_calls == 0  # the node's patience is for a controller that answered
+    assert pacer.awaiting_first
     with pacer.lock:
+        assert pacer.pauses_here()
         pacer.command_received(pacer.simulator.time)
+        assert not pacer.awaiting_first
+        assert not pacer.pauses_here()
     assert pacer.factor() == 0.0
+
+
+def test_lockstep_runs_in_real_time_once_its_command_was_dropped_or_reset():
+    """A stale command dropped by the node or a reset leaves the simulation running in real
+    time until commands come back (it does not stand as before the first command)."""
+    pacer = _pacer(lockstep_period=DT, real_time_factor=0.0)
+    pacer.command_received(0.0)
+    pacer.simulator.time = 1.0
+    assert pacer.pauses_here()
+    pacer.last_command = None  # what a node does with a stale command
+    assert not pacer.pauses_here()
+    assert pacer.factor() == 1.0
+    pacer.command_received(1.0)
+    pacer.reset()
+    pacer.simulator.time = 0.5
+    assert not pacer.pauses_here()
 
 
 def test_the_first_command_of_a_lockstep_leaves_the_pace_of_the_wait():
@@ -175,7 +206,6 @@ def test_the_first_command_of_a_lockstep_leaves_the_pace_of_the_wait():
 
 def test_lockstep_pauses_a_period_past_the_newest_command():
     pacer = _pacer(lockstep_period=0.03)
-    assert not pacer.pauses_here()  # no command yet
     pacer.command_received(0.0)
     # the next step would end past the period: half a step early counts as there
     for sim_time, pauses in ((0.0, False), (0.02, False), (0.03 - 0.4 * DT, True), (0.03, True)):

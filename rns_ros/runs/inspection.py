@@ -158,7 +158,9 @@ def run_method(
         # recorder (the logger) matched a moment after the first state then has all of it
         data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
         if data["times"][0] > task:  # the deviations count from the first recorded state
-            raise RnsError(
+            # this process matched late (the operator may count a subscriber of a run just
+            # ended): the run itself is repeatable
+            raise PartialRecordingError(
                 f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
                 f"the operator's profile started at {task:.3f} s"
             )

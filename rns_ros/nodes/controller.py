@@ -83,6 +83,7 @@ from rns_ros.nodes.controller_parameters import (
 )
 from rns_ros.nodes.controller_status import (
     DIAGNOSTICS_PERIOD,
+    TWISTS_RECEIVED,
     InputPublishers,
     JointLimitStop,
     StatusReporter,
@@ -232,6 +233,7 @@ class ControllerNode(Node):
     # --- inputs ---------------------------------------------------------------------------------
     def _on_stamped(self, data: bytes) -> None:
         fields = read_twist_stamped(data)
+        self._reporter.count(TWISTS_RECEIVED)
         if self._awaited is None:
             self._take_twist(fields.angular, fields.linear, fields.frame_id)
             return
@@ -262,6 +264,7 @@ class ControllerNode(Node):
         self._serve_ready(self._awaited.give_up())
 
     def _on_twist(self, msg: Twist) -> None:
+        self._reporter.count(TWISTS_RECEIVED)
         a, v = msg.angular, msg.linear
         self._take_twist([a.x, a.y, a.z], [v.x, v.y, v.z], "")
 

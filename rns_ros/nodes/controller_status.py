@@ -105,6 +105,10 @@ class JointLimitStop:
         self._free = None
 
 
+#: Status key: cmd_twist messages received (a scripted run starts once the controller has one).
+TWISTS_RECEIVED = "twists_received"
+
+
 class StatusReporter:
     """The newest status of ``node``: published on ~/status to a subscriber at each report, and
     on /diagnostics by :meth:`publish_diagnostics` (hardware_id = ``hardware_id``).
@@ -122,6 +126,8 @@ class StatusReporter:
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
         )
         self.advisories: list[str] = []
+        #: counts reported as key values in every status (e.g. ``twists_received``)
+        self.counters: dict[str, int] = {}
         self.last_state = ControllerState.WAITING_FOR_STATE
         self._last: tuple | None = None  # (level, message, state, values)
 
@@ -140,10 +146,15 @@ class StatusReporter:
         if self._status.get_subscription_count():
             self._status.publish(self.message())
 
+    def count(self, key: str) -> None:
+        """One more of ``key`` (reported in every status from now on)."""
+        self.counters[key] = self.counters.get(key, 0) + 1
+
     def message(self) -> DiagnosticArray:
         """The newest status as a DiagnosticArray stamped now."""
         level, message, state, values = self._last
         values = {"state": state.value, **(values() if callable(values) else values)}
+        values.update(self.counters)
         status = DiagnosticStatus(
             level=level,
             name=f"{self._node.get_name()}: reactionless control",

@@ -179,6 +179,10 @@ class OperatorNode(Node):
         that instant."""
         if self._start is None:
             if self._wait and not self._subscribed():
+                if self._lead:
+                    # zeros from the first tick on: a controller awaiting the stream waits on
+                    # every tick from the first sample it holds, long before the profile starts
+                    self._publish((0.0, 0.0, 0.0), now + Duration(nanoseconds=self._lead))
                 return
             delay = max(self._start_delay, self._lead * 1e-9)
             self._start = self._on_grid(now + Duration(nanoseconds=round(delay * 1e9)))
@@ -188,7 +192,7 @@ class OperatorNode(Node):
             self._resume_after_a_stall(now)
         t = (now - self._start).nanoseconds * 1e-9
         if t < 0.0:
-            if self._lead:  # a stream from the start condition on: a controller awaits it
+            if self._lead:  # zeros until the profile starts: a controller awaits them
                 self._publish((0.0, 0.0, 0.0), now)
             return
         end = self.scenario.duration + self._zero_duration

@@ -30,6 +30,7 @@ from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import RnsError, load_model
 from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
 from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
+from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import start_logger
@@ -149,7 +150,10 @@ def run_method(
         # the task only once the robot runs and this process and the logger record it (a
         # recorder matched late would miss the start of the task): the operator counts this
         # subscription among its min_subscribers
-        _wait_for_start(stack, processes, streams, listeners, method)
+        awaited = None
+        if sim_time and args.output_lead:
+            awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
+        _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
         task, end, task_wall = _run_task(stack, processes, streams, scenario, args, method)
         # stopped before the recorded messages are read: in lockstep the stack would go on
         # stepping as fast as it can meanwhile, competing with this process for the cores
@@ -405,6 +409,17 @@ def profile_start(commands: TopicLog, scenario: Scenario, rate: float) -> float:
 NODE_NAMES = {"controller": "rns_controller", "logger": "rns_rerun_logger"}
 
 
+def _has_twist(status: TopicLog | None) -> bool:
+    """rns_controller's newest ``status`` counts a received twist (True without a log)."""
+    if status is None:
+        return True
+    latest = status.latest()
+    if latest is None or not latest.status:
+        return False
+    values = {item.key: item.value for item in latest.status[0].values}
+    return int(values.get(TWISTS_RECEIVED, "0")) > 0
+
+
 def _wait_for_start(
     stack: Harness,
     processes: ProcessStack,
@@ -412,17 +427,24 @@ def _wait_for_start(
     listeners: list[str],
     method: str,
     timeout: float = 60.0,
+    awaited: TopicLog | None = None,
 ) -> None:
-    """Until this process records the robot state and ``listeners`` subscribe to it."""
+    """Until this process records the robot state and ``listeners`` subscribe to it; with
+    ``awaited`` (rns_controller's status, when it awaits the operator's twists), until the
+    controller has received a twist: from then on its every tick waits for the twist in force,
+    so the profile (released by this process's cmd_twist subscription, made after this) cannot
+    start on ticks served without it."""
     probe = stack.probe()
     state_streams = ("joints", "odom", "momentum")
 
     def missing() -> list[str]:
-        """What is not up yet: unrecorded state streams, listeners not subscribed."""
+        """What is not up yet: unrecorded state streams, listeners not subscribed, no twist at
+        the controller."""
         nodes = {info.node_name for info in probe.get_subscriptions_info_by_topic("/base_odom")}
         return [
             *(f"no {streams[name].topic} recorded" for name in state_streams if not streams[name]),
             *(f"{name} not subscribed to base_odom" for name in listeners if name not in nodes),
+            *(["rns_controller has received no cmd_twist"] if not _has_twist(awaited) else []),
         ]
 
     if not stack.spin_until(lambda: not missing(), timeout=timeout):

@@ -60,10 +60,12 @@ def test_operator_publishes_the_profile_then_zeros(ros, tmp_path):
     assert t[-1] <= SCENARIO["duration"] + 0.3
 
 
-def _play_on_clock(ros, operator, twists, period: float, ticks: int) -> list[float]:
+def _play_on_clock(
+    ros, operator, twists, period: float, ticks: int, finish: bool = True
+) -> list[float]:
     """Publish /clock from 10 s on every ``period`` [s] (at most ``ticks`` instants) until the
-    operator finished; returns, for each instant that brought a twist, how far the newest
-    twist's stamp is ahead of it [s]."""
+    operator finished (``finish``: it must); returns, for each instant that brought a twist, how
+    far the newest twist's stamp is ahead of it [s]."""
     clock = ros.probe().create_publisher(Clock, "/clock", 10)
     ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
     ahead = []
@@ -75,7 +77,7 @@ def _play_on_clock(ros, operator, twists, period: float, ticks: int) -> list[flo
             ahead.append(twists.stamps()[-1] - t)
         if operator.finished:
             break
-    assert operator.finished
+    assert operator.finished or not finish
     return ahead
 
 
@@ -112,6 +114,24 @@ def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
     assert rates[first, 1] == pytest.approx(np.deg2rad(15.0) / 0.4, rel=1e-9)
     angle = np.sum(rates[:-1, 1] * np.diff(stamps))
     assert angle == pytest.approx(np.deg2rad(30.0), rel=0.05)
+
+
+def test_with_lead_zeros_go_out_before_the_start_condition_and_no_profile(ros, tmp_path):
+    """lead: before its subscribers are there (min_subscribers), the operator already streams
+    zeros ahead of the clock: an awaiting controller then holds every tick from its first
+    sample on, so a profile that starts later can never find ticks served without it."""
+    path = tmp_path / "short.yaml"
+    path.write_text(yaml.safe_dump(SCENARIO))
+    twists = ros.record(TwistStamped, "cmd_twist")
+    operator = ros.add(
+        OperatorNode,
+        {"scenario": str(path), "lead": 0.04, "use_sim_time": True, "min_subscribers": 5},
+    )
+    ahead = _play_on_clock(ros, operator, twists, period=0.02, ticks=50, finish=False)
+    assert len(ahead) >= 45  # a sample at (nearly) every instant
+    assert ahead == pytest.approx([0.04] * len(ahead), abs=1e-9)
+    assert np.all(twists.array(_angular) == 0.0)
+    assert not operator.started
 
 
 def test_with_lead_a_stall_before_the_first_motion_shifts_the_profile(ros, tmp_path):

@@ -122,6 +122,8 @@ class StatusReporter:
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
         )
         self.advisories: list[str] = []
+        #: messages rejected as malformed, by topic (reported as ``rejected_messages``)
+        self.rejected: dict[str, int] = {}
         self.last_state = ControllerState.WAITING_FOR_STATE
         self._last: tuple | None = None  # (level, message, state, values)
 
@@ -140,10 +142,21 @@ class StatusReporter:
         if self._status.get_subscription_count():
             self._status.publish(self.message())
 
+    def reject(self, topic: str, error: Exception) -> None:
+        """A message on ``topic`` that is not one (``error`` says why): counted in the status,
+        logged (throttled); the node goes on."""
+        self.rejected[topic] = self.rejected.get(topic, 0) + 1
+        self._node.get_logger().error(
+            f"rejected a message on {topic}: {error} ({self.rejected[topic]} so far)",
+            throttle_duration_sec=1.0,
+        )
+
     def message(self) -> DiagnosticArray:
         """The newest status as a DiagnosticArray stamped now."""
         level, message, state, values = self._last
         values = {"state": state.value, **(values() if callable(values) else values)}
+        if self.rejected:
+            values["rejected_messages"] = ", ".join(f"{t}: {n}" for t, n in self.rejected.items())
         status = DiagnosticStatus(
             level=level,
             name=f"{self._node.get_name()}: reactionless control",

@@ -125,9 +125,13 @@ class PtpNode(Node):
         self._mode = PtpState.WAITING_FOR_STATE
         self._detail = ""
         self._rejected = ""  # why the newest goal was rejected (shown while not moving)
-        # planning in a worker thread: goals are numbered, only the newest result is taken
+        # planning in one worker thread at a time: goals are numbered, only the newest result
+        # is taken; a goal that comes while it plans waits as the newest request (flooded
+        # goals replace each other there instead of starting threads)
         self._lock = threading.Lock()
         self._generation = 0
+        self._request: tuple[int, np.ndarray, np.ndarray | None] | None = None
+        self._planner_busy = False
         # (goal, plan, input-clock time it was ready [s]): compared with state receipt times
         self._planned: tuple[int, object, float] | None = None
         self._last_status: DiagnosticStatus | None = None
@@ -229,10 +233,26 @@ class PtpNode(Node):
         self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
         with self._lock:
             self._generation += 1
-            generation = self._generation
-        threading.Thread(
-            target=self._plan, args=(generation, theta, goal), daemon=True, name="rns_ptp_plan"
-        ).start()
+            self._request = (self._generation, theta, goal)
+            if self._planner_busy:
+                self.get_logger().info(
+                    "a plan for an earlier goal is still being computed: the newest goal is "
+                    "planned next (goals in between are dropped)",
+                    throttle_duration_sec=1.0,
+                )
+                return
+            self._planner_busy = True
+        threading.Thread(target=self._planner, daemon=True, name="rns_ptp_plan").start()
+
+    def _planner(self) -> None:
+        """The planning thread: plans the newest request until none is left."""
+        while True:
+            with self._lock:
+                request, self._request = self._request, None
+                if request is None:
+                    self._planner_busy = False
+                    return
+            self._plan(*request)
 
     def goal_positions(self, msg: JointState, theta: np.ndarray) -> np.ndarray:
         """The goal configuration: the named joints at their positions, the others at ``theta``
@@ -270,6 +290,7 @@ class PtpNode(Node):
             with self._lock:
                 self._generation += 1
                 self._planned = None
+                self._request = None  # a goal waiting for the planner too
             self._deferred = None
             self._mode, self._detail = PtpState.IDLE, "planning cancelled"
             response.success, response.message = True, "planning cancelled; the arm is at rest"
@@ -327,6 +348,7 @@ class PtpNode(Node):
         with self._lock:
             self._generation += 1
             self._planned = None
+            self._request = None  # a goal waiting for the planner too
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint

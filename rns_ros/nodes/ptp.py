@@ -83,7 +83,9 @@ class PtpState(Choice):
     PLANNING = "PLANNING"
     MOVING = "MOVING"
     CANCELLING = "CANCELLING"
+    SETTLING = "SETTLING"
     DONE = "DONE"
+    GOAL_MISSED = "GOAL_MISSED"
     INVALID_GOAL = "INVALID_GOAL"
     STALE_STATE = "STALE_STATE"
     CONFLICTING_STATE = "CONFLICTING_STATE"
@@ -92,6 +94,7 @@ class PtpState(Choice):
 STATE_LEVELS = {
     PtpState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
     PtpState.INVALID_GOAL: DiagnosticStatus.ERROR,
+    PtpState.GOAL_MISSED: DiagnosticStatus.ERROR,
     PtpState.STALE_STATE: DiagnosticStatus.ERROR,
     PtpState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
 }
@@ -141,6 +144,8 @@ class PtpNode(Node):
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
         # (goal, input-clock time of the stop [s]): compared with state receipt times
         self._deferred: tuple[JointState, float] | None = None
+        # SETTLING: the plan's last sample [rad] (n,) and when it was played [s, input clock]
+        self._settle_from: tuple[np.ndarray, float] | None = None
         self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -338,7 +343,32 @@ class PtpNode(Node):
                 elapsed = 0.0  # the plan starts at this tick
         if self._mode in (PtpState.MOVING, PtpState.CANCELLING):
             self._play(elapsed)
+        elif self._mode is PtpState.SETTLING:
+            self._settle(now)
         self._publish_status(self._mode, self._detail)
+
+    def _settle(self, now: float) -> None:
+        """After the plan's last sample: DONE once every measured joint is within
+        goal_tolerance [rad] of it; GOAL_MISSED when one is not settle_timeout [s] (input clock,
+        ``now``) after the end (a simulator that refused the motion, an arm that stalled):
+        success is never reported for a motion that was not made."""
+        goal, ended = self._settle_from
+        error = np.abs(self._theta - goal)
+        joint = int(np.argmax(error))
+        if error[joint] <= self._params["goal_tolerance"]:
+            self._mode, self._detail = (
+                PtpState.DONE,
+                f"goal reached (within {error[joint]:.2g} rad)",
+            )
+            self.get_logger().info(self._detail)
+        elif now - ended > self._params["settle_timeout"]:
+            self._mode = PtpState.GOAL_MISSED
+            self._detail = (
+                f"{self.robot.joint_names[joint]} is {error[joint]:.3g} rad from the goal "
+                f"{self._params['settle_timeout']} s after the plan ended (goal_tolerance "
+                f"{self._params['goal_tolerance']} rad): the arm did not follow the plan"
+            )
+            self.get_logger().error(self._detail)
 
     def _abandon(self) -> None:
         """Zero velocity; the plan, a deferred goal and a plan being computed are dropped."""
@@ -430,9 +460,14 @@ class PtpNode(Node):
             self._publish_output(reference.theta, np.zeros(self.robot.n))
             if self._rate <= 0.0:
                 self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
+                self.get_logger().info(self._detail)
             else:
-                self._mode, self._detail = PtpState.DONE, "goal reached"
-            self.get_logger().info(self._detail)
+                # DONE only once the measured angles are there (:meth:`_settle`)
+                self._mode, self._detail = PtpState.SETTLING, "plan played: checking the angles"
+                self._settle_from = (
+                    np.array(reference.theta, dtype=float),
+                    self._input_clock.now(),
+                )
             return
         # mid-period hold correction: the rate held over the period is the plan's rate at its
         # middle (reactionless over the hold), scaled by the mid-period playback rate

@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pinocchio as pin
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rns_testing import Recorder, SimClock, status_values
@@ -729,3 +729,27 @@ def test_a_goal_flood_plans_one_goal_at_a_time_and_the_newest_wins(ros):
     assert max(planners) == 1
     assert stack.run_until(lambda: ptp._mode is PtpState.DONE, timeout=30.0)
     assert ptp.plan.goal[1] == pytest.approx(start[1] + 0.002 * 40)
+
+
+def test_done_only_once_the_measured_angles_reach_the_goal(ros):
+    """A plan played to its end is not success by itself: with its output going nowhere (a
+    simulator that refused it), the arm never moves and rns_ptp reports GOAL_MISSED naming
+    the joint and how far it is, never DONE."""
+    _node(ros, SimulatorNode)
+    ptp = ros.add(
+        PtpNode,
+        {"method": "joint_space", "duration": 0.3, "settle_timeout": 0.3},
+        remappings={"joint_references": "nowhere"},
+    )
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_ptp/status")
+    goal = ros.probe().create_publisher(JointState, "ptp_goal", 10)
+    assert ros.spin_until(lambda: ptp._theta is not None, timeout=10.0)
+    start = ptp._theta.copy()
+    goal.publish(JointState(name=["joint_2"], position=[float(start[1]) + 0.05]))
+    assert ros.spin_until(lambda: ptp._mode is PtpState.GOAL_MISSED, timeout=30.0)
+    assert ptp._detail.startswith("joint_2 is 0.05 rad from the goal")
+    assert ros.spin_until(lambda: status_values(status.messages[-1])["state"] == "GOAL_MISSED")
+    assert status.messages[-1].status[0].level == DiagnosticStatus.ERROR
+    states = {status_values(m)["state"] for m in status.messages}
+    assert "DONE" not in states
+    assert "SETTLING" in states

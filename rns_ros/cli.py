@@ -17,6 +17,7 @@ import signal
 import sys
 import threading
 from collections.abc import Callable
+from pathlib import Path
 
 #: ROS 2 domain IDs accepted here (the range that maps to valid UDP ports on every platform).
 DOMAIN_ID_RANGE = (0, 101)
@@ -95,6 +96,33 @@ def restore_default_interrupt() -> None:
     """Give Ctrl-C back to Python (KeyboardInterrupt) once main() is ready to catch it."""
     if signal.getsignal(signal.SIGINT) is _record_startup_signal:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def output_file_problem(path: Path) -> str | None:
+    """Why a file cannot be written at ``path`` (new, or replacing one), or None: checked
+    before a long run, so its result is not lost at the end."""
+    path = Path(path)
+    if path.is_dir():
+        return "is a folder, not a file"
+    folder = path.parent
+    if not folder.is_dir():
+        return f"cannot be written: its folder {str(folder)!r} does not exist"
+    if not os.access(folder, os.W_OK | os.X_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        return "cannot be written: permission denied"
+    return None
+
+
+def output_folder_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be an output folder (made with its parents when missing), or None."""
+    path = Path(path)
+    existing = path
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"cannot be a folder: {str(existing)!r} is a file"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"cannot be written: {str(existing)!r} is not writable"
+    return None
 
 
 def one_line(error: BaseException | str) -> str:

@@ -96,7 +96,9 @@ class TopicLog:
     A raw log (``msg_type`` given, :meth:`Harness.record` with ``raw=True``) keeps the serialized
     messages and deserializes them on first use of :attr:`messages`: recording costs no Python
     message per sample, which in a fast lockstep run is CPU the stack under test needs.
-    :meth:`latest_stamp` reads a raw message's header stamp without deserializing it.
+    :meth:`latest_stamp` reads a raw message's header stamp without deserializing it. Bytes
+    that are not a message of the type (anyone on the domain may send them) are dropped and
+    counted in :attr:`rejected`.
     """
 
     def __init__(self, topic: str, msg_type: type | None = None) -> None:
@@ -105,6 +107,7 @@ class TopicLog:
         self._messages: list[Any] = []
         self._raw: list[bytes] = []  # serialized, received after every one in _messages
         self.received: list[float] = []
+        self.rejected = 0  # raw messages that did not deserialize (dropped)
 
     def _append(self, msg) -> None:
         self._messages.append(msg)
@@ -118,9 +121,23 @@ class TopicLog:
     def messages(self) -> list[Any]:
         """The messages in receipt order (a raw log deserializes what it has not yet)."""
         if self._raw:
-            self._messages.extend(deserialize_message(data, self.msg_type) for data in self._raw)
-            self._raw = []
+            start = len(self._messages)
+            received = self.received[:start]
+            for data, at in zip(self._raw, self.received[start:], strict=True):
+                msg = self._deserialize(data)
+                if msg is not None:
+                    self._messages.append(msg)
+                    received.append(at)
+            self.received, self._raw = received, []
         return self._messages
+
+    def _deserialize(self, data: bytes):
+        """``data`` as a message, or None (counted in :attr:`rejected`)."""
+        try:
+            return deserialize_message(data, self.msg_type)
+        except Exception:  # rclpy raises RMWError for bytes that are not the type
+            self.rejected += 1
+            return None
 
     @messages.setter
     def messages(self, messages: list[Any]) -> None:
@@ -131,8 +148,11 @@ class TopicLog:
 
     def latest(self):
         """The newest message, or None."""
-        if self._raw:
-            return deserialize_message(self._raw[-1], self.msg_type)
+        for data in reversed(self._raw):
+            try:
+                return deserialize_message(data, self.msg_type)
+            except Exception:  # not the type: counted once :attr:`messages` reads it
+                continue
         return self._messages[-1] if self._messages else None
 
     def latest_stamp(self) -> float | None:

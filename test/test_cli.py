@@ -9,7 +9,12 @@ import sys
 
 import pytest
 
-from rns_ros.cli import add_domain_id_argument, split_ros_args
+from rns_ros.cli import (
+    add_domain_id_argument,
+    output_file_problem,
+    output_folder_problem,
+    split_ros_args,
+)
 
 ROS = ["--ros-args", "-r", "x:=y"]
 
@@ -77,3 +82,25 @@ def test_an_error_raised_out_of_an_interrupted_import_ends_quietly(interrupted):
     else:
         assert result.returncode == 1
         assert "ImportError: initialization failed" in result.stderr
+
+
+def test_output_file_problem_names_a_missing_folder_and_a_folder(tmp_path):
+    assert output_file_problem(tmp_path / "new.json") is None
+    (tmp_path / "old.json").write_text("{}")
+    assert output_file_problem(tmp_path / "old.json") is None  # replaced
+    assert output_file_problem(tmp_path) == "is a folder, not a file"
+    missing = tmp_path / "no" / "x.json"
+    assert output_file_problem(missing) == (
+        f"cannot be written: its folder {str(missing.parent)!r} does not exist"
+    )
+
+
+def test_output_folder_problem_allows_new_folders_but_not_below_a_file(tmp_path):
+    assert output_folder_problem(tmp_path) is None
+    assert output_folder_problem(tmp_path / "a" / "b") is None  # made with its parents
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert output_folder_problem(blocker) == f"cannot be a folder: {str(blocker)!r} is a file"
+    assert output_folder_problem(blocker / "sub") == (
+        f"cannot be a folder: {str(blocker)!r} is a file"
+    )

@@ -250,3 +250,18 @@ def test_spin_until_checks_a_costly_condition_at_most_every_check_every(executor
         assert len(spins) <= 2  # the whole duration in one call (a second for a rounding rest)
         assert fired
         assert all(start <= t <= end for t in fired)
+
+
+def test_a_raw_log_drops_and_counts_bytes_that_are_not_its_type():
+    """Anyone on the domain may send bytes that do not deserialize: the recorder of a run
+    drops them (with their receipt times) and counts them, never raises."""
+    log = TopicLog("/joint_states", JointState)
+    good = serialize_message(JointState(name=["a"], position=[1.0]))
+    for data in (good, good[:9], good):
+        log._append_raw(data)
+    assert log.latest().position.tolist() == [1.0]
+    assert len(log.messages) == 2
+    assert len(log.received) == 2
+    assert log.rejected == 1
+    log._append_raw(b"\x00\x01\x00\x00\xff")
+    assert log.latest().name == ["a"]  # the newest that is a message

@@ -18,7 +18,14 @@ from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
-from rns_ros.cli import add_domain_id_argument, one_line, run_main, split_ros_args
+from rns_ros.cli import (
+    add_domain_id_argument,
+    one_line,
+    output_file_problem,
+    output_folder_problem,
+    run_main,
+    split_ros_args,
+)
 from rns_ros.core import RnsError
 from rns_ros.resources import default_model_config, scenario_path
 from rns_ros.runs.clock import clock_text
@@ -180,6 +187,12 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
             )
     if args.runs > 1 and (args.scenario in PTP_SCENARIOS or is_contact_scenario(args.scenario)):
         parser.error("--runs is for the inspection scenarios")
+    # output paths before the runs: a summary or a recording that cannot be written is a
+    # usage error now, not a traceback after the task
+    if args.summary is not None and (problem := output_file_problem(args.summary)):
+        parser.error(f"--summary {str(args.summary)!r} {problem}")
+    if not args.no_record and (problem := output_folder_problem(args.output)):
+        parser.error(f"--output {str(args.output)!r} {problem}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -273,7 +286,12 @@ def _report(args, rows, table: str, problems: list[str], epilogue: str, summary:
     if recordings:
         print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
     if args.summary:
-        args.summary.write_text(json.dumps(summary, indent=2) + "\n")
+        try:
+            args.summary.write_text(json.dumps(summary, indent=2) + "\n")
+        except OSError as exc:  # checked at start-up; the folder went away meanwhile
+            print(f"rns_demo: cannot write --summary {str(args.summary)!r}: {exc.strerror}",
+                  file=sys.stderr)  # fmt: skip
+            return 2
         print(f"summary written to {args.summary}")
     return 0
 

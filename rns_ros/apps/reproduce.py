@@ -21,7 +21,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from rns_ros.cli import run_main
+from rns_ros.cli import output_file_problem, run_main
 
 PROGRAM = "rns_reproduce"
 DEFAULT_RUN_DIR = "reproduction_out"
@@ -89,6 +89,23 @@ def _run(reproductions, out: Path, quick: bool, progress: bool):
     return records
 
 
+def _announce_replaced(reproductions, out: Path) -> None:
+    """Say which earlier results in ``out`` the run replaces (their JSON and PNG files)."""
+    replaced = [
+        reproduction.id
+        for reproduction in reproductions
+        if any((out / f"{reproduction.id}.{suffix}").exists() for suffix in ("json", "png"))
+    ]
+    if replaced:
+        shown = ", ".join(replaced[:5]) + (
+            f" and {len(replaced) - 5} more" if len(replaced) > 5 else ""
+        )
+        print(
+            f"{PROGRAM}: replacing {len(replaced)} earlier result(s) in {out}: {shown}",
+            file=sys.stderr,
+        )
+
+
 def _use_dask_scheduler(address: str, ids: list[str]) -> None:
     """Check the scheduler answers, then hand its address to fig5.3 (the only result that uses
     one) through the environment variable chapter5.DASK_SCHEDULER_ENV."""
@@ -119,12 +136,21 @@ def _body(argv: Sequence[str]) -> int:
         reproductions = resolve(args.ids)
         if args.dask_scheduler is not None:
             _use_dask_scheduler(args.dask_scheduler, [r.id for r in reproductions])
-        _run(reproductions, output_dir(args.out), args.quick, progress=False)
+        out = output_dir(args.out)
+        _announce_replaced(reproductions, out)
+        _run(reproductions, out, args.quick, progress=False)
         return 0
     out = output_dir(args.out)
     report = Path(args.report) if args.report else out.with_suffix(".md")
+    problem = output_file_problem(report)
+    if problem is not None:  # before the hour of work, not after it
+        from rns_ros.core.errors import ConfigError
+
+        raise ConfigError(f"--report {str(report)!r} {problem}")
+    reproductions = list(load_all().values())
+    _announce_replaced(reproductions, out)
     start = time.perf_counter()
-    records = _run(list(load_all().values()), out, args.quick, progress=True)
+    records = _run(reproductions, out, args.quick, progress=True)
     figures = os.path.relpath(out.resolve(), report.resolve().parent)
     try:
         report.write_text(report_markdown(records, figures))

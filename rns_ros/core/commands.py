@@ -9,6 +9,7 @@ wrong and what would be valid.
 from __future__ import annotations
 
 import functools
+from collections import Counter
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -19,6 +20,8 @@ from rns_ros.core.errors import InputError
 #: Commanded speeds may exceed the URDF velocity limit by this fraction before rejection [-]
 #: (controllers that scale exactly to the limit land a rounding error above it).
 VELOCITY_LIMIT_TOLERANCE = 0.01
+#: Names an error message lists at most [-] (a stranger's command may name thousands).
+MAX_LISTED = 10
 
 
 class NamedJointCommand(NamedTuple):
@@ -42,26 +45,56 @@ def joint_order(names: Sequence[str], model_joints: Sequence[str]) -> np.ndarray
     cached (the returned array is read-only).
 
     Raises:
-        InputError: unknown, missing or duplicated joint names (all listed).
+        InputError: more names than the model has joints; unknown, missing or duplicated joint
+            names (listed, at most MAX_LISTED of each).
     """
+    check_name_count(len(names), model_joints)
     return _cached_order(tuple(names), tuple(model_joints))
+
+
+def check_name_count(count: int, model_joints: Sequence[str]) -> None:
+    """A command naming ``count`` joints can address the model at all: at most one name per
+    joint (checked first, in constant time: the other checks are linear in the names).
+
+    Raises:
+        InputError: more names than joints.
+    """
+    if count > len(model_joints):
+        raise InputError(
+            f"the command names {count} joints; the model has {len(model_joints)}: "
+            f"{list(model_joints)}"
+        )
+
+
+def listed(items: Sequence[str]) -> str:
+    """``items`` as a list, the first MAX_LISTED of them and how many more."""
+    items = list(items)
+    if len(items) <= MAX_LISTED:
+        return str(items)
+    return f"{items[:MAX_LISTED]} and {len(items) - MAX_LISTED} more"
+
+
+def _duplicated(names: Sequence[str]) -> list[str]:
+    return sorted(name for name, count in Counter(names).items() if count > 1)
 
 
 @functools.lru_cache(maxsize=16)
 def _cached_order(names: tuple[str, ...], model_joints: tuple[str, ...]) -> np.ndarray:
-    unknown = sorted(set(names) - set(model_joints))
-    missing = [joint for joint in model_joints if joint not in names]
-    duplicated = sorted({joint for joint in names if names.count(joint) > 1})
+    named = set(names)
+    unknown = sorted(named - set(model_joints))
+    missing = [joint for joint in model_joints if joint not in named]
+    duplicated = _duplicated(names)
     problems = []
     if unknown:
-        problems.append(f"unknown joints {unknown}")
+        problems.append(f"unknown joints {listed(unknown)}")
     if missing:
-        problems.append(f"missing joints {missing}")
+        problems.append(f"missing joints {listed(missing)}")
     if duplicated:
-        problems.append(f"duplicated joints {duplicated}")
+        problems.append(f"duplicated joints {listed(duplicated)}")
     if problems:
         raise InputError("; ".join(problems) + f" (model joints: {list(model_joints)})")
-    order = np.array([names.index(joint) for joint in model_joints])
+    index = {name: i for i, name in enumerate(names)}
+    order = np.array([index[joint] for joint in model_joints])
     order.flags.writeable = False
     return order
 
@@ -167,22 +200,25 @@ def partial_joint_goal(
         InputError: no names, unknown or duplicated names, a length mismatch, non-finite values,
             or a goal outside the URDF limits (the message names the joint and the range).
     """
-    names, positions, model = list(names), list(positions), list(model_joints)
-    if not names:
+    model = list(model_joints)
+    if not len(names):
         raise InputError("goal names no joint")
+    check_name_count(len(names), model)
+    names, positions = list(names), list(positions)
     if len(positions) != len(names):
         raise InputError(f"goal has {len(positions)} positions for {len(names)} names")
     unknown = sorted(set(names) - set(model))
     if unknown:
-        raise InputError(f"unknown joints {unknown} (model joints: {model})")
-    duplicated = sorted({name for name in names if names.count(name) > 1})
+        raise InputError(f"unknown joints {listed(unknown)} (model joints: {model})")
+    duplicated = _duplicated(names)
     if duplicated:
-        raise InputError(f"duplicated joints {duplicated}")
+        raise InputError(f"duplicated joints {listed(duplicated)}")
+    index = {name: i for i, name in enumerate(model)}
     goal = np.array(current, dtype=float)
     for name, value in zip(names, positions, strict=True):
         if not np.isfinite(value):
             raise InputError(f"goal position of {name} must be finite, got {value}")
-        goal[model.index(name)] = value
+        goal[index[name]] = value
     for i, name in enumerate(model):
         if not lower[i] <= goal[i] <= upper[i]:
             raise InputError(

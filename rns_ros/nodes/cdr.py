@@ -32,7 +32,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from rns_ros.core.errors import RnsError
+from rns_ros.core.errors import InputError, RnsError
 
 #: Stamp markers (sec, nanosec): unlikely byte patterns in any other field.
 _MARK_SEC, _MARK_NANOSEC = 0x5A17C0DE, 0x3B9AC9FF - 0x1234
@@ -40,6 +40,25 @@ _MARK_SEC, _MARK_NANOSEC = 0x5A17C0DE, 0x3B9AC9FF - 0x1234
 
 class TemplateError(RnsError):
     """A message's layout could not be captured in a template (publish messages instead)."""
+
+
+class MalformedMessageError(InputError):
+    """Received bytes that are not a message of the subscribed type (truncated, corrupt, or
+    of another type): anyone on the domain may send them, so the node rejects them and goes on."""
+
+
+def deserialize_or_reject(data: bytes, message_type: type):
+    """``data`` deserialized as ``message_type`` by rclpy.
+
+    Raises:
+        MalformedMessageError: they are not one (rclpy's RMWError, or any other failure).
+    """
+    try:
+        return deserialize_message(data, message_type)
+    except Exception as exc:  # rclpy raises RMWError; a broken buffer must never end a node
+        raise MalformedMessageError(
+            f"{len(data)} bytes that are not a {message_type.__name__} ({type(exc).__name__})"
+        ) from None
 
 
 Filler = Callable[[object, Mapping[str, np.ndarray]], None]
@@ -233,8 +252,9 @@ class JointStateFields(NamedTuple):
 
 class _NamedStreamReader:
     """Reads one stream of serialized messages that start with a header and a name list:
-    ``reader(data)`` is their fields (rclpy deserializes what :meth:`parse` declines). It keeps
-    the last name list, which a stream repeats, to skip parsing it."""
+    ``reader(data)`` is their fields (rclpy deserializes what :meth:`parse` declines; bytes that
+    are not the message raise :class:`MalformedMessageError`). It keeps the last name list, which
+    a stream repeats, to skip parsing it."""
 
     def __init__(self) -> None:
         self._names: tuple[bytes, tuple[str, ...]] | None = None
@@ -271,7 +291,7 @@ class JointStateReader(_NamedStreamReader):
         return JointStateFields(stamp, names, position, velocity, effort)
 
     def _from_message(self, data: bytes) -> JointStateFields:
-        return joint_state_fields(deserialize_message(data, JointState))
+        return joint_state_fields(deserialize_or_reject(data, JointState))
 
 
 class TrajectoryFields(NamedTuple):
@@ -299,7 +319,7 @@ class JointTrajectoryReader(_NamedStreamReader):
         return TrajectoryFields(stamp, names, points, *(first or (empty,) * 3))
 
     def _from_message(self, data: bytes) -> TrajectoryFields:
-        return trajectory_fields(deserialize_message(data, JointTrajectory))
+        return trajectory_fields(deserialize_or_reject(data, JointTrajectory))
 
 
 class OdometryFields(NamedTuple):
@@ -314,9 +334,13 @@ class OdometryFields(NamedTuple):
 
 def read_odometry(data: bytes) -> OdometryFields:
     """A serialized nav_msgs/Odometry's fields (rclpy deserializes what
-    :func:`parse_odometry` declines)."""
+    :func:`parse_odometry` declines).
+
+    Raises:
+        MalformedMessageError: the bytes are not an Odometry.
+    """
     fields = parse_odometry(data)
-    return odometry_fields(deserialize_message(data, Odometry)) if fields is None else fields
+    return odometry_fields(deserialize_or_reject(data, Odometry)) if fields is None else fields
 
 
 def parse_odometry(data: bytes) -> OdometryFields | None:
@@ -349,10 +373,14 @@ class TwistFields(NamedTuple):
 
 def read_twist_stamped(data: bytes) -> TwistFields:
     """A serialized geometry_msgs/TwistStamped's fields (rclpy deserializes what
-    :func:`parse_twist_stamped` declines)."""
+    :func:`parse_twist_stamped` declines).
+
+    Raises:
+        MalformedMessageError: the bytes are not a TwistStamped.
+    """
     fields = parse_twist_stamped(data)
     if fields is None:
-        return twist_stamped_fields(deserialize_message(data, TwistStamped))
+        return twist_stamped_fields(deserialize_or_reject(data, TwistStamped))
     return fields
 
 

@@ -71,7 +71,13 @@ from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes import controller_parameters
-from rns_ros.nodes.cdr import JointStateReader, TwistFields, read_odometry, read_twist_stamped
+from rns_ros.nodes.cdr import (
+    JointStateReader,
+    MalformedMessageError,
+    TwistFields,
+    read_odometry,
+    read_twist_stamped,
+)
 from rns_ros.nodes.clock_ticks import ClockTicks
 from rns_ros.nodes.controller_output import JointOutput
 from rns_ros.nodes.controller_parameters import (
@@ -232,7 +238,11 @@ class ControllerNode(Node):
 
     # --- inputs ---------------------------------------------------------------------------------
     def _on_stamped(self, data: bytes) -> None:
-        fields = read_twist_stamped(data)
+        try:
+            fields = read_twist_stamped(data)
+        except MalformedMessageError as exc:
+            self._reporter.reject(self._topics["cmd_twist"], exc)
+            return
         self._reporter.count(TWISTS_RECEIVED)
         if self._awaited is None:
             self._take_twist(fields.angular, fields.linear, fields.frame_id)
@@ -305,7 +315,11 @@ class ControllerNode(Node):
         return frame is not command.frame or not np.array_equal(angular, command.angular)
 
     def _on_joint_state(self, data: bytes) -> None:
-        fields = self._joint_state_reader(data)
+        try:
+            fields = self._joint_state_reader(data)
+        except MalformedMessageError as exc:
+            self._reporter.reject(self._topics["joint_states"], exc)
+            return
         try:
             command = match_named_command(
                 fields.names,
@@ -350,7 +364,11 @@ class ControllerNode(Node):
         )
 
     def _on_odom(self, data: bytes) -> None:
-        fields = read_odometry(data)
+        try:
+            fields = read_odometry(data)
+        except MalformedMessageError as exc:
+            self._reporter.reject(self.resolve_topic_name("base_odom"), exc)
+            return
         pose = base_pose(fields.pose)
         if pose is not None:
             self._base_position, self._base_orientation = pose

@@ -128,6 +128,8 @@ class StatusReporter:
         self.advisories: list[str] = []
         #: counts reported as key values in every status (e.g. ``twists_received``)
         self.counters: dict[str, int] = {}
+        #: messages rejected as malformed, by topic (reported as ``rejected_messages``)
+        self.rejected: dict[str, int] = {}
         self.last_state = ControllerState.WAITING_FOR_STATE
         self._last: tuple | None = None  # (level, message, state, values)
 
@@ -150,11 +152,22 @@ class StatusReporter:
         """One more of ``key`` (reported in every status from now on)."""
         self.counters[key] = self.counters.get(key, 0) + 1
 
+    def reject(self, topic: str, error: Exception) -> None:
+        """A message on ``topic`` that is not one (``error`` says why): counted in the status,
+        logged (throttled); the node goes on."""
+        self.rejected[topic] = self.rejected.get(topic, 0) + 1
+        self._node.get_logger().error(
+            f"rejected a message on {topic}: {error} ({self.rejected[topic]} so far)",
+            throttle_duration_sec=1.0,
+        )
+
     def message(self) -> DiagnosticArray:
         """The newest status as a DiagnosticArray stamped now."""
         level, message, state, values = self._last
         values = {"state": state.value, **(values() if callable(values) else values)}
         values.update(self.counters)
+        if self.rejected:
+            values["rejected_messages"] = ", ".join(f"{t}: {n}" for t, n in self.rejected.items())
         status = DiagnosticStatus(
             level=level,
             name=f"{self._node.get_name()}: reactionless control",

@@ -83,7 +83,9 @@ class PtpState(Choice):
     PLANNING = "PLANNING"
     MOVING = "MOVING"
     CANCELLING = "CANCELLING"
+    SETTLING = "SETTLING"
     DONE = "DONE"
+    GOAL_MISSED = "GOAL_MISSED"
     INVALID_GOAL = "INVALID_GOAL"
     STALE_STATE = "STALE_STATE"
     CONFLICTING_STATE = "CONFLICTING_STATE"
@@ -92,6 +94,7 @@ class PtpState(Choice):
 STATE_LEVELS = {
     PtpState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
     PtpState.INVALID_GOAL: DiagnosticStatus.ERROR,
+    PtpState.GOAL_MISSED: DiagnosticStatus.ERROR,
     PtpState.STALE_STATE: DiagnosticStatus.ERROR,
     PtpState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
 }
@@ -125,9 +128,13 @@ class PtpNode(Node):
         self._mode = PtpState.WAITING_FOR_STATE
         self._detail = ""
         self._rejected = ""  # why the newest goal was rejected (shown while not moving)
-        # planning in a worker thread: goals are numbered, only the newest result is taken
+        # planning in one worker thread at a time: goals are numbered, only the newest result
+        # is taken; a goal that comes while it plans waits as the newest request (flooded
+        # goals replace each other there instead of starting threads)
         self._lock = threading.Lock()
         self._generation = 0
+        self._request: tuple[int, np.ndarray, np.ndarray | None] | None = None
+        self._planner_busy = False
         # (goal, plan, input-clock time it was ready [s]): compared with state receipt times
         self._planned: tuple[int, object, float] | None = None
         self._last_status: DiagnosticStatus | None = None
@@ -137,6 +144,8 @@ class PtpNode(Node):
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
         # (goal, input-clock time of the stop [s]): compared with state receipt times
         self._deferred: tuple[JointState, float] | None = None
+        # SETTLING: the plan's last sample [rad] (n,) and when it was played [s, input clock]
+        self._settle_from: tuple[np.ndarray, float] | None = None
         self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -229,10 +238,26 @@ class PtpNode(Node):
         self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
         with self._lock:
             self._generation += 1
-            generation = self._generation
-        threading.Thread(
-            target=self._plan, args=(generation, theta, goal), daemon=True, name="rns_ptp_plan"
-        ).start()
+            self._request = (self._generation, theta, goal)
+            if self._planner_busy:
+                self.get_logger().info(
+                    "a plan for an earlier goal is still being computed: the newest goal is "
+                    "planned next (goals in between are dropped)",
+                    throttle_duration_sec=1.0,
+                )
+                return
+            self._planner_busy = True
+        threading.Thread(target=self._planner, daemon=True, name="rns_ptp_plan").start()
+
+    def _planner(self) -> None:
+        """The planning thread: plans the newest request until none is left."""
+        while True:
+            with self._lock:
+                request, self._request = self._request, None
+                if request is None:
+                    self._planner_busy = False
+                    return
+            self._plan(*request)
 
     def goal_positions(self, msg: JointState, theta: np.ndarray) -> np.ndarray:
         """The goal configuration: the named joints at their positions, the others at ``theta``
@@ -270,6 +295,7 @@ class PtpNode(Node):
             with self._lock:
                 self._generation += 1
                 self._planned = None
+                self._request = None  # a goal waiting for the planner too
             self._deferred = None
             self._mode, self._detail = PtpState.IDLE, "planning cancelled"
             response.success, response.message = True, "planning cancelled; the arm is at rest"
@@ -317,7 +343,32 @@ class PtpNode(Node):
                 elapsed = 0.0  # the plan starts at this tick
         if self._mode in (PtpState.MOVING, PtpState.CANCELLING):
             self._play(elapsed)
+        elif self._mode is PtpState.SETTLING:
+            self._settle(now)
         self._publish_status(self._mode, self._detail)
+
+    def _settle(self, now: float) -> None:
+        """After the plan's last sample: DONE once every measured joint is within
+        goal_tolerance [rad] of it; GOAL_MISSED when one is not settle_timeout [s] (input clock,
+        ``now``) after the end (a simulator that refused the motion, an arm that stalled):
+        success is never reported for a motion that was not made."""
+        goal, ended = self._settle_from
+        error = np.abs(self._theta - goal)
+        joint = int(np.argmax(error))
+        if error[joint] <= self._params["goal_tolerance"]:
+            self._mode, self._detail = (
+                PtpState.DONE,
+                f"goal reached (within {error[joint]:.2g} rad)",
+            )
+            self.get_logger().info(self._detail)
+        elif now - ended > self._params["settle_timeout"]:
+            self._mode = PtpState.GOAL_MISSED
+            self._detail = (
+                f"{self.robot.joint_names[joint]} is {error[joint]:.3g} rad from the goal "
+                f"{self._params['settle_timeout']} s after the plan ended (goal_tolerance "
+                f"{self._params['goal_tolerance']} rad): the arm did not follow the plan"
+            )
+            self.get_logger().error(self._detail)
 
     def _abandon(self) -> None:
         """Zero velocity; the plan, a deferred goal and a plan being computed are dropped."""
@@ -327,6 +378,7 @@ class PtpNode(Node):
         with self._lock:
             self._generation += 1
             self._planned = None
+            self._request = None  # a goal waiting for the planner too
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint
@@ -408,9 +460,14 @@ class PtpNode(Node):
             self._publish_output(reference.theta, np.zeros(self.robot.n))
             if self._rate <= 0.0:
                 self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
+                self.get_logger().info(self._detail)
             else:
-                self._mode, self._detail = PtpState.DONE, "goal reached"
-            self.get_logger().info(self._detail)
+                # DONE only once the measured angles are there (:meth:`_settle`)
+                self._mode, self._detail = PtpState.SETTLING, "plan played: checking the angles"
+                self._settle_from = (
+                    np.array(reference.theta, dtype=float),
+                    self._input_clock.now(),
+                )
             return
         # mid-period hold correction: the rate held over the period is the plan's rate at its
         # middle (reactionless over the hold), scaled by the mid-period playback rate

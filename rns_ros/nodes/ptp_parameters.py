@@ -64,6 +64,24 @@ PARAMETERS = (
     ),
     CLOCK_TIMEOUT,
     ParameterSpec(
+        "goal_tolerance",
+        0.01,
+        "DONE once every measured joint is this close to the plan's last sample; else "
+        "GOAL_MISSED after settle_timeout",
+        "[rad]",
+        1e-6,
+        1.0,
+    ),
+    ParameterSpec(
+        "settle_timeout",
+        1.0,
+        "Time after the plan's end for the measured joints to come within goal_tolerance "
+        "(node clock)",
+        "[s]",
+        0.01,
+        60.0,
+    ),
+    ParameterSpec(
         "cancel_deceleration",
         2.0,
         "On ~/cancel the playback rate (1 while moving) falls to 0 at this rate: the arm stops on "

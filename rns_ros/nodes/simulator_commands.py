@@ -22,7 +22,7 @@ from rns_ros.core.commands import (
     match_named_command,
 )
 from rns_ros.core.errors import InputError
-from rns_ros.nodes.cdr import JointTrajectoryReader
+from rns_ros.nodes.cdr import JointTrajectoryReader, MalformedMessageError
 from rns_ros.nodes.lockstep import LockstepPacer
 from rns_ros.nodes.parameters import velocity_joint_order
 from rns_ros.sim.free_floating import FreeFloatingSimulator
@@ -99,6 +99,7 @@ class CommandIntake:
         self._last_wheel_command: float | None = None  # monotonic receipt time [s]
         self._wheel_command_sim_time = 0.0
         self._wheel_stale_logged = False
+        self.malformed = 0  # joint_references that were not a JointTrajectory (rejected)
         self._subscribe(node, params)
 
     def _subscribe(self, node: Node, params: dict) -> None:
@@ -131,7 +132,12 @@ class CommandIntake:
 
     # --- executor thread ------------------------------------------------------------------------
     def _on_trajectory(self, data: bytes) -> None:
-        msg = self._trajectory_reader(data)
+        try:
+            msg = self._trajectory_reader(data)
+        except MalformedMessageError as exc:
+            self.malformed += 1
+            self._reject(f"{exc} ({self.malformed} so far)")
+            return
         if not msg.points:
             self._reject("JointTrajectory has no points")
             return

@@ -44,7 +44,7 @@ PTP_METHODS = {
     "transposed_jacobian": "TJ-C",
 }
 #: States of rns_ptp that end a demo run without reaching the goal.
-FAILED_STATES = ("INVALID_GOAL", "STALE_STATE", "CONFLICTING_STATE")
+FAILED_STATES = ("INVALID_GOAL", "GOAL_MISSED", "STALE_STATE", "CONFLICTING_STATE")
 #: Wall-time allowance for planning (IJ-C/TJ-C integrate the 3-phase plan first) [s].
 PLANNING_ALLOWANCE = 60.0
 SETTLE = 0.3

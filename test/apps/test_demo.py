@@ -179,6 +179,29 @@ def test_demo_rejects_bad_arguments(argv, message, capsys):
     assert message in capsys.readouterr().err
 
 
+def test_demo_checks_its_output_paths_before_the_runs(tmp_path, capsys):
+    """A summary or a recording folder that cannot be written is a usage error at start-up
+    (exit 2, naming the path), not a traceback after the task."""
+    missing = tmp_path / "no" / "such" / "s.json"
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    cases = [
+        (
+            ["--summary", str(missing), "--no-record"],
+            f"its folder {str(missing.parent)!r} does not",
+        ),
+        (["--summary", str(tmp_path), "--no-record"], "is a folder, not a file"),
+        (["--output", str(blocker / "rec")], f"{str(blocker)!r} is a file"),
+    ]
+    for argv, message in cases:
+        with pytest.raises(SystemExit) as exit_info:
+            main(argv)
+        assert exit_info.value.code == 2
+        err = capsys.readouterr().err
+        assert message in err, err
+        assert "running" not in err
+
+
 def test_demo_reports_an_unknown_scenario(capsys):
     assert main(["--scenario", "nowhere", "--no-record"]) == 2
     assert "neither a file nor one of" in capsys.readouterr().err

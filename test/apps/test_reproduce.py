@@ -95,6 +95,35 @@ def test_bad_ids_and_usage_are_one_line_and_exit_2(fakes, capsys, argv, message)
     assert message in err[0]
 
 
+def test_a_report_that_cannot_be_written_stops_before_the_work(
+    fakes, monkeypatch, tmp_path, capsys
+):
+    """The report is written after every result: a path that cannot take it is an error at
+    start-up (one line, exit 2), before any result is computed."""
+    computed = []
+    slow = Reproduction(
+        "fake1", "Fig. 0.1", "a line", lambda q: computed.append(q) or _line(2.0), _plot
+    )
+    monkeypatch.setattr(registry, "load_all", lambda: {"fake1": slow})
+    report = tmp_path / "no" / "such" / "report.md"
+    assert reproduce.main(["all", "--out", str(tmp_path / "out"), "--report", str(report)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"rns_reproduce: --report {str(report)!r} cannot be written: its folder "
+        f"{str(report.parent)!r} does not exist"
+    ]
+    assert computed == []
+
+
+def test_earlier_results_that_a_run_replaces_are_named(fakes, tmp_path, capsys):
+    assert reproduce.main(["run", "fake1", "--out", str(tmp_path), "--quick"]) == 0
+    assert "replacing" not in capsys.readouterr().err  # nothing there yet
+    assert reproduce.main(["run", "fake1", "fake.2", "--out", str(tmp_path), "--quick"]) == 0
+    assert f"rns_reproduce: replacing 1 earlier result(s) in {tmp_path}: fake1" in (
+        capsys.readouterr().err
+    )
+
+
 def test_an_unwritable_output_is_one_line_and_exit_2(fakes, tmp_path, capsys):
     blocker = tmp_path / "a_file"
     blocker.write_text("")

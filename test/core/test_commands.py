@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rns_ros.core import InputError
-from rns_ros.core.commands import match_named_command
+from rns_ros.core.commands import listed, match_named_command, partial_joint_goal
 
 JOINTS = ("a", "b", "c")
 LIMITS = np.array([1.0, 1.0, 2.0])
@@ -30,7 +30,8 @@ def test_reorders_into_model_order():
             r"unknown joints \['x'\].*missing joints \['c'\]",
         ),
         (["a", "b"], {"velocities": [0, 0]}, r"missing joints \['c'\]"),
-        (["a", "a", "b", "c"], {"velocities": [0, 0, 0, 0]}, r"duplicated joints \['a'\]"),
+        (["a", "a", "b"], {"velocities": [0, 0, 0]}, r"duplicated joints \['a'\]"),
+        (["a"] * 15000, {"velocities": [0] * 15000}, r"names 15000 joints; the model has 3"),
         (["a", "b", "c"], {"velocities": [0, 0]}, "velocities has 2 values for 3 joints"),
         (["a", "b", "c"], {"positions": [0, np.nan, 0]}, "positions must be finite"),
         (["a", "b", "c"], {"velocities": [0, np.inf, 0]}, "velocities must be finite"),
@@ -48,3 +49,37 @@ def test_speed_at_the_limit_is_accepted():
         ["a", "b", "c"], JOINTS, velocities=[1.0, -1.005, 2.0], velocity_limits=LIMITS
     )
     assert command.velocities[1] == -1.005
+
+
+GOAL_MODEL = ["a", "b", "c"]
+GOAL_LIMITS = (np.full(3, -1.0), np.full(3, 1.0))
+
+
+def test_a_partial_goal_keeps_the_unnamed_joints_where_they_are():
+    goal = partial_joint_goal(
+        ["c", "a"], [0.5, -0.25], GOAL_MODEL, np.array([0.1, 0.2, 0.3]), *GOAL_LIMITS
+    )
+    np.testing.assert_array_equal(goal, [-0.25, 0.2, 0.5])
+
+
+@pytest.mark.parametrize(
+    ("names", "positions", "message"),
+    [
+        ([], [], "goal names no joint"),
+        (["a"] * 15000, [0.0] * 15000, "names 15000 joints; the model has 3"),
+        (["a", "a"], [0.0, 0.1], r"duplicated joints \['a'\]"),
+        (["a", "x"], [0.0, 0.1], r"unknown joints \['x'\]"),
+        (["a"], [float("nan")], "goal position of a must be finite"),
+        (["b"], [2.0], r"goal b = 2 rad is outside its limits \[-1, 1\] rad"),
+    ],
+)
+def test_a_bad_partial_goal_is_rejected_with_its_reason(names, positions, message):
+    """A goal with more names than the model has joints is rejected before any per-name check
+    (a 15000-name goal must not cost seconds)."""
+    with pytest.raises(InputError, match=message):
+        partial_joint_goal(names, positions, GOAL_MODEL, np.zeros(3), *GOAL_LIMITS)
+
+
+def test_long_name_lists_are_cut_in_messages():
+    assert listed(["a", "b"]) == "['a', 'b']"
+    assert listed([str(k) for k in range(25)]).endswith("'9'] and 15 more")

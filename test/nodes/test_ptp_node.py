@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import threading
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -10,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pinocchio as pin
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rns_testing import Recorder, SimClock, status_values
@@ -23,7 +24,7 @@ from rns_ros.analysis.ptp_runs import run_plan
 from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
-from rns_ros.nodes.ptp import PtpNode
+from rns_ros.nodes.ptp import PtpNode, PtpState
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
 
@@ -703,3 +704,52 @@ def test_sim_time_a_state_stale_in_simulated_time_stops_the_arm(ros):
     assert "(state_timeout 0.5 s)" in message
     assert np.all(_velocities(stack) == 0.0)
     assert stack.ptp.plan is None
+
+
+def test_a_goal_flood_plans_one_goal_at_a_time_and_the_newest_wins(ros):
+    """Goals sent faster than they are planned (each plan held up 0.2 s here) never run more
+    than one planner thread; goals that come meanwhile replace each other, and the newest is
+    the one planned and played."""
+    stack = _stack(ros, method="joint_space", duration=0.5)
+    ptp = stack.ptp
+    plan = ptp._plan
+
+    def slow_plan(*args):
+        time.sleep(0.2)
+        plan(*args)
+
+    ptp._plan = slow_plan
+    assert stack.run_until(lambda: ptp._theta is not None, timeout=10.0)
+    start = ptp._theta.copy()
+    planners = []
+    for k in range(1, 41):
+        stack.goal.publish(JointState(name=["joint_2"], position=[float(start[1]) + 0.002 * k]))
+        ros.spin_for(0.01)
+        planners.append(sum(t.name == "rns_ptp_plan" for t in threading.enumerate()))
+    assert max(planners) == 1
+    assert stack.run_until(lambda: ptp._mode is PtpState.DONE, timeout=30.0)
+    assert ptp.plan.goal[1] == pytest.approx(start[1] + 0.002 * 40)
+
+
+def test_done_only_once_the_measured_angles_reach_the_goal(ros):
+    """A plan played to its end is not success by itself: with its output going nowhere (a
+    simulator that refused it), the arm never moves and rns_ptp reports GOAL_MISSED naming
+    the joint and how far it is, never DONE."""
+    _node(ros, SimulatorNode)
+    ptp = ros.add(
+        PtpNode,
+        {"method": "joint_space", "duration": 0.3, "settle_timeout": 0.3},
+        remappings={"joint_references": "nowhere"},
+    )
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_ptp/status")
+    goal = ros.probe().create_publisher(JointState, "ptp_goal", 10)
+    assert ros.spin_until(lambda: ptp._theta is not None, timeout=10.0)
+    start = ptp._theta.copy()
+    goal.publish(JointState(name=["joint_2"], position=[float(start[1]) + 0.05]))
+    assert ros.spin_until(lambda: ptp._mode is PtpState.GOAL_MISSED, timeout=30.0)
+    assert ptp._detail.startswith("joint_2 is 0.05 rad from the goal")
+    assert ros.spin_until(lambda: status_values(status.messages[-1])["state"] == "GOAL_MISSED")
+    assert status.messages[-1].status[0].level == DiagnosticStatus.ERROR
+    states = {status_values(m)["state"] for m in status.messages}
+    assert "DONE" not in states
+    assert "SETTLING" in states

@@ -174,7 +174,9 @@ class ControllerNode(Node):
         self._output = self._joint_output.publisher  # destroy_node waits for its acks
         self._reporter = StatusReporter(self, self.robot.name)
         self._limit_stop = JointLimitStop(self._period)
-        self._sources = InputPublishers(self, self._topics, self._command_type)
+        self._sources = InputPublishers(
+            self, self._topics, self._command_type, self._output.topic_name
+        )
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._start_ticks()

@@ -37,7 +37,6 @@ from __future__ import annotations
 import math
 import threading
 import time
-from types import SimpleNamespace
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -63,7 +62,7 @@ from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
-from rns_ros.nodes.status import level_rank, node_names, status_text
+from rns_ros.nodes.status import level_rank, node_names, other_publishers, status_text
 from rns_ros.resources import default_model_config
 
 #: A goal whose JointState name list is exactly this runs the full reactionless deployment.
@@ -587,14 +586,7 @@ class PtpNode(Node):
             for info in self.get_publishers_info_by_topic(self._state_topic)
             if info.topic_type == "sensor_msgs/msg/JointState"
         )
-        me = node_names(
-            [SimpleNamespace(node_name=self.get_name(), node_namespace=self.get_namespace())]
-        )
-        commanders = [
-            name
-            for name in node_names(self.get_publishers_info_by_topic(self._output_topic))
-            if name not in me
-        ]
+        commanders = other_publishers(self, self._output_topic)
         for name in set(commanders) - set(self._commanders):
             self.get_logger().warn(
                 f"{name} also publishes on {self._output_topic}: only one of rns_controller / "

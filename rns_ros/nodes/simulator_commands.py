@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from geometry_msgs.msg import Vector3Stamped
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
@@ -25,6 +26,7 @@ from rns_ros.core.errors import InputError
 from rns_ros.nodes.cdr import JointTrajectoryReader, MalformedMessageError
 from rns_ros.nodes.lockstep import LockstepPacer
 from rns_ros.nodes.parameters import velocity_joint_order
+from rns_ros.nodes.status import node_names
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 #: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to (older: another clock
@@ -33,6 +35,8 @@ MAX_CATCH_UP = 0.05
 #: Most JointTrajectories stamped ahead that wait for their stamps (within one lockstep period
 #: of the simulated time: a controller's next one or two; a flood keeps the newest).
 MAX_PENDING = 8
+#: Period [s] (wall clock) of the check for more than one node commanding the joints.
+COMMANDER_CHECK_PERIOD = 1.0
 #: Lockstep: a command stamped up to this long [s] before the simulated time still puts the
 #: pauses on its stamp's grid (older: another clock; the period counts from its receipt).
 MAX_GRID_AGE = 1.0
@@ -112,7 +116,7 @@ class CommandIntake:
             # taken serialized: the simulator reads the first point from the bytes
             # (rns_ros.nodes.cdr), cheaper than rclpy building the message (~27 us)
             self._trajectory_reader = JointTrajectoryReader()
-            node.create_subscription(
+            subscription = node.create_subscription(
                 JointTrajectory,
                 "joint_references",
                 self._on_trajectory,
@@ -122,13 +126,34 @@ class CommandIntake:
         else:
             self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
             self._velocity_joints = list(params["joints"])
-            node.create_subscription(
+            subscription = node.create_subscription(
                 Float64MultiArray, "joint_velocities", self._on_velocities, command_qos
             )
+        # who commands the joints, read from the graph once a second (wall clock: also while
+        # a lockstep pause holds the simulated time)
+        self.commanders: list[str] = []
+        self._command_topic = subscription.topic_name
+        node.create_timer(
+            COMMANDER_CHECK_PERIOD,
+            lambda: self.check_commanders(node),
+            clock=Clock(clock_type=ClockType.STEADY_TIME),
+        )
         if params["reaction_wheels"]:
             node.create_subscription(
                 Vector3Stamped, "wheel_torque", self._on_wheel_torque, command_qos
             )
+
+    def check_commanders(self, node: Node) -> None:
+        """Warn (once per new set) when more than one node publishes joint commands: each
+        command is taken as it comes, the newest wins, so the arm follows them in turn."""
+        commanders = node_names(node.get_publishers_info_by_topic(self._command_topic))
+        if len(commanders) > 1 and set(commanders) != set(self.commanders):
+            self._logger.warn(
+                f"{len(commanders)} nodes command the joints on {self._command_topic} "
+                f"({', '.join(commanders)}): each command is taken as it comes (the newest "
+                "wins), so the arm follows them in turn; run one commander"
+            )
+        self.commanders = commanders
 
     # --- executor thread ------------------------------------------------------------------------
     def _on_trajectory(self, data: bytes) -> None:

@@ -20,6 +20,12 @@ def node_names(infos) -> list[str]:
     ]
 
 
+def other_publishers(node, topic: str) -> list[str]:
+    """Nodes other than ``node`` that publish on ``topic`` (resolved name), from the graph."""
+    me = f"{node.get_namespace().rstrip('/')}/{node.get_name()}"
+    return [name for name in node_names(node.get_publishers_info_by_topic(topic)) if name != me]
+
+
 def level_rank(level) -> int:
     """DiagnosticStatus.level (bytes in rclpy) as an int, for max()."""
     return level[0] if isinstance(level, bytes) else int(level)

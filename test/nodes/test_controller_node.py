@@ -1078,3 +1078,24 @@ def test_under_sim_time_a_clock_that_stops_stops_the_moving_arm(ros):
 
     assert ros.spin_until(lambda: stopped() and reported(), timeout=10.0)
     assert "/clock stood still" in status.messages[-1].status[0].message
+
+
+def test_a_second_commander_of_the_joints_is_reported_by_the_controller_and_the_simulator(
+    ros, stack
+):
+    """Another node publishing on the controller's output (a forgotten rns_ptp): the controller
+    reports it in its status (WARN, naming it) and the simulator, which takes each command as
+    it comes, names both commanders. Read from the graph once a second (wall clock)."""
+    other = ros.probe("other_commander").create_publisher(JointTrajectory, "joint_references", 1)
+    status = stack.streams["status"]
+
+    def reported():
+        return bool(status.messages) and "other_commander" in status.messages[-1].status[0].message
+
+    assert ros.spin_until(reported, timeout=10.0)
+    entry = status.messages[-1].status[0]
+    assert entry.level == entry.WARN
+    assert "also command(s) the joints on /joint_references" in entry.message
+    assert ros.spin_until(lambda: len(stack.simulator._commands.commanders) == 2, timeout=10.0)
+    assert set(stack.simulator._commands.commanders) == {"/rns_controller", "/other_commander"}
+    del other

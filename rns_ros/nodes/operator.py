@@ -262,7 +262,7 @@ class OperatorNode(Node):
         sample's linear/angular velocity, zeros for None), both world-framed, both at ``stamp``.
 
         The setpoint first: a controller awaiting both streams (``await_commands``) waits on
-        the twists from the start condition on but cannot wait on a force stream that has not
+        the twists from the first zero on but cannot wait on a force stream that has not
         started; the twist of an instant, published after its setpoint, then makes the
         controller wait until that setpoint has been sent."""
         if self._lead:

@@ -37,22 +37,25 @@ def _broken(msg_type) -> list[bytes]:
     return [*cut, b"\x00\x01\x00\x00" + b"\xff" * (len(whole) - 4)]
 
 
-def _flood(ros, node) -> list[str]:
+def _flood(ros, node, seconds: float = 1.0) -> list[str]:
     """Publish :func:`_broken` bytes on every topic ``node`` subscribes (except /clock and
-    parameter events: rclpy's own); returns the topics."""
+    parameter events: rclpy's own) every 50 ms for ``seconds`` (a best-effort reader drops what
+    comes before it has matched the writer on its side); returns the topics."""
     probe = ros.probe()
-    topics = []
+    publishers = {}
     for subscription in node.subscriptions:
         topic = subscription.topic_name
         if topic in ("/clock", "/parameter_events"):
             continue
         publisher = probe.create_publisher(subscription.msg_type, topic, 10)
         assert ros.spin_until(lambda p=publisher: p.get_subscription_count() > 0, timeout=10.0)
-        for data in _broken(subscription.msg_type):
-            publisher.publish(data)
-        topics.append(topic)
-    ros.spin_for(0.5)  # a node that raised in a callback would raise out of the spin here
-    return topics
+        publishers[topic] = (publisher, _broken(subscription.msg_type))
+    for _ in range(round(seconds / 0.05)):
+        for publisher, broken in publishers.values():
+            for data in broken:
+                publisher.publish(data)
+        ros.spin_for(0.05)  # a node that raised in a callback would raise out of the spin here
+    return list(publishers)
 
 
 def _keeps_publishing(ros, recorder: Recorder) -> None:
@@ -72,7 +75,7 @@ def test_the_simulator_rejects_malformed_commands_and_runs_on(ros, overrides):
     assert topics
     _keeps_publishing(ros, joints)
     if not overrides:
-        assert node._commands.malformed == len(_broken(JointState))  # joint_references
+        assert node._commands.malformed >= 1  # joint_references
 
 
 def test_the_contact_simulator_rejects_malformed_torques_and_runs_on(ros):
@@ -97,9 +100,9 @@ def test_the_controller_rejects_malformed_inputs_counts_them_and_runs_on(ros, st
         item.split(": ")
         for item in status_values(status.messages[-1])["rejected_messages"].split(", ")
     )
-    # depth-1 inputs: a burst keeps its newest message, so at least one per topic is counted
+    # depth-1 inputs: a burst may keep only its newest message; some of each topic are counted
     for topic in ("/joint_states", "/base_odom", *(["/cmd_twist"] if stamped else [])):
-        assert 1 <= int(rejected[topic]) <= len(CUTS) + 1
+        assert int(rejected[topic]) >= 1
 
 
 def test_the_force_controller_rejects_malformed_inputs_and_runs_on(ros):

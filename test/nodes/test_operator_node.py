@@ -406,7 +406,9 @@ def test_motion_force_destroyed_mid_profile_sends_zero_twists_and_keeps_the_forc
     # the final force setpoints are the current one (the arm stops on the wall, pushing on):
     # 10 N along the constant wall normal, nothing jumps
     final = np.array([_force(m) for m in after_wrenches])
-    assert len(final) <= FINAL_ZEROS + len(after_twists) - len(zeros)
+    # + 1: a tick's setpoint goes out just before its twist, on another topic, so it may arrive
+    # after the counts were taken while its twist arrived before
+    assert len(final) <= FINAL_ZEROS + len(after_twists) - len(zeros) + 1
     assert np.all(final == current)
 
 

@@ -125,18 +125,19 @@ class TopicLog:
             received = self.received[:start]
             for data, at in zip(self._raw, self.received[start:], strict=True):
                 msg = self._deserialize(data)
-                if msg is not None:
+                if msg is None:
+                    self.rejected += 1
+                else:
                     self._messages.append(msg)
                     received.append(at)
             self.received, self._raw = received, []
         return self._messages
 
     def _deserialize(self, data: bytes):
-        """``data`` as a message, or None (counted in :attr:`rejected`)."""
+        """``data`` as a message, or None when the bytes are not one."""
         try:
             return deserialize_message(data, self.msg_type)
         except Exception:  # rclpy raises RMWError for bytes that are not the type
-            self.rejected += 1
             return None
 
     @messages.setter
@@ -148,11 +149,10 @@ class TopicLog:
 
     def latest(self):
         """The newest message, or None."""
-        for data in reversed(self._raw):
-            try:
-                return deserialize_message(data, self.msg_type)
-            except Exception:  # not the type: counted once :attr:`messages` reads it
-                continue
+        for data in reversed(self._raw):  # bad bytes are counted once :attr:`messages` reads them
+            msg = self._deserialize(data)
+            if msg is not None:
+                return msg
         return self._messages[-1] if self._messages else None
 
     def latest_stamp(self) -> float | None:

@@ -81,19 +81,19 @@ def quick_documents(identifiers, folder) -> dict:
     return written
 
 
-def quick_result_statuses(document: dict, png, identifier: str) -> set[str]:
-    """Check one quick result (its id, finite JSON, a real PNG) and return its statuses, which
-    must all be :class:`Status` values."""
-    from rns_ros.analysis.reproduce.registry import Status
+def quick_result_verdicts(document: dict, png, identifier: str) -> set[str]:
+    """Check one quick result (its id, finite JSON, a real PNG) and return its verdicts, which
+    must all be :class:`Verdict` values."""
+    from rns_ros.analysis.reproduce.registry import Verdict
 
     assert document["id"] == identifier
     assert document["quick"] is True
     assert json_finite(document)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert png.stat().st_size > 10_000
-    statuses = {c["status"] for c in document["comparisons"]}
-    assert statuses <= {status.value for status in Status}
-    return statuses
+    verdicts = {c["verdict"] for c in document["comparisons"]}
+    assert verdicts <= {verdict.value for verdict in Verdict}
+    return verdicts
 
 
 def assert_chapter_order(module: str, earlier: tuple[str, ...], identifiers) -> None:

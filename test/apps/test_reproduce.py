@@ -9,7 +9,15 @@ from pathlib import Path
 import pytest
 
 from rns_ros.analysis.reproduce import registry
-from rns_ros.analysis.reproduce.registry import Comparison, Outcome, Reproduction, Status
+from rns_ros.analysis.reproduce.registry import (
+    CLOSE_FRACTION,
+    Comparison,
+    Outcome,
+    Reproduction,
+    Verdict,
+    number_verdict,
+    trend_verdict,
+)
 from rns_ros.apps import reproduce
 from rns_ros.core.errors import ConfigError
 
@@ -20,8 +28,9 @@ EXECUTABLE = REPO / ".venv" / "bin" / "rns_reproduce"
 def _line(value: float) -> Outcome:
     return Outcome(
         comparisons=(
-            Comparison("slope_m", 2.0, value, "m", Status.EXACT, "a line"),
-            Comparison("shape", "straight", "straight", "", Status.QUALITATIVE),
+            Comparison.number("slope_m", 2.0, value, "m", tolerance=1e-9, note="a line"),
+            Comparison.trend("shape", "straight", "straight", "", holds=value > 0),
+            Comparison.input("points", 2, 2, "", "set by the test"),
         ),
         values={"samples": [0.0, value], "ratio": float("inf")},
         settings={"points": 2},
@@ -58,7 +67,7 @@ def test_list_prints_one_line_per_result(fakes, capsys):
 def test_run_writes_json_and_png(fakes, tmp_path):
     assert reproduce.main(["run", "fake.2", "--out", str(tmp_path), "--quick"]) == 0
     document = json.loads((tmp_path / "fake.2.json").read_text())
-    assert document["thesis"] == {"slope_m": 2.0, "shape": "straight"}
+    assert document["thesis"] == {"slope_m": 2.0, "shape": "straight", "points": 2}
     assert document["ours"]["slope_m"] == 1.5
     assert document["ratio"] == "inf"  # valid JSON: no Infinity literal
     assert document["settings"] == {"points": 2}
@@ -74,7 +83,14 @@ def test_all_regenerates_the_report_with_every_result(fakes, tmp_path, capsys):
     for identifier in FAKES:
         assert f"## {identifier}" in report
         assert f"(reproduction/{identifier}.png)" in report
-    assert "| `slope_m` [m] | 2 | 1.5 | reproduced exactly | a line |" in report
+    # fake.2's 1.5 is 25 % off the thesis' 2: different, whatever the figure says
+    assert "| `slope_m` [m] | 2 | 1.5 | different | a line; exact within 1e-09 m |" in report
+    assert "| `slope_m` [m] | 2 | 2 | exact |" in report
+    assert (
+        "Totals: 4 compared: 1 exact, 0 close, 1 different, 2 qualitative, 0 not reproduced; "
+        "2 input (not counted)"
+    ) in report
+    assert "One verdict rule for every comparison: *exact*" in report
     progress = capsys.readouterr().err
     assert "[" + "#" * reproduce.BAR_WIDTH + "] 2/2" in progress
 
@@ -161,9 +177,55 @@ def test_register_all_keeps_the_order_and_refuses_a_second_id(monkeypatch):
         registry.register_all(FAKES["fake1"])
 
 
-def test_a_checked_claim_is_qualitative_when_it_holds():
-    assert Status.claim(True) is Status.QUALITATIVE
-    assert Status.claim(False) is Status.NOT_REPRODUCIBLE
+def test_a_trend_is_qualitative_when_it_holds_and_not_reproduced_when_it_fails():
+    assert trend_verdict(True) is Verdict.QUALITATIVE
+    assert trend_verdict(False) is Verdict.NOT_REPRODUCED
+    assert Comparison.trend("k", "grows", "shrinks", "", holds=False).verdict is (
+        Verdict.NOT_REPRODUCED
+    )
+
+
+@pytest.mark.parametrize(
+    ("thesis", "ours", "tolerance", "verdict"),
+    [
+        (0.944885, 0.944885, 5e-7, Verdict.EXACT),
+        (0.944885, 0.9449, 5e-7, Verdict.CLOSE),
+        (28.5, 23.6, 0.05, Verdict.DIFFERENT),  # a deliberately wrong value is different
+        (4.22, 1.365, 0.005, Verdict.DIFFERENT),
+        (1000.0, 11.0, 0.5, Verdict.DIFFERENT),
+        (5.0, 5.0 * (1 + CLOSE_FRACTION) + 1e-9, 0.0, Verdict.DIFFERENT),
+        (5.0, 5.0 * (1 + CLOSE_FRACTION) - 1e-9, 0.0, Verdict.CLOSE),
+        (-2.0, -2.0, 0.0, Verdict.EXACT),
+        (0.0, 1e-3, 1e-6, Verdict.DIFFERENT),  # nothing is within 10 % of zero
+        ([1.0, 2.0, 3.0], [1.0, 2.0, 3.0 + 1e-12], 1e-9, Verdict.EXACT),
+        ([1.0, 2.0, 3.0], [1.0, 2.0, 3.2], 1e-9, Verdict.CLOSE),
+        ([1.0, 2.0, 3.0], [1.0, 2.0, 4.0], 1e-9, Verdict.DIFFERENT),
+        (1.0, float("nan"), 1.0, Verdict.DIFFERENT),
+        (1.0, "n/a", 1.0, Verdict.DIFFERENT),
+    ],
+)
+def test_one_rule_judges_every_number(thesis, ours, tolerance, verdict):
+    assert number_verdict(thesis, ours, tolerance) is verdict
+    assert Comparison.number("k", thesis, ours, "", tolerance=tolerance).verdict is verdict
+
+
+@pytest.mark.parametrize(
+    ("thesis", "ours", "tolerance", "message"),
+    [
+        (1.0, 1.0, -1.0, "tolerance must be finite and >= 0"),
+        (1.0, 1.0, float("nan"), "tolerance must be finite and >= 0"),
+        (float("inf"), 1.0, 0.0, "the thesis' number must be finite"),
+        ([1.0, 2.0], [1.0], 0.0, "differ in shape"),
+    ],
+)
+def test_a_comparison_that_cannot_be_judged_is_an_error(thesis, ours, tolerance, message):
+    with pytest.raises(ConfigError, match=message):
+        number_verdict(thesis, ours, tolerance)
+
+
+def test_an_input_is_shown_and_never_a_result():
+    row = Comparison.input("epsilon", 0.2, 0.2, "", "the threshold we set (eq. 4.10)")
+    assert row.verdict is Verdict.INPUT
 
 
 def test_the_resolution_choice_names_quick_or_full_runs():

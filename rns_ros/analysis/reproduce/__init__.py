@@ -9,12 +9,14 @@ from rns_ros.analysis.reproduce.registry import (
     Outcome,
     Reproduction,
     RunRecord,
-    Status,
+    Verdict,
     load_all,
+    number_verdict,
     register,
     report_markdown,
     resolve,
     run_one,
+    trend_verdict,
 )
 
 __all__ = [
@@ -22,10 +24,12 @@ __all__ = [
     "Outcome",
     "Reproduction",
     "RunRecord",
-    "Status",
+    "Verdict",
     "load_all",
+    "number_verdict",
     "register",
     "report_markdown",
     "resolve",
     "run_one",
+    "trend_verdict",
 ]

@@ -41,38 +41,111 @@ CHAPTER_MODULES = (
 )
 
 
-class Status(StrEnum):
-    """How far a thesis number is reproduced."""
+class Verdict(StrEnum):
+    """How a thesis number or claim is reproduced: one rule for every comparison (see
+    :data:`VERDICT_RULE`). *input* marks a value we set or fitted: shown, never counted."""
 
-    EXACT = "reproduced exactly"
-    QUALITATIVE = "reproduced qualitatively"
-    NOT_REPRODUCIBLE = "not reproducible"
+    EXACT = "exact"
+    CLOSE = "close"
+    DIFFERENT = "different"
+    QUALITATIVE = "qualitative"
+    NOT_REPRODUCED = "not reproduced"
+    INPUT = "input"
 
-    @classmethod
-    def claim(cls, holds: bool) -> Status:
-        """The status of a thesis claim checked on our model: QUALITATIVE when it holds."""
-        return cls.QUALITATIVE if holds else cls.NOT_REPRODUCIBLE
+
+#: relative distance to the thesis' number within which ours is *close* [-]
+CLOSE_FRACTION = 0.10
+#: the rule, as the report states it
+VERDICT_RULE = (
+    "*exact*: within the stated numerical tolerance of the thesis' number; "
+    f"*close*: within {CLOSE_FRACTION:.0%} of it; *different*: further than that; "
+    "*qualitative*: the thesis states only a trend, and the trend holds in our run; "
+    "*not reproduced*: the trend fails; *input*: a value we set or fitted, shown for reference "
+    "and never counted as a result."
+)
+
+
+def number_verdict(thesis, ours, tolerance: float) -> Verdict:
+    """*exact* when ``ours`` is within ``tolerance`` of ``thesis`` (largest element-wise
+    distance, same unit), *close* within :data:`CLOSE_FRACTION` of the thesis' magnitude (norms
+    for arrays), else *different*. A non-finite or non-numeric ``ours`` is *different*.
+
+    Raises:
+        ConfigError: a negative or non-finite ``tolerance``, a non-finite thesis number, or
+            shapes that differ.
+    """
+    if not (math.isfinite(tolerance) and tolerance >= 0.0):
+        raise ConfigError(f"tolerance must be finite and >= 0, got {tolerance!r}")
+    expected = np.asarray(thesis, dtype=float)
+    if not np.all(np.isfinite(expected)):
+        raise ConfigError(f"the thesis' number must be finite, got {thesis!r}")
+    try:
+        value = np.asarray(ours, dtype=float)
+    except (TypeError, ValueError):
+        return Verdict.DIFFERENT
+    if value.shape != expected.shape:
+        raise ConfigError(f"ours {value.shape} and the thesis' {expected.shape} differ in shape")
+    if not np.all(np.isfinite(value)):
+        return Verdict.DIFFERENT
+    if float(np.max(np.abs(value - expected), initial=0.0)) <= tolerance:
+        return Verdict.EXACT
+    if float(np.linalg.norm(value - expected)) <= CLOSE_FRACTION * float(np.linalg.norm(expected)):
+        return Verdict.CLOSE
+    return Verdict.DIFFERENT
+
+
+def trend_verdict(holds: bool) -> Verdict:
+    """*qualitative* when the thesis' trend holds in our run, else *not reproduced*."""
+    return Verdict.QUALITATIVE if holds else Verdict.NOT_REPRODUCED
 
 
 @dataclass(frozen=True)
 class Comparison:
-    """One quantity the thesis reports, next to ours.
+    """One quantity the thesis reports, next to ours, with its verdict. Build it with
+    :meth:`number`, :meth:`trend` or :meth:`input`: the verdict follows from the values.
 
     Attributes:
         key: name in the JSON (the thesis' quantity, with its unit as suffix, e.g. ``r_star_m``).
         thesis: the thesis' value (number or short text); None when it only says it in words.
         ours: our value (number, text or list).
         unit: unit of both, e.g. "m", "deg"; "" for counts and text.
-        status: :class:`Status`.
-        note: why the status, the tolerance, or the reason it cannot be reproduced.
+        verdict: :class:`Verdict`.
+        note: why, the tolerance, or the cause of a *different* / *not reproduced*.
     """
 
     key: str
     thesis: Any
     ours: Any
     unit: str
-    status: Status
+    verdict: Verdict
     note: str = ""
+
+    @classmethod
+    def number(
+        cls, key: str, thesis, ours, unit: str, *, tolerance: float, note: str = ""
+    ) -> Comparison:
+        """A number the thesis prints, judged by :func:`number_verdict` (the tolerance is
+        stated in the note)."""
+        stated = f"exact within {tolerance:.3g}{f' {unit}' if unit else ''}"
+        return cls(
+            key,
+            thesis,
+            ours,
+            unit,
+            number_verdict(thesis, ours, tolerance),
+            f"{note}; {stated}" if note else stated,
+        )
+
+    @classmethod
+    def trend(cls, key: str, thesis, ours, unit: str, *, holds: bool, note: str = "") -> Comparison:
+        """A trend the thesis states in words (``thesis`` quotes it), judged by
+        :func:`trend_verdict` on ``holds``, computed from our run."""
+        return cls(key, thesis, ours, unit, trend_verdict(bool(holds)), note)
+
+    @classmethod
+    def input(cls, key: str, thesis, ours, unit: str, note: str) -> Comparison:
+        """A value we set or fitted (``note`` says how): shown, never counted as a result."""
+        return cls(key, thesis, ours, unit, Verdict.INPUT, note)
 
 
 @dataclass(frozen=True)
@@ -212,7 +285,7 @@ def run_one(reproduction: Reproduction, out: Path, *, quick: bool = False) -> Ru
                 "thesis": c.thesis,
                 "ours": c.ours,
                 "unit": c.unit,
-                "status": c.status.value,
+                "verdict": c.verdict.value,
                 "note": c.note,
             }
             for c in outcome.comparisons
@@ -245,15 +318,17 @@ def _jsonable(value):
 
 
 def report_markdown(records: list[RunRecord], figure_dir: str) -> str:
-    """docs/reproduction.md: per result a table thesis | ours | status and its figure.
+    """docs/reproduction.md: the verdict rule and counts, then per result a table thesis | ours |
+    verdict and its figure.
 
     Args:
         figure_dir: path of the PNGs relative to the report (e.g. "reproduction").
     """
-    counts = {status: 0 for status in Status}
+    counts = {verdict: 0 for verdict in Verdict}
     for record in records:
         for comparison in record.outcome.comparisons:
-            counts[comparison.status] += 1
+            counts[comparison.verdict] += 1
+    compared = [verdict for verdict in Verdict if verdict is not Verdict.INPUT]
     lines = [
         "# Reproduction of the thesis",
         "",
@@ -261,9 +336,12 @@ def report_markdown(records: list[RunRecord], figure_dir: str) -> str:
         "result: the numbers the thesis reports next to ours, the settings and our choices.",
         "The JSON of each result, with every value, is written next to its figure.",
         "",
-        "Totals: "
-        + ", ".join(f"{count} {status.value}" for status, count in counts.items())
-        + f"; {len(records)} results, {sum(r.seconds for r in records):.0f} s of computing.",
+        f"One verdict rule for every comparison: {VERDICT_RULE}",
+        "",
+        f"Totals: {sum(counts[v] for v in compared)} compared: "
+        + ", ".join(f"{counts[v]} {v.value}" for v in compared)
+        + f"; {counts[Verdict.INPUT]} input (not counted); {len(records)} results, "
+        f"{sum(r.seconds for r in records):.0f} s of computing.",
         "",
         "| id | thesis | title |",
         "|---|---|---|",
@@ -281,13 +359,13 @@ def report_markdown(records: list[RunRecord], figure_dir: str) -> str:
             "",
             f"{rep.figure}: {rep.title}. Computed in {record.seconds:.1f} s.",
             "",
-            "| quantity | thesis | ours | status | note |",
+            "| quantity | thesis | ours | verdict | note |",
             "|---|---|---|---|---|",
         ]
         for c in outcome.comparisons:
             unit = f" [{c.unit}]" if c.unit else ""
             lines.append(
-                f"| `{c.key}`{unit} | {_cell(c.thesis)} | {_cell(c.ours)} | {c.status.value} | "
+                f"| `{c.key}`{unit} | {_cell(c.thesis)} | {_cell(c.ours)} | {c.verdict.value} | "
                 f"{_cell(c.note)} |"
             )
         if outcome.settings:

@@ -1,15 +1,19 @@
-"""Chapter 4 reproductions (Figs. 4.4-4.8): each id runs quick into JSON + PNG, physics holds."""
+"""Chapter 4 reproductions (Figs. 4.4-4.8): each id runs quick into JSON + PNG, the physics holds,
+and every verdict follows from the numbers next to it."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import numpy as np
 import pytest
-from rns_testing import quick_documents
+from rns_testing import quick_documents, quick_result_verdicts
 
 from rns_ros.analysis.reproduce import chapter4, scenario_runs
-from rns_ros.analysis.reproduce.registry import Status
+from rns_ros.analysis.reproduce.registry import Verdict, number_verdict, trend_verdict
 
 # whole closed-loop reproductions (quick grids): make test, not test-quick
-pytestmark = pytest.mark.slow
+slow = pytest.mark.slow
 
 IDS = ("fig4.4", "fig4.5", "fig4.6", "fig4.7", "fig4.8")
 METHODS = {
@@ -27,18 +31,46 @@ def documents(tmp_path_factory):
     return quick_documents(IDS, tmp_path_factory.mktemp("chapter4"))
 
 
+def rows_of(documents, identifier: str) -> dict[str, dict]:
+    return {c["key"]: c for c in documents[identifier][0]["comparisons"]}
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def test_runs_of_and_first_pass_find_the_first_interval_below_epsilon():
+    sigma = np.array([0.5, 0.1, 0.05, 0.3, 0.1, 0.4])
+    assert chapter4._runs_of(sigma < 0.2) == [(1, 3), (4, 5)]
+    trace = SimpleNamespace(sigma_min=sigma, t_mid=np.arange(6.0))
+    assert chapter4._first_pass(trace, 0.2) == slice(1, 3)
+    # never inside: the whole run
+    assert chapter4._first_pass(trace, 0.01) == slice(0, 6)
+    assert chapter4._intervals(trace.t_mid, sigma < 0.2) == [[1.0, 2.0], [4.0, 4.0]]
+
+
+def test_angle_lost_to_limits_is_the_scaled_off_rotation():
+    # 1 rad/s for 2 periods of 0.5 s, the second scaled to 0.25: 0.75 * 0.5 rad lost
+    trace = SimpleNamespace(
+        t_mid=np.array([0.25, 0.75]),
+        t_end=np.array([0.5, 1.0]),
+        limit_scale=np.array([1.0, 0.25]),
+        omega_ref=np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+    )
+    assert chapter4._angle_lost_to_limits_deg(trace) == pytest.approx(np.rad2deg(0.375))
+
+
+# --------------------------------------------------------------------------- quick runs
+
+
+@slow
 @pytest.mark.parametrize("identifier", IDS)
 def test_each_result_writes_json_and_png(documents, identifier):
     document, png = documents[identifier]
-    assert document["id"] == identifier
-    assert document["quick"] is True
+    verdicts = quick_result_verdicts(document, png, identifier)
+    assert verdicts - {Verdict.INPUT.value}
     assert set(document["max_base_deviation_deg"]) == METHODS[identifier]
     assert all(value >= 0.0 for value in document["max_base_deviation_deg"].values())
-    assert png.stat().st_size > 10_000
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    statuses = {c["status"] for c in document["comparisons"]}
-    assert statuses <= {status.value for status in Status}
-    assert statuses
+    assert all(0.0 < s <= 1.0 for s in document["min_joint_limit_scale"].values())
     settings = document["settings"]
     assert settings["controller_rate_hz"] == scenario_runs.QUICK_RATE
     assert settings["simulation_step_s"] == scenario_runs.QUICK_STEP
@@ -47,6 +79,7 @@ def test_each_result_writes_json_and_png(documents, identifier):
     assert len(document["choices"]) >= 5
 
 
+@slow
 @pytest.mark.parametrize("identifier", ["fig4.4", "fig4.5"])
 def test_reactionless_leaves_the_base_where_conventional_turns_it(documents, identifier):
     deviation = documents[identifier][0]["max_base_deviation_deg"]
@@ -57,23 +90,116 @@ def test_reactionless_leaves_the_base_where_conventional_turns_it(documents, ide
     assert deviation["conventional"] > chapter4.ETS_VII_ALLOWANCE_DEG
 
 
-def test_singularity_is_algorithmic_and_dls_trades_tracking_for_it(documents):
-    pinv = {c["key"]: c for c in documents["fig4.6"][0]["comparisons"]}
-    assert pinv["min_det_algorithmic"]["status"] == Status.QUALITATIVE.value
-    assert pinv["det_kinematic_at_singularity"]["status"] == Status.QUALITATIVE.value
-    # det_coupling is not asserted: on the identified geometry the pinv run reaches
-    # sigma_min = 0.003 at 10.8 s, where the coupling inertia has shrunk too (0.27 of its start)
+@slow
+@pytest.mark.parametrize("identifier", ["fig4.4", "fig4.5"])
+def test_inspection_verdicts_follow_the_numbers(documents, identifier):
+    rows = rows_of(documents, identifier)
+    for key in ("max_base_deviation_dls_deg", "max_base_deviation_dls_kg0_deg"):
+        holds = rows[key]["ours"] < chapter4.UNDISTURBED_DEG
+        assert rows[key]["verdict"] == trend_verdict(holds).value
+    conventional = rows["max_base_deviation_conventional_deg"]
+    holds = conventional["ours"] > chapter4.ETS_VII_ALLOWANCE_DEG
+    assert conventional["verdict"] == trend_verdict(holds).value
+    for method in ("dls", "conventional"):
+        row = rows[f"final_camera_error_{method}_deg"]
+        assert row["verdict"] == trend_verdict(row["ours"] < chapter4.REACHED_DEG).value
+    document = documents[identifier][0]
+    drift = document["max_wrist_drift_m"]
+    holds = drift["dls"] < chapter4.WRIST_HELD_SHARE * drift["dls_kg0"]
+    assert rows["max_wrist_drift_m"]["verdict"] == trend_verdict(holds).value
+    assert f"{drift['dls_kg0']:.3f} m" in rows["max_wrist_drift_m"]["note"]
+    # one row per claim: the allowance ratio is a value, not a second verdict
+    assert "conventional_over_ets_vii_allowance" not in rows
+    assert document["conventional_over_ets_vii_allowance"] == pytest.approx(
+        conventional["ours"] / chapter4.ETS_VII_ALLOWANCE_DEG
+    )
+
+
+@slow
+def test_a_missed_target_names_the_clipping_when_it_took_the_angle(documents):
+    document = documents["fig4.5"][0]
+    row = rows_of(documents, "fig4.5")["final_camera_error_conventional_deg"]
+    lost = document["angle_lost_to_joint_limits_deg"]["conventional"]
+    if row["verdict"] == Verdict.NOT_REPRODUCED.value and lost >= 0.5 * row["ours"]:
+        assert "the clipping to the joint-speed limits is the cause" in row["note"]
+        assert f"{lost:.2f} deg" in row["note"]
+    # the camera falls behind by about what the scaling took off the command
+    assert row["ours"] == pytest.approx(lost, abs=0.5)
+
+
+@slow
+def test_singularity_is_algorithmic_at_its_first_pass(documents):
+    document = documents["fig4.6"][0]
+    rows = rows_of(documents, "fig4.6")
+    t = rows["singularity_time_s"]["ours"]
+    low, high = chapter4.THESIS_SINGULAR_REGION_S
+    assert rows["singularity_time_s"]["verdict"] == trend_verdict(low <= t <= high).value
+    determinants = document["determinants_at_singularity"]
+    assert determinants["algorithmic"] == rows["min_det_algorithmic"]["ours"]
+    # the first pass is the one inside the thesis' region; the deepest one comes later
+    assert low <= t <= high < document["deepest_pass_time_s"]
+    assert rows["min_det_algorithmic"]["verdict"] == Verdict.QUALITATIVE.value
+    assert rows["det_kinematic_at_singularity"]["verdict"] == Verdict.QUALITATIVE.value
+    assert rows["fastest_joints_near_singularity"]["ours"].startswith("joints 5 and 7")
+
+
+@slow
+def test_singular_region_end_is_a_number_and_its_start_an_input(documents):
     dls = documents["fig4.7"][0]
-    assert dls["singular_region_s"]  # sigma_min < epsilon somewhere
-    rows = {c["key"]: c for c in dls["comparisons"]}
-    assert rows["singular_region_s"]["thesis"] == [1.71, 4.18]
-    assert rows["singular_region_s"]["status"] == Status.NOT_REPRODUCIBLE.value
-    # DLS trades tracking for bounded rates inside the region: a visible angular-velocity error
+    rows = rows_of(documents, "fig4.7")
+    assert rows["epsilon_lambda2_max"]["verdict"] == Verdict.INPUT.value
+    assert rows["singular_region_start_s"]["verdict"] == Verdict.INPUT.value
+    assert rows["singular_region_start_s"]["ours"] == dls["singular_region_s"][0][0]
+    end = rows["singular_region_end_s"]
+    assert end["thesis"] == chapter4.THESIS_SINGULAR_REGION_S[1]
+    assert end["ours"] == dls["singular_region_s"][0][1]
+    expected = number_verdict(end["thesis"], end["ours"], chapter4.THESIS_TIME_TOLERANCE_S)
+    assert end["verdict"] == expected.value
+    # today's geometry leaves the region about 0.8 s early: more than 10 % off, so different
+    assert end["ours"] < 0.9 * end["thesis"]
+    assert end["verdict"] == Verdict.DIFFERENT.value
+    start, stop = dls["singular_region_s"][0]
+    assert f"the first lasts {stop - start:.2f} s" in end["note"]
+    assert "singular_region_duration_s" not in rows
+
+
+@slow
+def test_dls_verdicts_follow_the_numbers(documents):
+    dls = documents["fig4.7"][0]
+    rows = rows_of(documents, "fig4.7")
+    speed = rows["max_joint_speed_in_singular_region_rad_s"]["ours"]
+    holds = speed["dls"] < chapter4.SUPPRESSED_SHARE * speed["pinv"]
+    assert rows["max_joint_speed_in_singular_region_rad_s"]["verdict"] == (
+        trend_verdict(holds).value
+    )
     error = rows["max_angular_velocity_error_in_singular_region_rad_s"]
-    assert error["ours"] > 0.01  # [rad/s]
+    assert error["ours"] > 0.01  # [rad/s]: DLS trades tracking for bounded rates in the region
+    if error["verdict"] == Verdict.NOT_REPRODUCED.value:
+        assert "joint-speed limits" in error["note"] or "cause open" in error["note"]
+    base = rows["max_base_deviation_in_singular_region_deg"]
+    assert base["verdict"] == trend_verdict(base["ours"] < chapter4.UNDISTURBED_DEG).value
     assert dls["max_base_deviation_deg"]["dls"] < 1e-3
 
 
-def test_sc_keeps_the_direction_dls_does_not(documents):
-    axis = documents["fig4.8"][0]["max_axis_error_deg"]
+@slow
+def test_sc_verdicts_follow_the_numbers(documents):
+    document = documents["fig4.8"][0]
+    rows = rows_of(documents, "fig4.8")
+    assert rows["sc_gain_b"]["verdict"] == Verdict.INPUT.value
+    axis = document["max_axis_error_deg"]
     assert axis["sc"] < 1.0 < axis["dls"]
+    assert rows["max_axis_error_deg"]["verdict"] == Verdict.QUALITATIVE.value
+    accel = rows["max_joint_acceleration_rad_s2"]["ours"]
+    holds = accel["sc"] < min(accel["dls"], accel["pinv"])
+    assert rows["max_joint_acceleration_rad_s2"]["verdict"] == trend_verdict(holds).value
+
+
+@slow
+def test_singularity_choices_come_from_the_run(documents):
+    pinv = scenario_runs.recorded_run(chapter4.SINGULARITY, "pinv", True)
+    regions = chapter4._intervals(pinv.trace.t_mid, pinv.trace.sigma_min < 0.2)
+    duration = scenario_runs.shipped_scenario(chapter4.SINGULARITY).duration
+    for identifier in ("fig4.6", "fig4.7", "fig4.8"):
+        (choice,) = [c for c in documents[identifier][0]["choices"] if c.startswith("Duration")]
+        assert f"runs {duration:g} s" in choice
+        assert str(regions) in choice

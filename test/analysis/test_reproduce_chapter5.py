@@ -1,25 +1,43 @@
 """Chapter 5 C_ratio maps (Figs. 5.1-5.3): quick runs give finite JSON with the documented keys,
-physically sensible numbers, a PNG, and fig5.3 runs on a dask scheduler given on the command
-line."""
+physically sensible numbers, a PNG, verdicts that follow from the numbers next to them, and
+fig5.3 runs on a dask scheduler given on the command line."""
 
 from __future__ import annotations
 
 import json
 import math
 
+import numpy as np
 import pytest
-from rns_testing import json_finite
+from rns_testing import quick_result_verdicts
 
 from rns_ros.analysis.reproduce import chapter5, registry
-from rns_ros.analysis.reproduce.registry import Status, run_one
+from rns_ros.analysis.reproduce.registry import run_one
 from rns_ros.apps import reproduce
 
 IDS = ("fig5.1", "fig5.2", "fig5.3")
 KEYS = {
-    "fig5.1": ("c_ratio_mean", "c_ratio_median", "c_ratio_max"),
+    "fig5.1": ("c_ratio_mean", "share_near_1", "c_ratio_max"),
     "fig5.2": ("c_ratio_mean_range", "decreasing_with_alpha"),
-    "fig5.3": ("c_ratio_mean", "c_ratio_median", "c_ratio_p99", "points"),
+    "fig5.3": (
+        "c_ratio_mean",
+        "c_ratio_median",
+        "slice_a_c_ratio_max",
+        "slice_b_c_ratio_max",
+        "points",
+    ),
 }
+
+
+def expected_verdict(thesis: float, ours: float, tolerance: float) -> str:
+    """The verdict rule for one printed number, written out here."""
+    if abs(ours - thesis) <= tolerance:
+        return "exact"
+    return "close" if abs(ours - thesis) <= 0.1 * abs(thesis) else "different"
+
+
+def rows(document) -> dict[str, dict]:
+    return {c["key"]: c for c in document["comparisons"]}
 
 
 @pytest.fixture(scope="module")
@@ -43,22 +61,44 @@ def test_registered_in_order_before_the_inspection_results():
 @pytest.mark.parametrize("identifier", IDS)
 def test_quick_run_writes_finite_json_with_the_documented_keys(documents, identifier):
     document, png = documents[identifier]
-    assert document["quick"] is True
+    quick_result_verdicts(document, png, identifier)
     assert tuple(document["ours"]) == KEYS[identifier]
-    assert json_finite(document)
-    statuses = {c["status"] for c in document["comparisons"]}
-    assert statuses <= {s.value for s in Status}
     assert document["choices"]
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for c in document["comparisons"]:
+        if c["verdict"] in {"different", "not reproduced"}:
+            assert "open" in c["note"], c
+
+
+@pytest.mark.parametrize(
+    ("thesis", "mean", "tolerance", "verdict"),
+    [
+        (1.002, 1.0018, 5e-4, "exact"),
+        (1.002, 1.0014977, 5e-4, "close"),  # the full 100² mesh: rounds to 1.001
+        (1.14, 1.0472, 5e-3, "close"),  # the full 50⁴ grid: excess 0.047 against 0.14
+        (1.14, 1.3, 5e-3, "different"),
+    ],
+)
+def test_mean_row_follows_the_rule_and_states_both_excesses(thesis, mean, tolerance, verdict):
+    row = chapter5.mean_row(thesis, mean, tolerance, "test")
+    assert row.verdict.value == verdict == expected_verdict(thesis, mean, tolerance)
+    assert f"ours {mean - 1:.3g}, the thesis' {thesis - 1:.3g}" in row.note
+    assert ("open" in row.note) == (verdict == "different")
 
 
 def test_fig5_1_ratio_is_one_almost_everywhere(documents):
     document, _ = documents["fig5.1"]
     ours = document["ours"]
-    assert 1.0 <= ours["c_ratio_median"] < 1.001
-    assert ours["c_ratio_median"] <= ours["c_ratio_mean"] <= ours["c_ratio_max"]
+    assert 1.0 <= document["c_ratio_median"] < 1.001
+    assert document["c_ratio_median"] <= ours["c_ratio_mean"] <= ours["c_ratio_max"]
     assert document["thesis"]["c_ratio_mean"] == 1.002
     assert document["share_above_1_01"] < 0.05
+    table = rows(document)
+    mean = table["c_ratio_mean"]
+    assert mean["verdict"] == expected_verdict(1.002, mean["ours"], 5e-4)
+    assert table["share_near_1"]["verdict"] == (
+        "qualitative" if ours["share_near_1"] >= 0.95 else "not reproduced"
+    )
+    assert table["c_ratio_max"]["verdict"] == "qualitative"  # > 1.5, near a zero of M~_ωm
 
 
 def test_fig5_2_means_are_near_one_and_fall_with_alpha(documents):
@@ -68,17 +108,41 @@ def test_fig5_2_means_are_near_one_and_fall_with_alpha(documents):
     assert all(1.0 <= value < 1.01 for row in table for value in row)
     middle = len(table[0]) // 2  # beta = 1
     assert table[0][middle] > table[-1][middle]  # alpha 0.5 above alpha 1.5
+    verdicts = {key: c["verdict"] for key, c in rows(document).items()}
+    assert verdicts == {"c_ratio_mean_range": "qualitative", "decreasing_with_alpha": "qualitative"}
+
+
+def test_fig5_2_trends_fail_on_a_table_that_rises_with_alpha():
+    alphas = np.array([0.5, 1.0, 1.5])
+    means = np.array([[1.001, 1.001, 1.001], [1.002, 1.002, 1.002], [1.03, 1.003, 1.003]])
+    range_row, alpha_row = chapter5._fig5_2_comparisons(alphas, means)
+    assert range_row.verdict.value == "not reproduced"  # 1.03 is 0.03 from 1
+    assert alpha_row.verdict.value == "not reproduced"
+    assert "0 of 3" in alpha_row.ours
 
 
 def test_fig5_3_statistics_and_slices(documents):
     document, _ = documents["fig5.3"]
     ours = document["ours"]
     assert ours["points"] == 8**4
-    assert 1.0 - 1e-9 <= ours["c_ratio_median"] <= ours["c_ratio_p99"] <= document["c_ratio_max"]
+    assert (
+        1.0 - 1e-9 <= ours["c_ratio_median"] <= document["c_ratio_p99"] <= document["c_ratio_max"]
+    )
     assert document["wall_s"] > 0.0
     assert document["thesis"]["c_ratio_mean"] == 1.14
     assert [s["theta1_rad"] for s in document["slices"]] == [-3.05, -math.pi]
     assert all(s["c_ratio_mean"] >= 1.0 - 1e-9 for s in document["slices"])
+    table = rows(document)
+    assert table["c_ratio_mean"]["verdict"] == expected_verdict(1.14, ours["c_ratio_mean"], 5e-3)
+    peak_a, peak_b = ours["slice_a_c_ratio_max"], ours["slice_b_c_ratio_max"]
+    assert peak_a == document["slices"][0]["c_ratio_max"]
+    assert table["slice_a_c_ratio_max"]["verdict"] == (
+        "qualitative" if peak_a <= 1.5 else "not reproduced"
+    )
+    assert table["slice_b_c_ratio_max"]["verdict"] == (
+        "qualitative" if peak_b > max(1.5, peak_a) else "not reproduced"
+    )
+    assert table["points"]["verdict"] == "input"
 
 
 def test_cli_runs_fig5_3_on_a_dask_scheduler(tmp_path, monkeypatch, capsys):

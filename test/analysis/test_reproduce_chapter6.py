@@ -4,10 +4,9 @@ documented keys and a PNG."""
 from __future__ import annotations
 
 import pytest
-from rns_testing import assert_chapter_order, quick_documents, quick_result_statuses
+from rns_testing import assert_chapter_order, quick_documents, quick_result_verdicts
 
 from rns_ros.analysis.reproduce import chapter6 as ch6
-from rns_ros.analysis.reproduce.registry import Status
 
 # whole motion/force reproductions (quick runs): make test, not test-quick
 pytestmark = pytest.mark.slow
@@ -31,14 +30,13 @@ def test_the_module_comes_after_chapter5_and_registers_four_results():
 @pytest.mark.parametrize("identifier", IDS)
 def test_each_result_writes_finite_json_with_the_documented_keys(documents, identifier):
     document, png = documents[identifier]
-    statuses = quick_result_statuses(document, png, identifier)
+    verdicts = quick_result_verdicts(document, png, identifier)
     for key in KEYS:
         assert set(document[key]) == CONTROLLERS
         assert all(value >= 0.0 for value in document[key].values())
     assert set(document["peak_ratio_to_rns_c"]) == {"OS-C", "OS-C-kinematic"}
     assert set(document["runs"]) == CONTROLLERS
-    assert statuses
-    assert Status.EXACT.value not in statuses  # nothing here is an exact reproduction
+    assert verdicts
     settings = document["settings"]
     assert settings["control_period_s"] == ch6.QUICK_PERIOD
     assert settings["k_p_1_s2"] == 100.0
@@ -50,20 +48,49 @@ def test_each_result_writes_finite_json_with_the_documented_keys(documents, iden
     assert any("Quick run" in choice for choice in document["choices"])
 
 
+def _trend(holds: bool) -> str:
+    return "qualitative" if holds else "not reproduced"
+
+
 def test_fig6_4_reports_the_thesis_peaks_and_the_tuning(documents):
     document = documents["fig6.4"][0]
     rows = {c["key"]: c for c in document["comparisons"]}
     rns = rows["peak_joint_speed_rns_c_rad_s"]
     assert rns["thesis"] == 0.73
     assert "TUNED" in rns["note"]
+    assert rns["verdict"] == "input"  # T_half was fitted to it
     assert rns["ours"] == pytest.approx(0.73, rel=0.1)
-    assert rows["peak_joint_speed_os_c_rad_s"]["thesis"] == 4.22
-    assert rows["peak_ratio_osc_over_rns_c"]["thesis"] == pytest.approx(5.78)
-    assert set(rows["peak_ratio_osc_over_rns_c"]["ours"]) == {"OS-C", "OS-C-kinematic"}
-    # the thesis claim holds in the quick run: both OS-C variants peak > 1.5x RNS-C
-    assert rows["peak_ratio_osc_over_rns_c"]["status"] == Status.QUALITATIVE.value
+    peaks = document["peak_joint_speed_rad_s"]
+    for key, controller in (
+        ("peak_joint_speed_os_c_rad_s", "OS-C"),
+        ("peak_joint_speed_os_c_kinematic_rad_s", "OS-C-kinematic"),
+    ):
+        row = rows[key]
+        assert row["thesis"] == 4.22
+        assert row["ours"] == peaks[controller]
+        # both OS-C readings peak more than 10 % below the thesis' 4.22 rad/s on our arc
+        assert row["ours"] < 0.9 * 4.22
+        assert row["verdict"] == "different"
+        assert "open" in row["note"]
+    ratios = rows["peak_ratio_osc_over_rns_c"]
+    assert set(ratios["ours"]) == {"OS-C", "OS-C-kinematic"}
+    # the thesis' trend holds in the quick run: both OS-C variants peak > 1.5x RNS-C
+    assert min(ratios["ours"].values()) > ch6.RATIO_THRESHOLD
+    assert ratios["verdict"] == "qualitative"
     assert document["scenario"]["start_point_m"] == pytest.approx([1.203, 1.91])
     assert document["scenario"]["half_cycle_s"] == document["settings"]["half_cycle_s"] == 1.6
+
+
+def test_fig6_8_verdict_follows_from_the_peaks(documents):
+    document = documents["fig6.8"][0]
+    (row,) = document["comparisons"]
+    ratios = document["peak_ratio_to_rns_c"]
+    assert row["key"] == "peak_ratio_osc_over_rns_c"
+    assert row["ours"] == ratios
+    assert all(ratio > 1.0 for ratio in ratios.values())  # OS-C still peaks higher
+    holds = min(ratios.values()) > ch6.RATIO_THRESHOLD
+    assert row["verdict"] == _trend(holds)
+    assert holds or "open" in row["note"]
 
 
 def test_task_error_results_share_the_runs_of_the_velocity_results(documents):
@@ -71,8 +98,22 @@ def test_task_error_results_share_the_runs_of_the_velocity_results(documents):
         a, b = documents[task][0], documents[velocity][0]
         for key in KEYS:
             assert a[key] == b[key]
-        rows = {c["key"] for c in a["comparisons"]}
-        assert {"task_position_error_spread", "task_force_error_spread"} <= rows
-        final = next(c for c in a["comparisons"] if c["key"] == "final_contact_force_N")
+        rows = {c["key"]: c for c in a["comparisons"]}
+        position = a["max_position_error_m"]
+        spread = max(position.values()) / min(position.values())
+        assert rows["task_position_error_spread"]["ours"] == pytest.approx(spread)
+        assert rows["task_position_error_spread"]["verdict"] == _trend(spread <= 2.0)
+        # the same-instant force loop makes the force error round-off for every controller
+        force = rows["task_force_error_N"]
+        assert force["verdict"] == "input"
+        assert force["ours"] == max(a["max_force_error_N"].values()) < 1e-3
+        final = rows["final_contact_force_N"]
+        assert final["verdict"] == "input"
         assert all(value == pytest.approx(10.0, abs=1e-3) for value in final["ours"].values())
+    orientation = {c["key"]: c for c in documents["fig6.7"][0]["comparisons"]}[
+        "max_orientation_error_rad"
+    ]
+    assert set(orientation["ours"]) == CONTROLLERS
+    assert max(orientation["ours"].values()) < ch6.ORIENTATION_HELD
+    assert orientation["verdict"] == "qualitative"
     assert set(documents["fig6.7"][0]["max_orientation_error_rad"]) == CONTROLLERS

@@ -50,6 +50,9 @@ def test_trace_rows_follow_their_definitions(run):
     # reactionless: the base stays where it was; the trace and the summary agree on it
     assert trace.base_deviation_deg.max() < 1e-3
     assert trace.base_deviation_deg.max() == pytest.approx(run.result.max_base_deviation_deg)
+    # DLS has no SC factor: its speed scale is the joint-limit scale alone, within (0, 1]
+    np.testing.assert_array_equal(trace.speed_scale, trace.limit_scale)
+    assert np.all((trace.limit_scale > 0.0) & (trace.limit_scale <= 1.0))
 
 
 def test_run_settings_name_the_scenario_methods_and_loop(run):
@@ -60,3 +63,4 @@ def test_run_settings_name_the_scenario_methods_and_loop(run):
     assert settings["quick"] is True
     values = scenario_runs.run_values([run])
     assert set(values["max_base_deviation_deg"]) == {"dls"}
+    assert values["min_joint_limit_scale"] == {"dls": float(run.trace.limit_scale.min())}

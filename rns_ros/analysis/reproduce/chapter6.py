@@ -39,7 +39,8 @@ from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
     Reproduction,
-    Status,
+    Verdict,
+    number_verdict,
     register_all,
     resolution_choice,
 )
@@ -53,13 +54,17 @@ from rns_ros.control.contact_tasks import (
     WallScenario,
 )
 
-#: Thesis §6.2.1 peak joint speeds [rad/s] and their ratio [D].
+#: Thesis §6.2.1 (Fig. 6.4) peak joint speeds [rad/s], printed to two decimals.
 THESIS_PEAK_RNS, THESIS_PEAK_OSC = 0.73, 4.22
-#: Acceptance (thesis_rest 4.8): RNS-C within +-10 % of 0.73 (T_half tuned), OS-C/RNS-C > 1.5.
-PEAK_TOLERANCE, RATIO_THRESHOLD = 0.10, 1.5
-#: "Almost identical" task errors: the larger max error at most this factor of the smaller [-];
-#: force errors below FORCE_FLOOR [N] (0.1 % of 10 N) count as identical.
-ALMOST_IDENTICAL_FACTOR, FORCE_FLOOR = 2.0, 1e-2
+#: Half a unit of the thesis' last printed digit [rad/s].
+PEAK_TOLERANCE = 5e-3
+#: "much larger fluctuations" under OS-C: its peak over RNS-C's above this in every OS-C variant
+#: (thesis_rest 4.8 acceptance) [-].
+RATIO_THRESHOLD = 1.5
+#: "Almost identical" position errors: the larger max error at most this factor of the smaller [-].
+ALMOST_IDENTICAL_FACTOR = 2.0
+#: The orientation counts as held ("fixed", §6.2.2) when its max error stays below this [rad].
+ORIENTATION_HELD = 1e-3
 PLANAR, WALL = "planar_arc", "lwr_wall"
 _COLORS = {Controller.RNS_C: "tab:red", Controller.OSC: "tab:green", Controller.OSC_KINEMATIC: "C0"}
 
@@ -90,9 +95,9 @@ _PLANAR_CHOICES = (
     "end (1.203, 1.91) m; start configuration = minimum-norm IK from the seed [106.4, -45.7, "
     "-56.2] deg onto that point, [106.432, -45.706, -56.222] deg.",
     f"Timing (A-4.7): two quintic half cycles of T_half = {PLANAR_HALF_CYCLE} s each, at rest at "
-    "the half cycle; T_half was TUNED so that the RNS-C peak is about the thesis' 0.73 rad/s "
-    "(1.5 s: 0.791, 1.55: 0.765, 1.6: 0.741, 1.65: 0.719, 1.7: 0.697 rad/s), so the RNS-C peak "
-    "is a calibration, not evidence; the OS-C peaks follow from it untuned.",
+    f"the half cycle; T_half was TUNED so that the RNS-C peak is about the thesis' "
+    f"{THESIS_PEAK_RNS} rad/s (a longer half cycle lowers every peak), so the RNS-C peak is a "
+    "calibration (an input), not evidence; the OS-C peaks follow from it untuned.",
     "Normal acceleration (A-4.8): the commanded acceleration includes the constraint-consistent "
     "centripetal term |v_t|^2 / R toward the axis (the thesis' S V_dot drops it). Without it "
     "RNS-C's contact force deviates by the centripetal force (2.9 N) and its peak joint speed "
@@ -213,70 +218,85 @@ def _outcome(name: str, quick: bool, rows: list, values: dict, runs) -> Outcome:
     )
 
 
-def _identical(values: dict[str, float], floor: float = 0.0) -> tuple[bool, float]:
-    """(almost identical, largest / smallest) over the controllers."""
+def _spread(values: dict[str, float]) -> float:
+    """Largest over smallest of ``values`` over the controllers [-] (inf when one is 0)."""
     big, small = max(values.values()), min(values.values())
-    ratio = big / small if small > 0.0 else float("inf")
-    return big <= floor or ratio <= ALMOST_IDENTICAL_FACTOR, ratio
+    return big / small if small > 0.0 else float("inf")
 
 
 # --------------------------------------------------------------------------- task errors
+
+_TASK_CLAIM = {
+    PLANAR: "'the order of end-effector position/force error are almost identical for the two "
+    "controllers' (§6.2.1, Fig. 6.3)",
+    WALL: "'the task-space behavior is almost identical for the two controllers' (§6.2.2, "
+    "Fig. 6.7)",
+}
 
 
 def _task_outcome(name: str, quick: bool) -> Outcome:
     runs = _runs(name, quick)
     values = _values(name, runs)
-    position, force = values["max_position_error_m"], values["max_force_error_N"]
-    same_position, position_ratio = _identical(position)
-    same_force, force_ratio = _identical(force, FORCE_FLOOR)
     rows = [
-        Comparison(
-            "task_position_error_spread",
-            "almost identical",
-            position_ratio,
-            "",
-            Status.claim(same_position),
-            "largest over smallest max in-plane EE position error over the three controllers "
-            f"(criterion <= {ALMOST_IDENTICAL_FACTOR:g}); "
-            + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in position.items()),
-        ),
-        Comparison(
-            "task_force_error_spread",
-            "almost identical",
-            force_ratio,
-            "",
-            Status.claim(same_force),
-            "largest over smallest max |f_des - f| (criterion <= "
-            f"{ALMOST_IDENTICAL_FACTOR:g}, or all below {FORCE_FLOOR:g} N); "
-            + ", ".join(f"{k} {v:.3g} N" for k, v in force.items())
-            + ". The force loop is solved at the same instant on a model-exact plant, so the "
-            "force error is near zero for every controller.",
-        ),
-    ]
-    final = max(abs(run.force_error[-1]) for run in runs.values())
-    rows.append(
-        Comparison(
+        _position_spread_row(name, values["max_position_error_m"]),
+        _force_error_row(values["max_force_error_N"]),
+        Comparison.input(
             "final_contact_force_N",
             FORCE,
             {c.value: float(run.contact_force[-1]) for c, run in runs.items()},
             "N",
-            Status.claim(final < 0.1),
-            "contact force at the end of the run (target 10 N after the 1 s ramp).",
-        )
-    )
+            f"the desired force ({FORCE:g} N after a {FORCE_RAMP:g} s quintic ramp, "
+            f"{'§6.2.1' if name == PLANAR else '§6.2.2'}): "
+            "reached by construction of the same-instant force loop (see the force error).",
+        ),
+    ]
     if name == WALL:
-        orientation = values["max_orientation_error_rad"]
-        rows.append(
-            Comparison(
-                "max_orientation_error_rad",
-                None,
-                orientation,
-                "rad",
-                Status.QUALITATIVE,
-                "orientation held (thesis: 'fixed'); no number printed.",
-            )
-        )
+        rows.append(_orientation_row(values["max_orientation_error_rad"]))
     return _outcome(name, quick, rows, values, runs)
+
+
+def _position_spread_row(name: str, position: dict[str, float]) -> Comparison:
+    """Largest over smallest max in-plane position error over the controllers."""
+    ratio = _spread(position)
+    return Comparison.trend(
+        "task_position_error_spread",
+        _TASK_CLAIM[name],
+        ratio,
+        "",
+        holds=ratio <= ALMOST_IDENTICAL_FACTOR,
+        note="largest over smallest max in-plane EE position error over the three controllers "
+        f"(criterion <= {ALMOST_IDENTICAL_FACTOR:g}); "
+        + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in position.items()),
+    )
+
+
+def _force_error_row(force: dict[str, float]) -> Comparison:
+    """The force errors: zero up to round-off for every controller by construction."""
+    return Comparison.input(
+        "task_force_error_N",
+        "almost identical",
+        max(force.values()),
+        "N",
+        "largest max |f_des - f| over the controllers: "
+        + ", ".join(f"{k} {v:.3g} N" for k, v in force.items())
+        + ". The force loop (6.34) is solved at the same instant on a model-exact rigid "
+        "contact, so f = f_des up to round-off for any controller: identical by construction, "
+        "not evidence for the thesis' claim.",
+    )
+
+
+def _orientation_row(orientation: dict[str, float]) -> Comparison:
+    """§6.2.2: the EE orientation is held fixed."""
+    worst = max(orientation.values())
+    return Comparison.trend(
+        "max_orientation_error_rad",
+        "'orientation of the end-effector is fixed' (§6.2.2; no number)",
+        orientation,
+        "rad",
+        holds=worst < ORIENTATION_HELD,
+        note=f"max |log(R_des R^T)| per controller, largest {worst:.3g} rad (criterion < "
+        f"{ORIENTATION_HELD:g} rad).",
+    )
 
 
 def _plot_task(outcome: Outcome, figure) -> None:
@@ -313,79 +333,112 @@ def _plot_task(outcome: Outcome, figure) -> None:
 def _velocity_outcome(name: str, quick: bool) -> Outcome:
     runs = _runs(name, quick)
     values = _values(name, runs)
-    peaks, ratios = values["peak_joint_speed_rad_s"], values["peak_ratio_to_rns_c"]
-    rns = peaks[Controller.RNS_C.value]
-    ratio_status = Status.claim(min(ratios.values()) > RATIO_THRESHOLD)
-    rows = []
     if name == PLANAR:
-        within = abs(rns - THESIS_PEAK_RNS) <= PEAK_TOLERANCE * THESIS_PEAK_RNS
-        rows.append(
-            Comparison(
-                "peak_joint_speed_rns_c_rad_s",
-                THESIS_PEAK_RNS,
-                rns,
-                "rad/s",
-                Status.claim(within),
-                f"within +-{PEAK_TOLERANCE:.0%} of 0.73 by construction: T_half = "
-                f"{PLANAR_HALF_CYCLE} s was TUNED to it (A-4.7; the thesis gives no duration)"
-                + ("." if not quick else "; quick run: one half cycle at 2 ms."),
-            )
-        )
-        for controller, thesis in (
-            (Controller.OSC, THESIS_PEAK_OSC),
-            (Controller.OSC_KINEMATIC, None),
-        ):
-            rows.append(
-                Comparison(
-                    f"peak_joint_speed_{controller.value.lower().replace('-', '_')}_rad_s",
-                    thesis,
-                    peaks[controller.value],
-                    "rad/s",
-                    Status.claim(ratios[controller.value] > RATIO_THRESHOLD),
-                    f"untuned; {ratios[controller.value]:.3g}x RNS-C (acceptance > "
-                    f"{RATIO_THRESHOLD:g}); "
-                    + (
-                        "the thesis' OS-C (literal (6.13), tau_a = 0)."
-                        if controller == Controller.OSC
-                        else "the labelled kinematic variant (not in the thesis)."
-                    ),
-                )
-            )
-        thesis_ratio = round(THESIS_PEAK_OSC / THESIS_PEAK_RNS, 2)
-        rows.append(
-            Comparison(
-                "peak_ratio_osc_over_rns_c",
-                thesis_ratio,
-                ratios,
-                "",
-                ratio_status,
-                "OS-C peak over RNS-C peak per OS-C variant (thesis 4.22 / 0.73); the size "
-                "depends on the unknown geometry, timing and OS-C details (thesis_rest 4.8).",
-            )
-        )
+        rows = _planar_velocity_rows(values, quick)
     else:
-        rows.append(
-            Comparison(
-                "peak_ratio_osc_over_rns_c",
-                "larger for OS-C, 'in the same way as the planar case' (no number)",
-                ratios,
-                "",
-                ratio_status,
-                "OS-C peak over RNS-C peak per OS-C variant (criterion > "
-                f"{RATIO_THRESHOLD:g}); peaks "
-                + ", ".join(f"{k} {v:.3g} rad/s" for k, v in peaks.items())
-                + "; first stroke only: "
-                + ", ".join(
-                    f"{k} {v:.3g} rad/s"
-                    for k, v in values["peak_joint_speed_first_segment_rad_s"].items()
-                )
-                + ". RNS-C at m_hat = 1e5 kg is the resolved acceleration J^+ (same peak to "
-                "1e-3 in a development run); its null-space velocity is not damped and "
-                "accumulates over the strokes (chapter 7's point), so its joints keep moving "
-                "when the EE stops and its peak in stroke 3 nearly reaches OS-C's.",
-            )
-        )
+        rows = [_wall_ratio_row(runs, values["peak_ratio_to_rns_c"])]
     return _outcome(name, quick, rows, values, runs)
+
+
+def _planar_velocity_rows(values: dict, quick: bool) -> list[Comparison]:
+    """Fig. 6.4: the RNS-C peak (fitted), both OS-C readings' peaks against the thesis' 4.22
+    rad/s, and the 'much larger fluctuations' trend."""
+    peaks, ratios = values["peak_joint_speed_rad_s"], values["peak_ratio_to_rns_c"]
+    rns = Comparison.input(
+        "peak_joint_speed_rns_c_rad_s",
+        THESIS_PEAK_RNS,
+        peaks[Controller.RNS_C.value],
+        "rad/s",
+        f"fitted: T_half = {PLANAR_HALF_CYCLE:g} s was TUNED so that this peak is about the "
+        f"thesis' {THESIS_PEAK_RNS:g} rad/s (A-4.7; the thesis gives no duration), so it is a "
+        "calibration, not evidence"
+        + ("." if not quick else f"; quick run: one half cycle at {QUICK_PERIOD * 1e3:g} ms."),
+    )
+    trend = Comparison.trend(
+        "peak_ratio_osc_over_rns_c",
+        "'the joint velocity obtained from the OS-C simulation undergoes much larger "
+        f"fluctuations than that in the RNS-C one' (peaks {THESIS_PEAK_OSC:g} vs "
+        f"{THESIS_PEAK_RNS:g} rad/s)",
+        ratios,
+        "",
+        holds=min(ratios.values()) > RATIO_THRESHOLD,
+        note="OS-C peak over RNS-C peak per OS-C variant (criterion > "
+        f"{RATIO_THRESHOLD:g} in every variant, thesis_rest 4.8); the thesis' ratio "
+        f"{THESIS_PEAK_OSC / THESIS_PEAK_RNS:.3g} is compared through the OS-C peaks, since the "
+        "RNS-C peak is fitted.",
+    )
+    osc = [_osc_peak_row(c, peaks, ratios) for c in (Controller.OSC, Controller.OSC_KINEMATIC)]
+    return [rns, *osc, trend]
+
+
+def _osc_peak_row(controller: Controller, peaks: dict, ratios: dict) -> Comparison:
+    """One OS-C reading's peak joint speed against the thesis' 4.22 rad/s (§6.2.1)."""
+    other = Controller.OSC_KINEMATIC if controller == Controller.OSC else Controller.OSC
+    ours = peaks[controller.value]
+    reading = (
+        "the thesis' OS-C read literally ((6.13) at torque level, tau_a = 0)"
+        if controller == Controller.OSC
+        else "the labelled kinematic reading theta_ddot = J^{M+} a' of the thesis' OS-C"
+    )
+    note = f"{reading}; untuned, {ratios[controller.value]:.3g}x RNS-C"
+    if number_verdict(THESIS_PEAK_OSC, ours, PEAK_TOLERANCE) is Verdict.DIFFERENT:
+        note += (
+            f"; ours is {ours / THESIS_PEAK_OSC:.3g}x the thesis'. The run shows that the OS-C "
+            f"reading alone moves the peak ({other.value}: {peaks[other.value]:.3g} rad/s); the "
+            "thesis prints neither its OS-C details nor a duration or a start on the arc "
+            "(thesis_rest 4.8), so the cause is open"
+        )
+    return Comparison.number(
+        f"peak_joint_speed_{controller.value.lower().replace('-', '_')}_rad_s",
+        THESIS_PEAK_OSC,
+        ours,
+        "rad/s",
+        tolerance=PEAK_TOLERANCE,
+        note=note,
+    )
+
+
+def _per_stroke(run: ClosedLoopRun) -> tuple[list[float], list[float]]:
+    """Peak joint speed within each stroke and ||P_hat_RNS theta_dot|| at its end [rad/s]."""
+    strokes = max(1, round(float(run.t[-1]) / WALL_STROKE))
+    peaks, left = [], []
+    for k in range(strokes):
+        inside = (run.t >= k * WALL_STROKE - 1e-9) & (run.t <= (k + 1) * WALL_STROKE + 1e-9)
+        peaks.append(float(run.joint_speed[inside].max()))
+        left.append(float(run.null_space_velocity[np.flatnonzero(inside)[-1]]))
+    return peaks, left
+
+
+def _wall_ratio_row(runs, ratios: dict[str, float]) -> Comparison:
+    """Fig. 6.8: OS-C's joint velocities larger 'in the same way as the planar case'; ``ratios``
+    = OS-C peak over RNS-C peak per OS-C variant."""
+    strokes = {c.value: _per_stroke(run) for c, run in runs.items()}
+    rns_peaks, rns_left = strokes.pop(Controller.RNS_C.value)
+    first = min(peaks[0] for peaks, _ in strokes.values()) / rns_peaks[0]
+    holds = min(ratios.values()) > RATIO_THRESHOLD
+    note = (
+        f"OS-C peak over RNS-C peak per OS-C variant (criterion > {RATIO_THRESHOLD:g}); peak "
+        f"joint speed per stroke: RNS-C {[round(p, 3) for p in rns_peaks]}; "
+        + "; ".join(f"{k} {[round(p, 3) for p in v[0]]}" for k, v in strokes.items())
+        + " rad/s; RNS-C's ||P_hat_RNS theta_dot|| at the stroke ends "
+        f"{[round(x, 3) for x in rns_left]} rad/s."
+    )
+    if not holds:
+        note += (
+            f" In the first stroke OS-C / RNS-C is {first:.3g}; RNS-C's null-space velocity is "
+            "not damped (chapter 7) and its peak per stroke goes "
+            f"{' -> '.join(f'{p:.3g}' for p in rns_peaks)} rad/s. Why the ratio stays below "
+            "the planar case's is open."
+        )
+    return Comparison.trend(
+        "peak_ratio_osc_over_rns_c",
+        "'a different behavior in joint-space, especially joint velocity, in the same way as "
+        "the planar case' (no number)",
+        ratios,
+        "",
+        holds=holds,
+        note=note,
+    )
 
 
 def _plot_velocity(outcome: Outcome, figure) -> None:

@@ -47,6 +47,8 @@ class Trace:
         det_kinematic, det_coupling, det_algorithmic: the determinants of §4.3.1.
         sigma_min: sigma_min of J-bar (J_W_omega_e for the conventional baseline) [-].
         damping: DLS lambda^2 [-]; speed_scale: SC / limit speed factor [-].
+        limit_scale: the joint-limit part of ``speed_scale`` alone, in [0, 1] [-] (below 1 when
+            the URDF speed or position limits scaled the command down).
     """
 
     t_mid: np.ndarray
@@ -65,6 +67,7 @@ class Trace:
     sigma_min: np.ndarray
     damping: np.ndarray
     speed_scale: np.ndarray
+    limit_scale: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -126,6 +129,7 @@ class TraceRecorder:
             sigma_min=np.array([o.sigma_min for o in outputs]),
             damping=np.array([o.damping for o in outputs]),
             speed_scale=np.array([o.speed_scale for o in outputs]),
+            limit_scale=np.array([o.limit_scale for o in outputs]),
         )
 
 
@@ -213,6 +217,7 @@ def run_values(runs: list[Run]) -> dict:
         "min_sigma": each(lambda r: r.result.min_sigma),
         "max_damping": each(lambda r: r.result.max_damping),
         "speed_scale_range": each(lambda r: [r.result.min_speed_scale, r.result.max_speed_scale]),
+        "min_joint_limit_scale": each(lambda r: float(r.trace.limit_scale.min())),
         "min_det_algorithmic": each(lambda r: r.result.min_algorithmic_determinant),
         "min_det_kinematic": each(lambda r: r.result.min_kinematic_determinant),
         "min_det_coupling_kg6m12": each(lambda r: r.result.min_coupling_determinant),

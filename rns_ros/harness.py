@@ -54,6 +54,7 @@ from rclpy.task import Future
 
 from rns_ros.cli import DOMAIN_ID_RANGE, one_line
 from rns_ros.core.errors import ConfigError
+from rns_ros.resources import apply_loopback_profile
 
 #: DDS discovery never leaves the machine.
 DISCOVERY_RANGE = "LOCALHOST"
@@ -224,8 +225,10 @@ class Harness:
     ) -> None:
         if executor not in EXECUTORS:
             raise ConfigError(f"executor must be one of {list(EXECUTORS)}, got {executor!r}")
-        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
         os.environ.pop("ROS_STATIC_PEERS", None)
+        if apply_loopback_profile() is None:  # the loopback profile counts as localhost
+            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = DISCOVERY_RANGE
+            apply_loopback_profile()
         self.domain_id = _domain(domain_id)
         self.context = rclpy.Context()
         ros_args = list(ros_args)

@@ -25,6 +25,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import NoReturn
 
+from rns_ros.resources import apply_loopback_profile
+
 #: Seconds to wait for a node's parameter services or a topic to show up in the graph.
 DEFAULT_TIMEOUT = 5.0
 #: Seconds of discovery after the first other node showed up, before listing the graph.
@@ -62,6 +64,7 @@ class ToolSession:
         from rclpy.signals import SignalHandlerOptions
 
         self.stop = stop
+        apply_loopback_profile()  # with localhost discovery, DDS sockets on 127.0.0.1 too
         self.context = rclpy.Context()
         # rclpy's own SIGINT handler would tear the Context down under a running wait; ours only
         # sets `stop`. The domain and discovery range come from the environment, like ros2.

@@ -27,7 +27,7 @@ ALLOWED = {
     "harness": {"core", "cli", "resources"},
     "keyboard": {"core", "control"},
     "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard"},
-    "tool_session": {"core", "cli"},
+    "tool_session": {"core", "cli", "resources"},
     "runs": {"core", "control", "sim", "analysis", "viz", "cli", "resources", "harness", "nodes"},
 }
 #: the programs may import every room; test/apps/test_apps_apart.py keeps them apart

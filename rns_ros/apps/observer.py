@@ -50,7 +50,12 @@ from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError, RnsError, load_model
 from rns_ros.core.state import FreeFloatingState
 from rns_ros.harness import RECORD_QOS, TopicLog, ros_environment
-from rns_ros.resources import default_model_config, scenario_path
+from rns_ros.resources import (
+    apply_loopback_profile,
+    default_model_config,
+    loopback_profile,
+    scenario_path,
+)
 from rns_ros.runs.recorded import robot_arrays
 
 #: Topics recorded: report key -> (message type, topic name).
@@ -85,12 +90,15 @@ def static_peer_environment(
     """
     env = ros_environment(domain_id, base)  # domain and the Fast DDS RMW
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range
+    if env.get("FASTRTPS_DEFAULT_PROFILES_FILE") == str(loopback_profile()):
+        del env["FASTRTPS_DEFAULT_PROFILES_FILE"]  # it keeps DDS on 127.0.0.1: no peer reached
     env["ROS_STATIC_PEERS"] = ";".join(peers)
     return env
 
 
 def observe(args: argparse.Namespace) -> dict[str, Any]:
     """Record the topics as ``args`` says; return the report (see the module docstring)."""
+    apply_loopback_profile()  # with localhost discovery, DDS sockets on 127.0.0.1 too
     context = rclpy.Context()
     try:  # argv[0] is a program name to rcl; remaps (-r) apply to the topics below
         rclpy.init(args=["rns_observer", *args.ros_args], context=context, domain_id=args.domain_id)

@@ -15,7 +15,13 @@ from sensor_msgs.msg import JointState
 from rns_ros.control.controller import ControllerStep
 from rns_ros.control.teleop import ControllerState, GateOutput
 from rns_ros.core.model import FreeFloatingModel
-from rns_ros.nodes.status import level_rank, node_names, other_publishers, status_text, type_name
+from rns_ros.nodes.status import (
+    CommanderWatch,
+    level_rank,
+    node_names,
+    status_text,
+    type_name,
+)
 
 #: Period of the /diagnostics publication and of the check of who publishes the inputs [s].
 DIAGNOSTICS_PERIOD = 1.0
@@ -207,7 +213,13 @@ class InputPublishers:
     ) -> None:
         self._node, self._topics, self._command_type = node, topics, command_type
         self._output_topic = output_topic
-        self._commanders: set[str] = set()
+        self._commanders = CommanderWatch(
+            node,
+            output_topic,
+            "the simulator takes each command as it comes, so the arm follows both in turn; "
+            "run one commander",
+            publishes=True,
+        )
         self._warned_types: set[str] = set()
         self.state_publishers: list[str] = []  # nodes publishing joint_states
 
@@ -242,13 +254,7 @@ class InputPublishers:
             for info in node.get_publishers_info_by_topic(self._topics["joint_states"])
             if info.topic_type == type_name(JointState)
         )
-        commanders = other_publishers(node, self._output_topic)
-        for name in set(commanders) - self._commanders:
-            node.get_logger().warn(
-                f"{name} also publishes on {self._output_topic}: the simulator takes each "
-                "command as it comes, so the arm follows both in turn; run one commander"
-            )
-        self._commanders = set(commanders)
+        commanders = self._commanders.check()
         if commanders:
             advisories.append(
                 f"{', '.join(commanders)} also command(s) the joints on {self._output_topic}"

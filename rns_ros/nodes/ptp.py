@@ -62,7 +62,7 @@ from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
 from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
-from rns_ros.nodes.status import level_rank, node_names, other_publishers, status_text
+from rns_ros.nodes.status import CommanderWatch, level_rank, node_names, status_text
 from rns_ros.resources import default_model_config
 
 #: A goal whose JointState name list is exactly this runs the full reactionless deployment.
@@ -164,6 +164,12 @@ class PtpNode(Node):
                 Float64MultiArray, "joint_velocities", QoSProfile(depth=1)
             )
         self._output_topic = self._output.topic_name
+        self._commander_watch = CommanderWatch(
+            self,
+            self._output_topic,
+            "only one of rns_controller / rns_ptp may command the joints at a time",
+            publishes=True,
+        )
         self._status = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
         self._diagnostics = self.create_publisher(
             DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
@@ -586,13 +592,7 @@ class PtpNode(Node):
             for info in self.get_publishers_info_by_topic(self._state_topic)
             if info.topic_type == "sensor_msgs/msg/JointState"
         )
-        commanders = other_publishers(self, self._output_topic)
-        for name in set(commanders) - set(self._commanders):
-            self.get_logger().warn(
-                f"{name} also publishes on {self._output_topic}: only one of rns_controller / "
-                "rns_ptp may command the joints at a time"
-            )
-        self._commanders = commanders
+        self._commanders = self._commander_watch.check()
 
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""

@@ -30,6 +30,7 @@ from rns_ros.cli import (
 )
 from rns_ros.core.errors import RnsError
 from rns_ros.nodes.parameters import ParameterSpec, warn_unknown_parameters
+from rns_ros.resources import apply_loopback_profile
 
 #: What rcl / rclpy raise at start-up on a user's mistake rather than a bug: unparsable ROS
 #: arguments or params file (RCLInvalidROSArgsError is an RCLError), an unknown --ros-args flag,
@@ -91,9 +92,12 @@ def start_node(executable: str, factory: Callable[[], Node], argv: Sequence[str]
     """rclpy.init (without rclpy's signal handlers) and ``factory()``; None after printing one
     line ``<executable>: <problem>`` when rcl rejects the ROS arguments, params file or
     environment (:data:`ROS_STARTUP_ERRORS`). Overrides naming no parameter of the node are
-    logged with the closest valid name. :class:`RnsError` from the factory propagates."""
+    logged with the closest valid name. :class:`RnsError` from the factory propagates. With
+    localhost discovery the DDS sockets go on the loopback interface
+    (:func:`~rns_ros.resources.apply_loopback_profile`)."""
     try:
         check_domain_id_environment()
+        apply_loopback_profile()
         rclpy.init(args=list(argv), signal_handler_options=SignalHandlerOptions.NO)
         node = factory()
     except ROS_STARTUP_ERRORS as exc:

@@ -26,7 +26,7 @@ from rns_ros.core.errors import InputError
 from rns_ros.nodes.cdr import JointTrajectoryReader, MalformedMessageError
 from rns_ros.nodes.lockstep import LockstepPacer
 from rns_ros.nodes.parameters import velocity_joint_order
-from rns_ros.nodes.status import node_names
+from rns_ros.nodes.status import CommanderWatch
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
 #: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to (older: another clock
@@ -131,29 +131,22 @@ class CommandIntake:
             )
         # who commands the joints, read from the graph once a second (wall clock: also while
         # a lockstep pause holds the simulated time)
-        self.commanders: list[str] = []
-        self._command_topic = subscription.topic_name
+        self.commanders = CommanderWatch(
+            node,
+            subscription.topic_name,
+            "each command is taken as it comes (the newest wins), so the arm follows them in "
+            "turn; run one commander",
+            publishes=False,
+        )
         node.create_timer(
             COMMANDER_CHECK_PERIOD,
-            lambda: self.check_commanders(node),
+            self.commanders.check,
             clock=Clock(clock_type=ClockType.STEADY_TIME),
         )
         if params["reaction_wheels"]:
             node.create_subscription(
                 Vector3Stamped, "wheel_torque", self._on_wheel_torque, command_qos
             )
-
-    def check_commanders(self, node: Node) -> None:
-        """Warn (once per new set) when more than one node publishes joint commands: each
-        command is taken as it comes, the newest wins, so the arm follows them in turn."""
-        commanders = node_names(node.get_publishers_info_by_topic(self._command_topic))
-        if len(commanders) > 1 and set(commanders) != set(self.commanders):
-            self._logger.warn(
-                f"{len(commanders)} nodes command the joints on {self._command_topic} "
-                f"({', '.join(commanders)}): each command is taken as it comes (the newest "
-                "wins), so the arm follows them in turn; run one commander"
-            )
-        self.commanders = commanders
 
     # --- executor thread ------------------------------------------------------------------------
     def _on_trajectory(self, data: bytes) -> None:

@@ -1,5 +1,5 @@
-"""Helpers shared by the nodes' status reporting: diagnostic levels, key/value text, and the
-names the ROS graph gives to message types and nodes."""
+"""Helpers shared by the nodes' status reporting: diagnostic levels, key/value text, the names
+the ROS graph gives to message types and nodes, and who commands the joints."""
 
 from __future__ import annotations
 
@@ -20,10 +20,46 @@ def node_names(infos) -> list[str]:
     ]
 
 
-def other_publishers(node, topic: str) -> list[str]:
-    """Nodes other than ``node`` that publish on ``topic`` (resolved name), from the graph."""
-    me = f"{node.get_namespace().rstrip('/')}/{node.get_name()}"
-    return [name for name in node_names(node.get_publishers_info_by_topic(topic)) if name != me]
+class CommanderWatch:
+    """Who commands the joints on one topic, read from the ROS graph; one warning for each new
+    set of two or more commanders.
+
+    Args:
+        node: the watching node.
+        topic: resolved name of the command topic.
+        consequence: what two commanders do, the end of the warning.
+        publishes: the node itself publishes on ``topic`` (a commander); else it subscribes.
+    """
+
+    def __init__(self, node, topic: str, consequence: str, *, publishes: bool) -> None:
+        self._node, self._topic, self._consequence = node, topic, consequence
+        self._publishes = publishes
+        #: every node commanding on the topic at the last check, this one included
+        self.commanders: list[str] = []
+
+    @property
+    def others(self) -> list[str]:
+        """The commanders other than the watching node (at the last check)."""
+        me = _full_name(self._node)
+        return [name for name in self.commanders if name != me]
+
+    def check(self) -> list[str]:
+        """Read the graph; warn when two or more nodes command and the set is new. Returns
+        :attr:`others`."""
+        names = node_names(self._node.get_publishers_info_by_topic(self._topic))
+        if self._publishes and _full_name(self._node) not in names:
+            names.insert(0, _full_name(self._node))  # its publisher may not be in the graph yet
+        if len(names) > 1 and set(names) != set(self.commanders):
+            self._node.get_logger().warn(
+                f"{len(names)} nodes command the joints on {self._topic} ({', '.join(names)}): "
+                f"{self._consequence}"
+            )
+        self.commanders = names
+        return self.others
+
+
+def _full_name(node) -> str:
+    return f"{node.get_namespace().rstrip('/')}/{node.get_name()}"
 
 
 def level_rank(level) -> int:

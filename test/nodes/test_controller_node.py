@@ -1096,6 +1096,11 @@ def test_a_second_commander_of_the_joints_is_reported_by_the_controller_and_the_
     entry = status.messages[-1].status[0]
     assert entry.level == entry.WARN
     assert "also command(s) the joints on /joint_references" in entry.message
-    assert ros.spin_until(lambda: len(stack.simulator._commands.commanders) == 2, timeout=10.0)
-    assert set(stack.simulator._commands.commanders) == {"/rns_controller", "/other_commander"}
+    assert ros.spin_until(
+        lambda: len(stack.simulator._commands.commanders.commanders) == 2, timeout=10.0
+    )
+    assert set(stack.simulator._commands.commanders.commanders) == {
+        "/rns_controller",
+        "/other_commander",
+    }
     del other

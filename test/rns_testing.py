@@ -96,6 +96,18 @@ def quick_result_verdicts(document: dict, png, identifier: str) -> set[str]:
     return verdicts
 
 
+def expected_verdict(thesis: float, ours: float, tolerance: float) -> str:
+    """The verdict rule for one printed number, written out independently of the registry."""
+    if abs(ours - thesis) <= tolerance:
+        return "exact"
+    return "close" if abs(ours - thesis) <= 0.1 * abs(thesis) else "different"
+
+
+def comparison_rows(document) -> dict[str, dict]:
+    """A result JSON's comparisons by key."""
+    return {c["key"]: c for c in document["comparisons"]}
+
+
 def assert_chapter_order(module: str, earlier: tuple[str, ...], identifiers) -> None:
     """Chapter ``module`` loads after each of the ``earlier`` chapter modules and registers
     ``identifiers``."""

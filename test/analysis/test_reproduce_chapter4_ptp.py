@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from rns_testing import quick_documents, quick_result_verdicts
+from rns_testing import comparison_rows, expected_verdict, quick_documents, quick_result_verdicts
 
 from rns_ros.analysis.reproduce import chapter4_ptp
 from rns_ros.analysis.reproduce.registry import CHAPTER_MODULES
@@ -17,17 +17,6 @@ METHODS = {"3-phase", "JS-C", "IJ-C", "TJ-C"}
 #: full-resolution max base deviations [deg] of table4.2 and partial_deployment (docs/ptp.md)
 FULL_TABLE = {"3-phase": 1.934631, "JS-C": 2.651097, "IJ-C": 3.062447, "TJ-C": 3.028953}
 FULL_PARTIAL = {"partial_reactionless": 3.105277, "baseline": 4.064867}
-
-
-def expected_verdict(thesis: float, ours: float, tolerance: float) -> str:
-    """The verdict rule for one printed number, written out here."""
-    if abs(ours - thesis) <= tolerance:
-        return "exact"
-    return "close" if abs(ours - thesis) <= 0.1 * abs(thesis) else "different"
-
-
-def rows(document) -> dict[str, dict]:
-    return {c["key"]: c for c in document["comparisons"]}
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +94,7 @@ def test_table_4_2(documents):
     # the thesis' claim holds on our geometry: the 3-phase method disturbs the base least
     assert min(deviation, key=deviation.get) == "3-phase"
     assert document["final_camera_error_m"]["TJ-C"] < 0.01
-    table = rows(document)
+    table = comparison_rows(document)
     for name in METHODS:
         row = table[f"max_base_deviation_{name}_deg"]
         assert row["ours"] == pytest.approx(deviation[name], abs=1e-4)
@@ -125,7 +114,7 @@ def test_fig_4_10_coupling_only_in_phase_two(documents):
     assert per_phase["II"] > 1.0
     assert per_phase["I"] < 1e-10 * per_phase["II"]
     assert per_phase["III"] < 1e-10 * per_phase["II"]
-    table = rows(document)
+    table = comparison_rows(document)
     assert table["coupling_only_in_phase_II"]["verdict"] == "qualitative"
     assert table["phase_durations_s"]["verdict"] == "input"
 
@@ -133,7 +122,7 @@ def test_fig_4_10_coupling_only_in_phase_two(documents):
 @pytest.mark.slow
 def test_fig_4_12_deviation_only_in_phase_two(documents):
     document, _ = documents["fig4.12"]
-    table = rows(document)
+    table = comparison_rows(document)
     row = table["deviation_only_in_phase_II_deg"]
     outside = max(row["ours"].values())
     assert outside < 1e-3 * document["max_base_deviation_deg"]["3-phase"]
@@ -146,7 +135,7 @@ def test_fig_4_12_deviation_only_in_phase_two(documents):
 def test_deployments(documents):
     full, _ = documents["fig4.13"]
     assert full["max_base_deviation_deg"] < 1e-3
-    table = rows(full)
+    table = comparison_rows(full)
     assert table["max_base_deviation_deg"]["verdict"] == "qualitative"
     # theta_4 = 134.55 deg is where the plan ends the fold: an input
     assert table["theta4_final_deg"]["verdict"] == "input"
@@ -159,5 +148,5 @@ def test_deployments(documents):
     )
     assert partial["reduction_percent"] > 0.0
     assert partial["final_error_deg"] < 0.1
-    reduction = rows(partial)["reduction_percent"]
+    reduction = comparison_rows(partial)["reduction_percent"]
     assert reduction["verdict"] == expected_verdict(28.5, reduction["ours"], 0.05)

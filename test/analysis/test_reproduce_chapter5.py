@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from rns_testing import quick_result_verdicts
+from rns_testing import comparison_rows, expected_verdict, quick_result_verdicts
 
 from rns_ros.analysis.reproduce import chapter5, registry
 from rns_ros.analysis.reproduce.registry import run_one
@@ -27,17 +27,6 @@ KEYS = {
         "points",
     ),
 }
-
-
-def expected_verdict(thesis: float, ours: float, tolerance: float) -> str:
-    """The verdict rule for one printed number, written out here."""
-    if abs(ours - thesis) <= tolerance:
-        return "exact"
-    return "close" if abs(ours - thesis) <= 0.1 * abs(thesis) else "different"
-
-
-def rows(document) -> dict[str, dict]:
-    return {c["key"]: c for c in document["comparisons"]}
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +81,7 @@ def test_fig5_1_ratio_is_one_almost_everywhere(documents):
     assert document["c_ratio_median"] <= ours["c_ratio_mean"] <= ours["c_ratio_max"]
     assert document["thesis"]["c_ratio_mean"] == 1.002
     assert document["share_above_1_01"] < 0.05
-    table = rows(document)
+    table = comparison_rows(document)
     mean = table["c_ratio_mean"]
     assert mean["verdict"] == expected_verdict(1.002, mean["ours"], 5e-4)
     assert table["share_near_1"]["verdict"] == (
@@ -108,7 +97,7 @@ def test_fig5_2_means_are_near_one_and_fall_with_alpha(documents):
     assert all(1.0 <= value < 1.01 for row in table for value in row)
     middle = len(table[0]) // 2  # beta = 1
     assert table[0][middle] > table[-1][middle]  # alpha 0.5 above alpha 1.5
-    verdicts = {key: c["verdict"] for key, c in rows(document).items()}
+    verdicts = {key: c["verdict"] for key, c in comparison_rows(document).items()}
     assert verdicts == {"c_ratio_mean_range": "qualitative", "decreasing_with_alpha": "qualitative"}
 
 
@@ -132,7 +121,7 @@ def test_fig5_3_statistics_and_slices(documents):
     assert document["thesis"]["c_ratio_mean"] == 1.14
     assert [s["theta1_rad"] for s in document["slices"]] == [-3.05, -math.pi]
     assert all(s["c_ratio_mean"] >= 1.0 - 1e-9 for s in document["slices"])
-    table = rows(document)
+    table = comparison_rows(document)
     assert table["c_ratio_mean"]["verdict"] == expected_verdict(1.14, ours["c_ratio_mean"], 5e-3)
     peak_a, peak_b = ours["slice_a_c_ratio_max"], ours["slice_b_c_ratio_max"]
     assert peak_a == document["slices"][0]["c_ratio_max"]

@@ -9,6 +9,7 @@ period, the time series the thesis plots (:class:`Trace`). :func:`run` caches on
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import inspect
@@ -135,8 +136,21 @@ class TraceRecorder:
 
 @functools.cache
 def default_robot() -> FreeFloatingModel:
-    """The default 7-DoF model (config/model.yaml), loaded once per process."""
+    """The default 7-DoF model (config/model.yaml) with its URDF joint limits, loaded once per
+    process: the product's limits, for the labelled "URDF limits" series."""
     return load_model(default_model_config())
+
+
+@functools.cache
+def thesis_robot() -> FreeFloatingModel:
+    """The default 7-DoF model without joint speed or position limits, as the thesis simulates
+    it (its runs scale nothing down): the model every reproduction runs on unless it says
+    otherwise. The URDF's limits are a product safety choice (:func:`default_robot`)."""
+    robot = copy.copy(load_model(default_model_config()))
+    robot.velocity_limits = np.full(robot.n, np.inf)
+    robot.lower_limits = np.full(robot.n, -np.inf)
+    robot.upper_limits = np.full(robot.n, np.inf)
+    return robot
 
 
 def shipped_scenario(name: str, wrist_gain: float | None = None) -> Scenario:
@@ -160,10 +174,18 @@ def loop_settings(quick: bool) -> dict:
     return {key: getattr(value, "value", value) for key, value in defaults.items()}
 
 
-@functools.cache  # unbounded: one run per (scenario, method, quick, k_g)
-def recorded_run(name: str, method: str, quick: bool, wrist_gain: float | None = None) -> Run:
-    """Run scenario ``name`` with ``method`` (``wrist_gain`` overrides the file's k_g)."""
-    robot = default_robot()
+@functools.cache  # unbounded: one run per (scenario, method, quick, k_g, limits)
+def recorded_run(
+    name: str,
+    method: str,
+    quick: bool,
+    wrist_gain: float | None = None,
+    urdf_limits: bool = False,
+) -> Run:
+    """Run scenario ``name`` with ``method`` (``wrist_gain`` overrides the file's k_g) on
+    :func:`thesis_robot`, or with ``urdf_limits`` on :func:`default_robot` (commands scaled
+    down to the URDF's joint limits; label suffix ``_urdf_limits``)."""
+    robot = default_robot() if urdf_limits else thesis_robot()
     scenario = shipped_scenario(name, wrist_gain)
     loop = loop_settings(quick)
     state_0 = FreeFloatingState.compute(robot, robot.configuration(scenario.initial_theta))
@@ -171,8 +193,17 @@ def recorded_run(name: str, method: str, quick: bool, wrist_gain: float | None =
     result = run_scenario(robot, scenario, method=method, on_period=recorder, **loop)
     gains = dataclasses.asdict(scenario.gains())
     label = method if wrist_gain is None else f"{method}_kg{wrist_gain:g}"
-    settings = {"method": method, "gains": gains, **loop}
+    label += "_urdf_limits" if urdf_limits else ""
+    settings = {"method": method, "gains": gains, "joint_limits": _limits_used(urdf_limits), **loop}
     return Run(label, result, recorder.trace(), settings)
+
+
+def _limits_used(urdf_limits: bool) -> str:
+    return (
+        "URDF speed and position limits (commands scaled down uniformly)"
+        if urdf_limits
+        else "none (as in the thesis' simulations)"
+    )
 
 
 def scenario_settings(name: str) -> dict:
@@ -233,7 +264,12 @@ def run_settings(name: str, runs: list[Run], quick: bool) -> dict:
     return {
         **scenario_settings(name),
         "methods": {
-            run.label: {"method": run.settings["method"], **run.settings["gains"]} for run in runs
+            run.label: {
+                "method": run.settings["method"],
+                "joint_limits": run.settings["joint_limits"],
+                **run.settings["gains"],
+            }
+            for run in runs
         },
         "controller_rate_hz": first["rate"],
         "simulation_step_s": first["simulation_step"],

@@ -35,7 +35,7 @@ from rns_ros.analysis.reproduce.registry import (
     number_verdict,
     register_all,
 )
-from rns_ros.analysis.reproduce.scenario_runs import default_robot
+from rns_ros.analysis.reproduce.scenario_runs import default_robot, thesis_robot
 from rns_ros.control.ptp import PtpPlan, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment, plan_partial_deployment
 from rns_ros.control.ptp_planner import plan_ptp
@@ -100,7 +100,7 @@ def _step(quick: bool) -> float:
 @functools.cache
 def _table_runs(quick: bool) -> dict[str, PtpRun]:
     """The four Table 4.2 runs (3-phase first: its final camera is the IJ-C/TJ-C target)."""
-    robot = default_robot()
+    robot = thesis_robot()
     start, goal = np.deg2rad(INITIAL_DEG), np.deg2rad(FINAL_DEG)
     runs = {"3-phase": run_plan(robot, plan_ptp(robot, start, goal, "three_phase"), **_loop(quick))}
     settings = PtpSettings(
@@ -124,7 +124,8 @@ def _loop(quick: bool) -> dict:
 def _settings(quick: bool) -> dict:
     defaults = PtpSettings()
     return {
-        "model": f"{default_robot().name} (config/urdf/rns_7dof_arm.urdf)",
+        "model": f"{thesis_robot().name} (config/urdf/rns_7dof_arm.urdf)",
+        "joint_limits": "none (as in the thesis' simulations)",
         "simulation_step_s": _step(quick),
         "control_rate_hz": RATE,
         "phase_durations_nominal_s": list(defaults.phase_durations),
@@ -132,8 +133,17 @@ def _settings(quick: bool) -> dict:
         "path_step_rad": defaults.path_step,
         "elbow_gain_per_s": defaults.elbow_gain,
         "fold_angle_deg": math.degrees(defaults.fold_angle),
-        "velocity_limits_rad_s": default_robot().velocity_limits.tolist(),
+        "urdf_velocity_limits_rad_s": default_robot().velocity_limits.tolist(),
     }
+
+
+@functools.cache
+def _urdf_limited_durations() -> list[float]:
+    """Phase durations [s] of the Table 4.2 3-phase plan on the URDF's joint speed limits (the
+    product's; a phase is stretched where a joint would exceed its limit, A-2.3)."""
+    robot = default_robot()
+    plan = plan_ptp(robot, np.deg2rad(INITIAL_DEG), np.deg2rad(FINAL_DEG), "three_phase")
+    return [round(p.end - p.start, 3) for p in plan.phases]
 
 
 def _phases(plan: PtpPlan) -> list[dict]:
@@ -151,7 +161,7 @@ def _phases(plan: PtpPlan) -> list[dict]:
 
 def _plan_coupling(plan: PtpPlan, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Times [s], theta_dot (k, n) and M~_omega_m theta_dot (k, 3) of the plan's own reference."""
-    robot = default_robot()
+    robot = thesis_robot()
     times = np.linspace(0.0, plan.duration, count)
     rates, coupling = [], []
     for t in times:
@@ -374,7 +384,7 @@ def _compute_fig4_10(quick: bool) -> Outcome:
         f"{run.max_coupling(True):.3g} kg m^2/s in Phases I/III"
     )
     durations = [round(p.end - p.start, 3) for p in plan.phases]
-    limit = float(default_robot().velocity_limits[:4].max())
+    limited = _urdf_limited_durations()
     comparisons = (
         Comparison.trend(
             "coupling_only_in_phase_II",
@@ -389,8 +399,8 @@ def _compute_fig4_10(quick: bool) -> Outcome:
             [5.0, 20.0, 5.0],
             durations,
             "s",
-            f"set: nominal {list(PtpSettings().phase_durations)} s (§4.4.2), a phase stretched "
-            f"where joints 1-4 would exceed {limit:g} rad/s (A-2.3)",
+            f"set: nominal {list(PtpSettings().phase_durations)} s (§4.4.2), without joint "
+            f"speed limits as in the thesis; the URDF's limits would stretch them to {limited} s",
         ),
     )
     values = {
@@ -429,14 +439,14 @@ def _plot_fig4_10(outcome: Outcome, figure) -> None:
 # fig 4.13: deployment -----------------------------------------------------------------------
 @functools.cache
 def _deployment(quick: bool) -> PtpRun:
-    robot = default_robot()
+    robot = thesis_robot()
     return run_plan(robot, plan_deployment(robot, STOWED), **_loop(quick))
 
 
 def _compute_fig4_13(quick: bool) -> Outcome:
     run = _deployment(quick)
     plan = run.plan
-    robot = default_robot()
+    robot = thesis_robot()
     snapshot_times = np.linspace(0.0, plan.duration, 6)
     snapshots = [plan.sample(t).theta for t in snapshot_times]
     reached = math.degrees(plan.phases[0].fold_reached)
@@ -518,7 +528,7 @@ def _plot_fig4_13(outcome: Outcome, figure) -> None:
 # partial deployment -------------------------------------------------------------------------
 @functools.cache
 def _partial(quick: bool) -> dict[str, PtpRun]:
-    robot = default_robot()
+    robot = thesis_robot()
     goal = np.deg2rad(PARTIAL_FINAL_DEG)
     plan = plan_partial_deployment(robot, STOWED, goal)
     baseline = plan_ptp(robot, STOWED, goal, "joint_space", PtpSettings(duration=plan.duration))

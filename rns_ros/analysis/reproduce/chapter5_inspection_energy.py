@@ -45,7 +45,7 @@ from rns_ros.analysis.reproduce.registry import (
     register_all,
     resolution_choice,
 )
-from rns_ros.analysis.reproduce.scenario_runs import default_robot
+from rns_ros.analysis.reproduce.scenario_runs import default_robot, thesis_robot
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core.energy import WHEEL_INERTIA
 from rns_ros.resources import scenario_path
@@ -114,7 +114,9 @@ def _comparison(index: int, quick: bool) -> ConditionComparison:
     """Both runs of condition ``index`` (0-based) of the quick or full condition list."""
     count = QUICK_CONDITIONS if quick else CONDITIONS
     rate, step = _loop(quick)
-    return compare(default_robot(), _conditions(count)[index], rate=rate, simulation_step=step)
+    # drawn within the URDF's position limits (poses the arm can take), run without joint
+    # limits as the thesis simulates
+    return compare(thesis_robot(), _conditions(count)[index], rate=rate, simulation_step=step)
 
 
 def _completed(run: EnergyRun) -> bool:
@@ -166,6 +168,8 @@ def _settings(quick: bool, count: int) -> dict:
     robot = default_robot()
     return {
         "model": f"{robot.name} (config/urdf/rns_7dof_arm.urdf, {robot.n} joints)",
+        "joint_limits": "none in the runs (as in the thesis' simulations); conditions drawn "
+        "within the URDF's position limits",
         "controller_rate_hz": rate,
         "simulation_step_s": step,
         "simulation_mode": "kinematic",

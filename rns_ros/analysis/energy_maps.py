@@ -176,18 +176,21 @@ def c_ratio_batch(
 
 
 # --- planar 2-DoF arm (Figs. 5.1, 5.2) ----------------------------------------------------------
-def planar_arm(alpha: float = 1.0, beta: float = 1.0) -> PlanarArm:
+def planar_arm(alpha: float = 1.0, beta: float = 1.0, *, scale_inertia: bool = False) -> PlanarArm:
     """The section-5.2 planar arm with the parameter variation of eqs. (5.6)-(5.7).
 
-    alpha scales both link masses and both link inertias (m_i* = alpha m_i, I_i* = alpha I_i,
-    uniform density, choice A-3.3); beta scales both CoM distances (l_ci* = beta l_i / 2); the
-    link lengths (joint positions) stay 1 m. Base 1010 kg (1000 kg + one 10 kg wheel at its CoM).
+    alpha scales both link masses (m_i* = alpha m_i, eq. 5.6); with ``scale_inertia`` also both
+    link inertias about their CoM (I_i* = alpha I_i, uniform density: thesis_rest's reading
+    A-3.3, which the equation does not state). beta scales both CoM distances
+    (l_ci* = beta l_i / 2, eq. 5.7); the link lengths (joint positions) stay 1 m. Base 1010 kg
+    (1000 kg + one 10 kg wheel at its CoM).
     """
+    inertia = PLANAR_LINK_INERTIA * (alpha if scale_inertia else 1.0)
     return PlanarArm(
         attach_distance=PLANAR_ATTACH_DISTANCE,
         base_mass=PLANAR_BASE_MASS,
         link_masses=(100.0 * alpha, 100.0 * alpha),
-        link_inertias=(PLANAR_LINK_INERTIA * alpha, PLANAR_LINK_INERTIA * alpha),
+        link_inertias=(inertia, inertia),
         com_distances=(0.5 * beta, 0.5 * beta),
     )
 
@@ -213,16 +216,28 @@ def planar_c_ratio_map(
 
 
 def parameter_variation_map(
-    alphas: Sequence[float], betas: Sequence[float], count: int = 100
+    alphas: Sequence[float],
+    betas: Sequence[float],
+    count: int = 100,
+    *,
+    scale_inertia: bool = False,
 ) -> np.ndarray:
-    """Mean C_ratio over the count^2 mesh for each (alpha, beta) of eqs. (5.6)-(5.7) (Fig. 5.2).
+    """Mean C_ratio over the count^2 mesh for each (alpha, beta) of eqs. (5.6)-(5.7) (Fig. 5.2);
+    ``scale_inertia`` as in :func:`planar_arm`.
 
     Returns:
         shape (len(alphas), len(betas)), [-].
     """
     return np.array(
         [
-            [float(planar_c_ratio_map(planar_arm(a, b), count)[1].mean()) for b in betas]
+            [
+                float(
+                    planar_c_ratio_map(planar_arm(a, b, scale_inertia=scale_inertia), count)[
+                        1
+                    ].mean()
+                )
+                for b in betas
+            ]
             for a in alphas
         ]
     )

@@ -75,21 +75,25 @@ def test_planar_map_matches_pinocchio_and_has_the_thesis_mean(reference_c_ratio)
     assert np.median(ratio) < 1.0001
 
 
-def test_parameter_variation_scales_masses_inertias_and_com_distances(reference_c_ratio):
-    """alpha, beta of eqs. (5.6)-(5.7) against a Pinocchio model edited the same way."""
+@pytest.mark.parametrize("scale_inertia", [False, True])
+def test_parameter_variation_scales_masses_com_distances_and_optionally_inertias(
+    reference_c_ratio, scale_inertia
+):
+    """alpha, beta of eqs. (5.6)-(5.7) against a Pinocchio model edited the same way: alpha
+    scales the masses (and the inertias only with ``scale_inertia``), beta the CoM distances."""
     alpha, beta = 0.7, 1.3
-    arm = em.planar_arm(alpha, beta)
+    arm = em.planar_arm(alpha, beta, scale_inertia=scale_inertia)
     base = planar_2dof_model(0.945, 0.0, base_mass=1010.0, link_inertia=8.3)
     model = pin.Model(base.model)
     for j in (2, 3):
         body = model.inertias[j]
-        model.inertias[j] = pin.Inertia(
-            alpha * body.mass, beta * body.lever, alpha * body.inertia.copy()
-        )
+        rotational = body.inertia.copy() * (alpha if scale_inertia else 1.0)
+        model.inertias[j] = pin.Inertia(alpha * body.mass, beta * body.lever, rotational)
     edited = type(base)(model, base.spec, name="planar_scaled")
     for theta in ([0.3, -1.2], [2.5, 0.4], [-3.0, 2.9]):
         reference, _, _ = reference_c_ratio(edited, theta)
         assert em.planar_c_ratio(arm, theta) == pytest.approx(reference, rel=1e-9)
-    means = em.parameter_variation_map([0.5, 1.5], [1.0], count=40)
+    means = em.parameter_variation_map([0.5, 1.5], [1.0], count=40, scale_inertia=scale_inertia)
     assert means.shape == (2, 1)
-    assert means[1, 0] < means[0, 0]  # heavier links: closer to minimum energy (Fig. 5.2)
+    if scale_inertia:  # heavier (denser) links: closer to minimum energy (Fig. 5.2)
+        assert means[1, 0] < means[0, 0]

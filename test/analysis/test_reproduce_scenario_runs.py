@@ -58,9 +58,31 @@ def test_trace_rows_follow_their_definitions(run):
 def test_run_settings_name_the_scenario_methods_and_loop(run):
     settings = scenario_runs.run_settings(SCENARIO, [run], True)
     assert settings["scenario"] == f"config/scenarios/{SCENARIO}.yaml"
-    assert settings["methods"] == {"dls": {"method": "dls", **run.settings["gains"]}}
+    assert settings["methods"] == {
+        "dls": {
+            "method": "dls",
+            "joint_limits": run.settings["joint_limits"],
+            **run.settings["gains"],
+        }
+    }
     assert settings["controller_rate_hz"] == scenario_runs.QUICK_RATE
     assert settings["quick"] is True
     values = scenario_runs.run_values([run])
     assert set(values["max_base_deviation_deg"]) == {"dls"}
     assert values["min_joint_limit_scale"] == {"dls": float(run.trace.limit_scale.min())}
+
+
+@pytest.mark.slow
+def test_thesis_robot_never_scales_where_the_urdf_limits_do():
+    """The reproductions' model has no joint limits (the thesis scales nothing down); the
+    labelled URDF series scales the algorithmic-singularity run down."""
+    free = scenario_runs.recorded_run("algorithmic_singularity", "pinv", True)
+    limited = scenario_runs.recorded_run("algorithmic_singularity", "pinv", True, urdf_limits=True)
+    np.testing.assert_array_equal(free.trace.limit_scale, 1.0)
+    assert limited.trace.limit_scale.min() < 0.5
+    assert limited.label == "pinv_urdf_limits"
+    assert np.abs(limited.trace.theta_dot).max() <= (
+        scenario_runs.default_robot().velocity_limits.max() + 1e-9
+    )
+    assert np.abs(free.trace.theta_dot).max() > scenario_runs.default_robot().velocity_limits.max()
+    assert np.all(np.isinf(scenario_runs.thesis_robot().velocity_limits))

@@ -19,6 +19,8 @@ is therefore an input here. The three singularity figures share their cached run
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from rns_ros.analysis.reproduce import plotting as plot
@@ -66,6 +68,9 @@ POSITIONING_SHARE = 0.5
 KEPT_SHARE, APPROACH_SHARE = 0.5, 0.2
 #: DLS "suppresses the growth of the joint velocity" when its peak is below this share of pinv's.
 SUPPRESSED_SHARE = 0.9
+#: "High joint rates" near the singularity: the pass's peak |theta_dot_i| at least this many times
+#: the run's median per-period peak (the spike stands out of the plotted curve).
+HIGH_RATE_FACTOR = 2.0
 #: "A tracking error within the singular region": at least this many times the error outside.
 ERROR_CONTRAST = 100.0
 
@@ -89,9 +94,35 @@ _CHOICES_COMMON = (
     "The wrist term is -k_g P J_vw^T dp_w (the sign that descends eq. 4.6; docs/controller.md).",
     "Determinants and sigma_min are the controller's, evaluated at the mid-period configuration "
     "where it evaluates the law; for the conventional baseline sigma_min is that of J_W_omega_e.",
-    "Joint limits: the command is scaled uniformly to the URDF speed (and position) limits; the "
-    "notes give the joint-limit scale where it changes a verdict.",
 )
+
+
+def _limits_choice() -> str:
+    """Which joint limits the runs use: none, as the thesis; the URDF's only as a labelled
+    series."""
+    limits = default_robot().velocity_limits
+    speeds = ", ".join(
+        f"{limit:g} rad/s joint{'s' if len(joints) > 1 else ''} "
+        + (f"{joints[0]}-{joints[-1]}" if len(joints) > 1 else f"{joints[0]}")
+        for limit, joints in _grouped(limits)
+    )
+    return (
+        "Joint limits: none, as in the thesis' simulations (the runs use the model without "
+        "joint speed or position limits; settings.methods.*.joint_limits). The URDF's limits "
+        f"({speeds}; commands scaled down uniformly) are the product's safety choice; Fig. 4.6 "
+        "shows them as the labelled series 'pinv_urdf_limits', never compared with the thesis."
+    )
+
+
+def _grouped(limits: np.ndarray) -> list[tuple[float, list[int]]]:
+    """[(limit, [joint numbers]), ...] for runs of equal consecutive limits (1-based joints)."""
+    groups: list[tuple[float, list[int]]] = []
+    for i, limit in enumerate(limits.tolist(), start=1):
+        if groups and groups[-1][0] == limit:
+            groups[-1][1].append(i)
+        else:
+            groups.append((limit, [i]))
+    return groups
 
 
 def _subchain_excursion_deg(run: Run) -> tuple[float, float]:
@@ -127,14 +158,6 @@ def _acceleration(trace: Trace) -> np.ndarray:
     """max_i |theta_dot_i(k+1) - theta_dot_i(k)| / T between consecutive periods [rad/s^2]."""
     dt = np.diff(trace.t_mid)
     return (np.abs(np.diff(trace.theta_dot, axis=0)) / dt[:, None]).max(axis=1)
-
-
-def _angle_lost_to_limits_deg(trace: Trace) -> float:
-    """Camera rotation the joint-limit scaling took off the command: sum of
-    (1 - limit scale) |omega_ref| T over the periods [deg]."""
-    period = 2.0 * (trace.t_end - trace.t_mid)
-    lost = (1.0 - trace.limit_scale) * np.linalg.norm(trace.omega_ref, axis=1) * period
-    return float(np.rad2deg(lost.sum()))
 
 
 def _mean_singular_ratio(determinants: np.ndarray, k: int) -> float:
@@ -201,19 +224,9 @@ def _final_error_row(run: Run, thesis: str) -> Comparison:
     """Thesis §4.2.2: "the end-effector task is accomplished successfully in both simulations"."""
     value = run.result.final_orientation_error_deg
     holds = value < REACHED_DEG
-    lost = _angle_lost_to_limits_deg(run.trace)
-    scale = float(run.trace.limit_scale.min())
     note = f"the camera ends {value:.2g} deg from the target (holds below {REACHED_DEG:g} deg)"
-    if scale < 1.0:
-        note += (
-            f"; the URDF joint-speed limits scaled the command down to {scale:.3f}, taking "
-            f"{lost:.2f} deg off the commanded turn"
-        )
     if not holds:
-        clipped = lost >= 0.5 * value
-        note += (
-            ": the clipping to the joint-speed limits is the cause" if clipped else "; cause open"
-        )
+        note += "; cause open"
     if run.settings["method"] == "conventional":
         note += f"; sigma_min(J_W_omega_e) reaches {run.result.min_sigma:.3f}"
     return Comparison.trend(
@@ -225,13 +238,12 @@ def _wrist_drift_row(rns: Run, no_wrist: Run, thesis: str) -> Comparison:
     """The wrist term (4.6) holds the wrist: drift with k_g = 100 against k_g = 0."""
     drift, free = rns.result.max_wrist_drift, no_wrist.result.max_wrist_drift
     holds = drift < WRIST_HELD_SHARE * free
-    scale = float(rns.trace.limit_scale.min())
-    clipping = (
-        "the run is never clipped (joint-limit scale 1), so the clipping is not the cause"
-        if scale >= 1.0
-        else f"the joint-limit scale reaches {scale:.3f}"
+    cause = (
+        ""
+        if holds
+        else f"; the drift peaks at {rns.trace.t_end[np.argmax(rns.trace.wrist_drift)]:.2f} s "
+        f"and ends at {rns.trace.wrist_drift[-1]:.3f} m; cause open"
     )
-    cause = "" if holds else f"; {clipping}; cause open"
     return Comparison.trend(
         "max_wrist_drift_m",
         thesis,
@@ -279,9 +291,6 @@ def _inspection(name: str, quick: bool) -> tuple[list[Run], dict]:
     values["conventional_over_ets_vii_allowance"] = (
         runs[2].result.max_base_deviation_deg / ETS_VII_ALLOWANCE_DEG
     )
-    values["angle_lost_to_joint_limits_deg"] = {
-        run.label: _angle_lost_to_limits_deg(run.trace) for run in runs
-    }
     return runs, values
 
 
@@ -339,7 +348,7 @@ def _inspection_outcome(
         tuple(rows),
         values,
         run_settings(name, runs, quick),
-        (*_CHOICES_COMMON, wrist_choice, _quick_choice(quick)),
+        (*_CHOICES_COMMON, _limits_choice(), wrist_choice, _quick_choice(quick)),
         {"runs": runs},
     )
 
@@ -364,7 +373,13 @@ def _singularity_outcome(
         tuple(rows),
         values,
         run_settings(SINGULARITY, runs, quick),
-        (*_CHOICES_COMMON, *_singularity_choices(quick), *extra_choices, _quick_choice(quick)),
+        (
+            *_CHOICES_COMMON,
+            _limits_choice(),
+            *_singularity_choices(quick),
+            *extra_choices,
+            _quick_choice(quick),
+        ),
         {"runs": runs[:1], "lines": lines},
     )
 
@@ -462,37 +477,146 @@ def _not_singular_row(
     )
 
 
-def _fastest_joints_row(trace: Trace, window: slice) -> Comparison:
+def _peak(trace: Trace, window: slice) -> dict:
+    """The largest |theta_dot_i| within ``window``: ``peak_rad_s`` [rad/s], ``time_s`` [s], the
+    two fastest joints of that period (1-based) and their rates [rad/s], ``window_s`` [s]."""
+    rates = np.abs(trace.theta_dot[window]).max(axis=1)
+    k = (window.start or 0) + int(np.argmax(rates))
+    joints = sorted(int(i) + 1 for i in np.argsort(np.abs(trace.theta_dot[k]))[-2:])
+    return {
+        "peak_rad_s": float(rates.max()),
+        "time_s": float(trace.t_mid[k]),
+        "fastest_joints": joints,
+        "their_rates_rad_s": [float(trace.theta_dot[k, j - 1]) for j in joints],
+        "sigma_min": float(trace.sigma_min[k]),
+        "window_s": [float(trace.t_mid[window][0]), float(trace.t_mid[window][-1])],
+    }
+
+
+def _deepest_pass(trace: Trace, epsilon: float) -> slice:
+    """The pass through sigma_min < epsilon holding the run's smallest sigma_min."""
+    deepest = int(np.argmin(trace.sigma_min))
+    for a, b in _runs_of(trace.sigma_min < epsilon):
+        if a <= deepest < b:
+            return slice(a, b)
+    return slice(deepest, deepest + 1)
+
+
+def _task_bound(trace: Trace, k: int) -> float:
+    """Upper bound of the task part of the command at period k [rad/s]: |omega_ref| s /
+    sigma_min, s the speed scale (SC's b sigma_1 sigma_2 sigma_3, 1 for pinv and DLS), since the
+    pinv, DLS (eq. 4.11) and SC (eq. 4.13) inverses have a 2-norm of at most s / sigma_min.
+    The rest of |theta_dot| comes from the null-space wrist term (4.6)."""
+    speed = float(np.linalg.norm(trace.omega_ref[k]))
+    return speed * float(trace.speed_scale[k]) / float(trace.sigma_min[k])
+
+
+def _burst_note(trace: Trace, k: int, wrist_gain: float) -> str:
+    """What the command at period k is made of: its size against the task bound, and the wrist
+    drift the period before and 0.1 s after it."""
+    before = max(k - 1, 0)
+    after = min(int(np.searchsorted(trace.t_mid, trace.t_mid[k] + 0.1)), len(trace.t_mid) - 1)
+    return (
+        f"|theta_dot| = {np.linalg.norm(trace.theta_dot[k]):.1f} rad/s at sigma_min "
+        f"{trace.sigma_min[k]:.3f}, where the task part is at most "
+        f"{_task_bound(trace, k):.2f} rad/s: the rest is the wrist term (k_g = {wrist_gain:g}) "
+        f"pulling the wrist back (drift {trace.wrist_drift[before]:.2f} m the period before, "
+        f"{trace.wrist_drift[after]:.2f} m 0.1 s later)"
+    )
+
+
+def _joint_text(peak: dict) -> str:
+    (i, j), (a, b) = peak["fastest_joints"], peak["their_rates_rad_s"]
+    return (
+        f"{peak['peak_rad_s']:.3g} rad/s at {peak['time_s']:.3f} s on joints {i} and {j} "
+        f"({a:+.2f}, {b:+.2f} rad/s)"
+    )
+
+
+def _fastest_joints_row(run: Run, window: slice, peaks: dict) -> Comparison:
     """Thesis §4.3.1: near the singularity joints 5 and 7 rotate in opposite directions with
-    high rates. The peak is taken on the command before the joint-limit scaling."""
-    applied = np.abs(trace.theta_dot[window]).max(axis=1)
-    command = applied / trace.limit_scale[window]
-    peak = window.start + int(np.argmax(command))
-    rates = trace.theta_dot[peak]
-    fastest = sorted(int(i) + 1 for i in np.argsort(np.abs(rates))[-2:])
-    holds = fastest == [5, 7] and bool(rates[4] * rates[6] < 0.0)
+    high joint rates: the two fastest joints of the first pass's peak are 5 and 7, opposite in
+    sign, at :data:`HIGH_RATE_FACTOR` x the run's median rate or more."""
+    trace = run.trace
+    peak = _peak(trace, window)
     median = float(np.median(np.abs(trace.theta_dot).max(axis=1)))
+    ratio = peak["peak_rad_s"] / median
+    a, b = peak["their_rates_rad_s"]
+    holds = peak["fastest_joints"] == [5, 7] and a * b < 0.0 and ratio >= HIGH_RATE_FACTOR
+    whole = peaks["whole_run"]
+    k = int(np.searchsorted(trace.t_mid, whole["time_s"]))
+    kp = int(np.searchsorted(trace.t_mid, peak["time_s"]))
+    note = (
+        f"the peak |theta_dot_i| of the {_pass_note(trace, window)} (the thesis' vertical line) "
+        f"is {ratio:.1f}x the run's median per-period peak {median:.3f} rad/s (holds when the two "
+        f"fastest are 5 and 7, opposite, at {HIGH_RATE_FACTOR:g}x or more); no joint limits. The "
+        f"deepest pass peaks at {_joint_text(peaks['deepest_pass'])}; the whole run at "
+        f"{_joint_text(whole)}: {_burst_note(trace, k, run.settings['gains']['wrist_gain'])}"
+    )
     return Comparison.trend(
         "fastest_joints_near_singularity",
         "joints 5 and 7, opposite directions, high rates",
-        f"joints {fastest[0]} and {fastest[1]} at {trace.t_mid[peak]:.2f} s: "
-        f"theta_dot_5 = {rates[4]:+.3f}, theta_dot_7 = {rates[6]:+.3f} rad/s",
+        f"joints {peak['fastest_joints'][0]} and {peak['fastest_joints'][1]} at "
+        f"{peak['time_s']:.3f} s: theta_dot_5 = {trace.theta_dot[kp, 4]:+.3f}, "
+        f"theta_dot_7 = {trace.theta_dot[kp, 6]:+.3f} rad/s",
         "",
         holds=holds,
-        note=f"largest command of the {_pass_note(trace, window)}: "
-        f"{command.max():.3f} rad/s = {command.max() / median:.1f}x the run's median, scaled "
-        f"by {trace.limit_scale[peak]:.3f} to the URDF speed limits"
-        + ("" if holds else "; cause open")
-        + ".",
+        note=note + ("" if holds else "; cause open") + ".",
     )
+
+
+def _pinv_peaks(pinv: Run) -> dict:
+    """Plain pinv's peak |theta_dot_i| in its first pass, its deepest pass and the whole run."""
+    trace, epsilon = pinv.trace, pinv.settings["gains"]["epsilon"]
+    return {
+        "first_pass": _peak(trace, _first_pass(trace, epsilon)),
+        "deepest_pass": _peak(trace, _deepest_pass(trace, epsilon)),
+        "whole_run": _peak(trace, slice(0, len(trace.t_mid))),
+    }
+
+
+def _suppression(dls: Run, pinv: Run) -> dict:
+    """pinv's peak |theta_dot_i| over DLS's (Fig. 4.7 run) in the same window: the whole run,
+    and plain pinv's first pass through the singular region (the same periods of both)."""
+    window = _first_pass(pinv.trace, pinv.settings["gains"]["epsilon"])
+    whole = slice(0, min(len(pinv.trace.t_mid), len(dls.trace.t_mid)))
+    result = {}
+    for name, span in (("whole_run", whole), ("pinv_first_pass", window)):
+        ours, theirs = _peak(dls.trace, span), _peak(pinv.trace, span)
+        result[name] = {
+            "pinv_rad_s": theirs["peak_rad_s"],
+            "dls_rad_s": ours["peak_rad_s"],
+            "factor": theirs["peak_rad_s"] / ours["peak_rad_s"],
+            "window_s": theirs["window_s"],
+        }
+    return result
+
+
+def _urdf_series(run: Run) -> dict:
+    """The labelled URDF-limits series of Fig. 4.6 (the product's limits, not the thesis')."""
+    trace = run.trace
+    command = np.abs(trace.theta_dot).max(axis=1) / trace.limit_scale
+    return {
+        "label": run.label,
+        "joint_limits": run.settings["joint_limits"],
+        "peak_joint_speed_rad_s": float(np.abs(trace.theta_dot).max()),
+        "min_joint_limit_scale": float(trace.limit_scale.min()),
+        "peak_command_before_scaling_rad_s": float(command.max()),
+        "camera_turn_deg": run.result.achieved_angle_deg,
+    }
 
 
 def _compute_fig4_6(quick: bool) -> Outcome:
     run = recorded_run(SINGULARITY, "pinv", quick)
+    limited = recorded_run(SINGULARITY, "pinv", quick, urdf_limits=True)
+    dls = recorded_run(SINGULARITY, "dls", quick)
     trace = run.trace
     window = _first_pass(trace, run.settings["gains"]["epsilon"])
     k = window.start + int(np.argmin(trace.det_algorithmic[window]))
     deepest = int(np.argmin(trace.det_algorithmic))
+    peaks = _pinv_peaks(run)
+    suppression = _suppression(dls, run)
+    series = _urdf_series(limited)
     rows = [
         _singularity_time_row(trace, window, k, deepest),
         _approaches_zero_row(trace, k, deepest),
@@ -514,9 +638,20 @@ def _compute_fig4_6(quick: bool) -> Outcome:
             deepest,
             "a coupling-inertia singularity, so the singularity is algorithmic",
         ),
-        _fastest_joints_row(trace, window),
+        _fastest_joints_row(run, window, peaks),
+        Comparison.input(
+            "peak_joint_speed_urdf_limits_rad_s",
+            None,
+            series["peak_joint_speed_rad_s"],
+            "rad/s",
+            f"the labelled series '{limited.label}': the same run with the product's URDF limits "
+            f"(commands scaled down uniformly, scale down to {series['min_joint_limit_scale']:.4f}"
+            f"; the command before the scaling peaks at "
+            f"{series['peak_command_before_scaling_rad_s']:.1f} rad/s); not the thesis' setting, "
+            f"shown for reference (unlimited run: {peaks['whole_run']['peak_rad_s']:.1f} rad/s)",
+        ),
     ]
-    values = run_values([run])
+    values = run_values([run, limited])
     values["singularity_time_s"] = float(trace.t_mid[k])
     values["deepest_pass_time_s"] = float(trace.t_mid[deepest])
     values["determinants_at_singularity"] = {
@@ -524,7 +659,18 @@ def _compute_fig4_6(quick: bool) -> Outcome:
         "coupling_kg6m12": float(trace.det_coupling[k]),
         "algorithmic": float(trace.det_algorithmic[k]),
     }
-    return _singularity_outcome(rows, values, [run], [float(trace.t_mid[k])], quick)
+    whole = peaks["whole_run"]
+    values["pinv_peak_joint_speed_rad_s"] = whole["peak_rad_s"]
+    values["pinv_peak_window"] = "whole run, no joint limits (per window: pinv_peaks)"
+    values["pinv_peak_joints"] = whole["fastest_joints"]
+    values["pinv_peak_time_s"] = whole["time_s"]
+    values["pinv_peaks"] = peaks
+    values["dls_suppression_factor"] = suppression["whole_run"]["factor"]
+    values["dls_suppression_window"] = "whole run, the Fig. 4.7 DLS run (per window: suppression)"
+    values["suppression"] = suppression
+    values["urdf_limits_series"] = series
+    outcome = _singularity_outcome(rows, values, [run, limited], [float(trace.t_mid[k])], quick)
+    return dataclasses.replace(outcome, figure_data={**outcome.figure_data, "urdf": limited})
 
 
 def _region_end_note(dls: Run, pinv: Run, start: float, end: float) -> str:
@@ -533,7 +679,6 @@ def _region_end_note(dls: Run, pinv: Run, start: float, end: float) -> str:
     epsilon = dls.settings["gains"]["epsilon"]
     trace, window = dls.trace, _first_pass(dls.trace, epsilon)
     k = window.start + int(np.argmin(trace.sigma_min[window]))
-    scale = float(trace.limit_scale[window].min())
     pinv_window = _first_pass(pinv.trace, epsilon)
     pinv_t = pinv.trace.t_mid
     low, high = THESIS_SINGULAR_REGION_S
@@ -544,11 +689,6 @@ def _region_end_note(dls: Run, pinv: Run, start: float, end: float) -> str:
     )
     if end < high - THESIS_TIME_TOLERANCE_S:
         note += "; the geometry was fitted to the start only: " + _geometry_note("the end")
-        if scale < 1.0:
-            note += (
-                f"; the joint-speed limits scale the command down to {scale:.3f} inside the "
-                "region, which slows the arm along its path and so cannot end it early"
-            )
     return note
 
 
@@ -582,51 +722,41 @@ def _region_rows(dls: Run, pinv: Run) -> list[Comparison]:
     ]
 
 
-def _peak_speed(run: Run, window: slice) -> tuple[float, float, float, float]:
-    """(applied peak |theta_dot|, the peak before the joint-limit scaling [rad/s], smallest
-    joint-limit scale, smallest sigma_min) over ``window``."""
-    trace = run.trace
-    norms = np.linalg.norm(trace.theta_dot[window], axis=1)
-    command = norms / trace.limit_scale[window]
-    return (
-        float(norms.max()),
-        float(command.max()),
-        float(trace.limit_scale[window].min()),
-        float(trace.sigma_min[window].min()),
-    )
-
-
 def _suppression_row(dls: Run, pinv: Run) -> Comparison:
-    """Thesis §4.3.2: "the growth of the joint velocity has been successfully suppressed"."""
-    window = _first_pass(pinv.trace, pinv.settings["gains"]["epsilon"])
-    peak_dls, command_dls, scale_dls, sigma_dls = _peak_speed(dls, window)
-    peak_pinv, command_pinv, scale_pinv, sigma_pinv = _peak_speed(pinv, window)
-    holds = peak_dls < SUPPRESSED_SHARE * peak_pinv
+    """Thesis §4.3.2: "the growth of the joint velocity has been successfully suppressed", read
+    as DLS's peak |theta_dot_i| over the whole run below :data:`SUPPRESSED_SHARE` of plain
+    pinv's (Fig. 4.6 run, same conditions, no joint limits)."""
+    suppression = _suppression(dls, pinv)
+    whole, first = suppression["whole_run"], suppression["pinv_first_pass"]
+    holds = whole["dls_rad_s"] < SUPPRESSED_SHARE * whole["pinv_rad_s"]
+    epsilon = pinv.settings["gains"]["epsilon"]
+    peak = _peak(pinv.trace, slice(0, len(pinv.trace.t_mid)))
+    k = int(np.searchsorted(pinv.trace.t_mid, peak["time_s"]))
+    dls_first = _first_pass(dls.trace, epsilon)
     note = (
-        f"max |theta_dot| (2-norm) during plain pinv's {_pass_note(pinv.trace, window)} (holds "
-        f"when DLS's is below {SUPPRESSED_SHARE:g} of pinv's)"
+        f"largest |theta_dot_i| over the whole run, no joint limits: pinv / DLS = "
+        f"{whole['factor']:.1f} (holds when DLS's is below {SUPPRESSED_SHARE:g} of pinv's). "
+        f"Pinv peaks at {_joint_text(peak)}, {_burst_note(pinv.trace, k, _gain(pinv))}, after "
+        f"its deepest pass (sigma_min {pinv.trace.sigma_min.min():.4f}); DLS stays below "
+        f"epsilon only in {_intervals(dls.trace.t_mid, dls.trace.sigma_min < epsilon)} s. Over "
+        f"plain pinv's {_pass_note(pinv.trace, _first_pass(pinv.trace, epsilon))} the factor "
+        f"is {first['factor']:.2f} (pinv {first['pinv_rad_s']:.3f}, DLS "
+        f"{first['dls_rad_s']:.3f} rad/s): DLS's first pass goes deeper (sigma_min "
+        f"{dls.trace.sigma_min[dls_first].min():.3f} vs "
+        f"{pinv.trace.sigma_min[_first_pass(pinv.trace, epsilon)].min():.3f})"
     )
-    if not holds:
-        note += (
-            f"; the URDF speed limits scale both commands there (down to {scale_pinv:.3f} pinv, "
-            f"{scale_dls:.3f} DLS), which before the scaling peak at {command_pinv:.3f} (pinv) and "
-            f"{command_dls:.3f} rad/s (DLS)"
-        )
-        if command_dls < SUPPRESSED_SHARE * command_pinv:
-            note += ": the clipping hides pinv's growth"
-        else:
-            note += (
-                f": DLS's command is not smaller even before the clipping; DLS passes closer to "
-                f"the singularity (sigma_min {sigma_dls:.3f} vs {sigma_pinv:.3f}); cause open"
-            )
     return Comparison.trend(
-        "max_joint_speed_in_singular_region_rad_s",
+        "peak_joint_speed_rad_s",
         "'growth of the joint velocity successfully suppressed'",
-        {"dls": peak_dls, "pinv": peak_pinv},
+        {"dls": whole["dls_rad_s"], "pinv": whole["pinv_rad_s"]},
         "rad/s",
         holds=holds,
-        note=note + ".",
+        note=note + ("" if holds else "; cause open") + ".",
     )
+
+
+def _gain(run: Run) -> float:
+    return run.settings["gains"]["wrist_gain"]
 
 
 def _tracking_error_row(dls: Run) -> Comparison:
@@ -646,13 +776,7 @@ def _tracking_error_row(dls: Run) -> Comparison:
         f"{dls.result.final_orientation_error_deg:.1f} deg from the target"
     )
     if not holds:
-        scale = float(trace.limit_scale[j])
-        note += (
-            f"; outside, the error peaks at {trace.t_mid[j]:.3f} s where the joint-speed limits "
-            f"scale the command by {scale:.3f}: the clipping, not the damping, makes that error"
-            if scale < 1.0
-            else f"; outside, the error peaks at {trace.t_mid[j]:.3f} s; cause open"
-        )
+        note += f"; outside, the error peaks at {trace.t_mid[j]:.3f} s; cause open"
     return Comparison.trend(
         "max_angular_velocity_error_in_singular_region_rad_s",
         "'an end-effector tracking error can be observed within the singular region'",
@@ -714,25 +838,31 @@ def _compute_fig4_7(quick: bool) -> Outcome:
     )
 
 
-def _acceleration_row(runs: dict[str, Run]) -> Comparison:
-    """Thesis §4.3.2 on SC: "the rapid change of the joint velocity can be avoided", read as SC's
-    largest |delta theta_dot| / T over the run below both plain pinv's (Fig. 4.6) and DLS's
-    (Fig. 4.7)."""
+def _acceleration_row(runs: dict[str, Run], no_wrist: Run) -> Comparison:
+    """Thesis §4.3.3 on SC: "the rapid change of the joint velocity can be avoided", read as SC's
+    largest |delta theta_dot_i| / T over the run below plain pinv's (Fig. 4.6, the untreated
+    singularity); DLS's is given for reference."""
     peak = {label: float(_acceleration(run.trace).max()) for label, run in runs.items()}
-    holds = peak["sc"] < min(peak["dls"], peak["pinv"])
+    holds = peak["sc"] < peak["pinv"]
     in_pass = ", ".join(f"{label} {_pass_acceleration(run):.2f}" for label, run in runs.items())
+    pinv = runs["pinv"]
+    j = int(np.argmax(_acceleration(pinv.trace)))
     note = (
-        "largest |delta theta_dot| / T between periods (holds when SC's is below both others); "
-        f"{_where_fastest_change(runs['sc'].trace)}; in each run's first pass through the "
-        f"singular region: {in_pass} rad/s^2"
+        "largest |delta theta_dot_i| / T between periods, no joint limits (holds when SC's is "
+        f"below pinv's); {_where_fastest_change(runs['sc'])}; pinv's is at "
+        f"{pinv.trace.t_mid[j]:.2f} s, {_burst_note(pinv.trace, j + 1, _gain(pinv))}"
+        f"; in each run's first pass through the singular region: {in_pass} rad/s^2; without the "
+        f"wrist term (k_g = 0) SC's is {float(_acceleration(no_wrist.trace).max()):.2f} rad/s^2, "
+        f"but that run never enters the region (sigma_min >= {no_wrist.trace.sigma_min.min():.3f})"
     )
     return Comparison.trend(
         "max_joint_acceleration_rad_s2",
-        "'the rapid change of the joint velocity can be avoided'",
-        peak,
+        "'the rapid change of the joint velocity can be avoided' (against the untreated "
+        "singularity, Fig. 4.6)",
+        {"sc": peak["sc"], "pinv": peak["pinv"]},
         "rad/s^2",
         holds=holds,
-        note=note + ("" if holds else "; why SC commands this much there is open") + ".",
+        note=note + ("" if holds else "; why the wrist term grows this large is open") + ".",
     )
 
 
@@ -744,36 +874,55 @@ def _pass_acceleration(run: Run) -> float:
     )
 
 
-def _where_fastest_change(trace: Trace) -> str:
-    """Where the run's largest |delta theta_dot| / T happens: time, joint, sigma_min, and the
-    joint-limit scaling in the second before it (the command before the scaling)."""
+def _where_fastest_change(run: Run) -> str:
+    """Where the run's largest |delta theta_dot| / T happens: time, joint and what the command
+    after the change is made of."""
+    trace = run.trace
     k = int(np.argmax(_acceleration(trace)))
     joint = int(np.argmax(np.abs(np.diff(trace.theta_dot, axis=0))[k])) + 1
-    text = (
-        f"SC's is at {trace.t_mid[k]:.2f} s on joint {joint}, where sigma_min = "
-        f"{trace.sigma_min[k]:.3f} and SC's speed factor {trace.speed_scale[k]:.2f}"
+    return (
+        f"SC's is at {trace.t_mid[k]:.2f} s on joint {joint}, SC's speed factor "
+        f"{trace.speed_scale[k + 1]:.2f}, {_burst_note(trace, k + 1, _gain(run))}"
     )
-    before = (trace.t_mid >= trace.t_mid[k] - 1.0) & (trace.t_mid <= trace.t_mid[k + 1])
-    scale = float(trace.limit_scale[before].min())
-    if scale < 1.0:
-        command = np.abs(trace.theta_dot[before]).max(axis=1) / trace.limit_scale[before]
-        text += (
-            f"; in the second before it the joint-limit scale climbs from {scale:.3f} to "
-            f"{trace.limit_scale[k + 1]:.3f} while SC's command before the scaling falls from "
-            f"{command.max():.2f} rad/s: the change is SC's own command far from the "
-            "singularity, released by the clipping"
+
+
+def _axis_row(sc: Run, dls: Run, no_wrist: Run) -> Comparison:
+    """Thesis §4.3.3: SC follows the commanded direction y, in contrast with DLS."""
+    axis = {run.label: run.result.max_axis_error_deg for run in (sc, dls)}
+    follows = axis["sc"] < 1.0 and axis["dls"] > 10.0 * axis["sc"]
+    trace = sc.trace
+    errors = np.nan_to_num(trace.axis_error_deg)
+    k = int(np.argmax(errors))
+    window = _first_pass(trace, sc.settings["gains"]["epsilon"])
+    through = float(errors[: window.stop].max())
+    note = (
+        "largest angle between achieved and commanded rotation axis over one period, no joint "
+        "limits (holds when SC's is below 1 deg and DLS's above 10x SC's)"
+    )
+    if not follows:
+        note += (
+            f"; SC's is at {trace.t_mid[k]:.3f} s, {_burst_note(trace, k, _gain(sc))}; up to the "
+            f"end of SC's {_pass_note(trace, window)} it is {through:.3g} deg; without the wrist "
+            f"term (k_g = 0) SC's is {no_wrist.result.max_axis_error_deg:.2g} deg (that run never "
+            f"enters the region); why the wrist term grows this large is open"
         )
-    return text
+    return Comparison.trend(
+        "max_axis_error_deg",
+        "SC follows the commanded direction y; DLS does not",
+        axis,
+        "deg",
+        holds=follows,
+        note=note + ".",
+    )
 
 
 def _compute_fig4_8(quick: bool) -> Outcome:
     runs = {m: recorded_run(SINGULARITY, m, quick) for m in ("sc", "dls", "pinv")}
+    no_wrist = recorded_run(SINGULARITY, "sc", quick, 0.0)
     sc, dls = runs["sc"], runs["dls"]
     trace = sc.trace
-    axis = {run.label: run.result.max_axis_error_deg for run in (sc, dls)}
     window = _first_pass(trace, sc.settings["gains"]["epsilon"])
     k = window.start + int(np.argmin(trace.det_algorithmic[window]))
-    follows = axis["sc"] < 1.0 and axis["dls"] > 10.0 * axis["sc"]
     speed_error = sc.result.min_speed_scale < 0.9 or sc.result.max_speed_scale > 1.1
     rows = [
         Comparison.input(
@@ -783,35 +932,30 @@ def _compute_fig4_8(quick: bool) -> Outcome:
             "",
             "our setting: the thesis' empirically chosen b of eq. (4.13)",
         ),
-        Comparison.trend(
-            "max_axis_error_deg",
-            "SC follows the commanded direction y; DLS does not",
-            axis,
-            "deg",
-            holds=follows,
-            note="largest angle between achieved and commanded rotation axis over one period "
-            "(holds when SC's is below 1 deg and DLS's above 10x SC's)"
-            + ("" if follows else "; cause open")
-            + ".",
-        ),
+        _axis_row(sc, dls, no_wrist),
         Comparison.trend(
             "speed_scale_range",
             "'an error only appears in the speed along the path'",
             [sc.result.min_speed_scale, sc.result.max_speed_scale],
             "",
             holds=speed_error,
-            note="achieved / commanded speed b sigma_1 sigma_2 sigma_3 times the joint-limit "
-            f"scale, which reaches {float(trace.limit_scale.min()):.3f} (holds outside 0.9-1.1); "
-            f"the camera turns {sc.result.achieved_angle_deg:.0f} deg of the commanded "
-            f"{np.rad2deg(abs(shipped_scenario(SINGULARITY).angle)):.0f} deg"
+            note="achieved / commanded speed b sigma_1 sigma_2 sigma_3, no joint limits (holds "
+            f"outside 0.9-1.1); the camera turns {sc.result.achieved_angle_deg:.0f} deg of the "
+            f"commanded {np.rad2deg(abs(shipped_scenario(SINGULARITY).angle)):.0f} deg"
             + ("" if speed_error else "; cause open")
             + ".",
         ),
-        _acceleration_row(runs),
+        _acceleration_row(runs, no_wrist),
     ]
     values = run_values(list(runs.values()))
     values["max_joint_acceleration_rad_s2"] = {
         label: float(_acceleration(run.trace).max()) for label, run in runs.items()
+    }
+    values["sc_without_wrist_term"] = {
+        "label": no_wrist.label,
+        "max_axis_error_deg": no_wrist.result.max_axis_error_deg,
+        "max_joint_acceleration_rad_s2": float(_acceleration(no_wrist.trace).max()),
+        "min_sigma": no_wrist.result.min_sigma,
     }
     values["singularity_time_s"] = float(trace.t_mid[k])
     return _singularity_outcome(rows, values, list(runs.values()), [float(trace.t_mid[k])], quick)
@@ -849,6 +993,17 @@ def _plot_singularity(outcome: Outcome, figure) -> None:
     plot.trace_base_deviation(axes[2, 0], [run], lines)
     extra = _SIGMA_EXTRA.get(run.settings["method"])
     plot.trace_sigma(axes[2, 1], [run], lines, extra)
+    limited = outcome.figure_data.get("urdf")
+    if limited is not None:
+        axes[0, 0].plot(
+            limited.trace.t_mid,
+            np.abs(limited.trace.theta_dot).max(axis=1),
+            color="k",
+            ls="--",
+            lw=1.0,
+            label=r"max$_i|\dot\theta_i|$, URDF limits (not the thesis')",
+        )
+        axes[0, 0].legend(fontsize=6, ncol=4, loc="best")
 
 
 REPRODUCTIONS = register_all(

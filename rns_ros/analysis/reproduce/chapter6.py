@@ -100,8 +100,8 @@ _PLANAR_CHOICES = (
     "calibration (an input), not evidence; the OS-C peaks follow from it untuned.",
     "Normal acceleration (A-4.8): the commanded acceleration includes the constraint-consistent "
     "centripetal term |v_t|^2 / R toward the axis (the thesis' S V_dot drops it). Without it "
-    "RNS-C's contact force deviates by the centripetal force (2.9 N) and its peak joint speed "
-    "grows to 2.7 rad/s with a 15 mm position error (development run).",
+    "the constraint supplies the centripetal force, outside the controllers' choice "
+    "(docs/part2.md [A-4.8] gives a full run without the term).",
     "Model (A-4.4): links 1 m, 10 kg, uniform rods (I = m l^2 / 12), plane x-y (thesis x-z).",
 )
 _WALL_CHOICES = (

@@ -111,6 +111,7 @@ def test_the_snapshot_motions_stay_reactionless():
 
 def _sampled(value: float) -> dict[str, np.ndarray]:
     keys = ("b_norm", "momentum_ratio", "share12_b", "share12_n", "elbow_share", "share3_n")
+    keys += ("sigma3_p",)
     sampled = {key: np.full(5, value) for key in keys}
     return sampled | {"elbow_largest": np.ones(5)}
 

@@ -88,19 +88,32 @@ def printed_tolerance(value: float) -> float:
     return 0.5 * 10.0 ** (math.floor(math.log10(abs(value))) - 2)
 
 
+def _input_row(key: str, printed, ours, unit: str, tolerance: float, note: str) -> Comparison:
+    """A Table 4.1 value next to ours: an *input* (our model is built from this table), its note
+    saying whether ours still matches it within ``tolerance``."""
+    gap = float(np.max(np.abs(np.asarray(ours, dtype=float) - np.asarray(printed, dtype=float))))
+    check = (
+        f"matches within {tolerance:.3g} {unit}"
+        if gap <= tolerance
+        else f"DIFFERS by {gap:.3g} {unit} (tolerance {tolerance:.3g})"
+    )
+    return Comparison.input(key, printed, ours, unit, f"{note}; set from this table: {check}")
+
+
 def table_comparisons(masses, principal, attachment) -> list[Comparison]:
-    """Table 4.1 rows: each m_i [kg]; each printed moment [kg m^2] against our principal moment
-    of the same rank (both sorted: frame-independent); the attachment point [m]."""
+    """Table 4.1 rows, all *inputs* (the model's parameters were set from the table): each m_i
+    [kg]; each printed moment [kg m^2] against our principal moment of the same rank (both
+    sorted: frame-independent); the attachment point [m]."""
     rows = []
     for i, (printed, ours) in enumerate(zip(THESIS_MASSES, masses, strict=True)):
         rows.append(
-            Comparison.number(
+            _input_row(
                 f"m_{i + 1}_kg",
                 printed,
                 round(float(ours), 6),
                 "kg",
-                tolerance=MASS_TOLERANCE,
-                note=f"Table 4.1, link {i + 1}",
+                MASS_TOLERANCE,
+                f"Table 4.1, link {i + 1}",
             )
         )
     for i, printed in enumerate(THESIS_MOMENTS):
@@ -109,24 +122,24 @@ def table_comparisons(masses, principal, attachment) -> list[Comparison]:
         matched[rank] = np.sort(principal[i])
         for axis, value, ours in zip(AXES, printed, matched, strict=True):
             rows.append(
-                Comparison.number(
+                _input_row(
                     f"I_{axis}{i + 1}_kgm2",
                     value,
                     float(f"{ours:.6g}"),
                     "kg m^2",
-                    tolerance=printed_tolerance(value),
-                    note=f"Table 4.1, link {i + 1}: our principal moment of the same rank "
+                    printed_tolerance(value),
+                    f"Table 4.1, link {i + 1}: our principal moment of the same rank "
                     f"(sorted {np.round(np.sort(principal[i]), 6).tolist()})",
                 )
             )
     rows.append(
-        Comparison.number(
+        _input_row(
             "attachment_m",
             list(THESIS_ATTACHMENT),
             np.round(attachment, 6).tolist(),
             "m",
-            tolerance=ATTACHMENT_TOLERANCE,
-            note="§4.1.1: joint 1's origin from the base CoM in base axes (URDF joint_1 origin)",
+            ATTACHMENT_TOLERANCE,
+            "§4.1.1: joint 1's origin from the base CoM in base axes (URDF joint_1 origin)",
         )
     )
     return rows

@@ -10,6 +10,10 @@ run_plan` (kinematic free-floating model, RK4, 100 Hz hold sampled at mid-period
 * ``fig4.13``: full reactionless deployment from the stowed pose (snapshots, base deviation).
 * ``partial_deployment``: stowed → [90 50 0 −300 0 20 0]° by Phase II + Phase III against a
   joint-space line.
+* ``fig4.11`` / ``fig4.14`` / ``fig4.15``: snapshots (stick figures, base at the origin) of the
+  3-phase run, the partial deployment and its joint-space baseline, with trends read from the
+  runs: where the elbow moves (joint 4's share of the joint travel per phase), how folded the arm
+  is (joint 1 → camera distance) and where the base moves.
 
 The arm is the identified geometry (docs/arm_identification.md; the thesis prints none). Its
 fitting targets (the 3-phase end-effector position, the Phase I fold, the full deployment's end)
@@ -339,20 +343,21 @@ def _compute_fig4_12(quick: bool) -> Outcome:
     return Outcome(comparisons, values, _settings(quick), CHOICES, {"runs": runs})
 
 
-def _phase_two_only(run: PtpRun) -> Comparison:
-    """Fig. 4.12 (a): the 3-phase base deviation grows only in Phase II [deg]."""
-    phase_two = run.plan.phases[1]
+def _phase_two_only(run: PtpRun, key: str = "deviation_only_in_phase_II_deg") -> Comparison:
+    """Fig. 4.12 (a): the base deviation of a plan with a Phase II grows only in Phase II [deg]
+    (before it and after it the plan is reactionless)."""
+    phase_two = next(phase for phase in run.plan.phases if phase.name == "II")
     before = math.degrees(float(run.base_deviation[run.t <= phase_two.start].max()))
     after = math.degrees(float(np.ptp(run.base_deviation[run.t >= phase_two.end])))
     share = max(before, after) / run.max_base_deviation_deg
     note = (
-        f"Phase I max and Phase III change are {share:.1e} of the run's "
+        f"the max before Phase II and the change after it are {share:.1e} of the run's "
         f"{run.max_base_deviation_deg:.3f} deg peak (qualitative below {REACTIONLESS_SHARE:g})"
     )
     if share >= REACTIONLESS_SHARE:
         note += "; the plan reference is reactionless there (fig4.10), the cause is open"
     return Comparison.trend(
-        "deviation_only_in_phase_II_deg",
+        key,
         "the base deviates only in Phase II: 'only Phase II introduced the coupling angular "
         "momentum' (§4.4.2)",
         {"phase_I_max": round(before, 6), "phase_III_change": round(after, 6)},
@@ -459,7 +464,8 @@ def _compute_fig4_13(quick: bool) -> Outcome:
         "notes": list(plan.notes),
     }
     points = [robot.skeleton(robot.configuration(theta)) for theta in snapshots]
-    data = {"run": run, "points": points, "times": snapshot_times}
+    labels = [f"t = {t:.0f} s" for t in snapshot_times]
+    data = {"run": run, "points": points, "labels": labels}
     return Outcome(comparisons, values, _settings(quick), CHOICES, data)
 
 
@@ -502,7 +508,9 @@ def _theta4_row(plan: PtpPlan) -> Comparison:
     )
 
 
-def _plot_fig4_13(outcome: Outcome, figure) -> None:
+def _plot_snapshots(outcome: Outcome, figure) -> None:
+    """Figs. 4.11/4.13-4.15: stick figures of the arm (base at the origin, its attitude at t = 0)
+    at the snapshot times in three projections [m], and the run's base deviation [deg]."""
     data = outcome.figure_data
     axes = figure.subplots(2, 2)
     colors = [f"C{i}" for i in range(len(data["points"]))]
@@ -511,8 +519,8 @@ def _plot_fig4_13(outcome: Outcome, figure) -> None:
         (axes[0, 1], (0, 1), ("x [m]", "y [m]")),
         (axes[1, 0], (1, 2), ("y [m]", "z [m]")),
     ):
-        for points, color, t in zip(data["points"], colors, data["times"], strict=True):
-            ax.plot(points[:, i], points[:, j], "-o", color=color, ms=3, label=f"t = {t:.0f} s")
+        for points, color, text in zip(data["points"], colors, data["labels"], strict=True):
+            ax.plot(points[:, i], points[:, j], "-o", color=color, ms=3, label=text)
         ax.plot(0.0, 0.0, "ks", ms=8)
         ax.set_xlabel(label[0])
         ax.set_ylabel(label[1])
@@ -521,6 +529,7 @@ def _plot_fig4_13(outcome: Outcome, figure) -> None:
     axes[0, 0].legend(fontsize=7)
     run = data["run"]
     axes[1, 1].plot(run.t, np.rad2deg(run.base_deviation))
+    _phase_lines(axes[1, 1], run.plan)
     plot.time_axes(axes[1, 1], "base attitude deviation [deg]")
     axes[1, 1].grid(alpha=0.3)
 
@@ -608,6 +617,204 @@ def _plot_partial(outcome: Outcome, figure) -> None:
     plot.legend_grid(axes[1], ncol=4)
 
 
+# snapshots: figs 4.11, 4.14, 4.15 ------------------------------------------------------------
+#: Joint 4 (the elbow) in zero-based joint order.
+ELBOW = 3
+#: Every how many recorded samples (0.01 s each) the reach is evaluated.
+REACH_STRIDE = 10
+
+
+def _phase_at(plan: PtpPlan, t: float) -> str:
+    """Name of the phase ``plan`` is in at ``t`` [s] (a phase's end belongs to the next one)."""
+    return next((p.name for p in plan.phases if t < p.end), plan.phases[-1].name)
+
+
+def _snapshots(run: PtpRun, times: np.ndarray) -> dict:
+    """Plot data of :func:`_plot_snapshots`: the reference configurations of ``run`` at
+    ``times`` [s] as stick figures (each (n + 2, 3) [m]), labelled with time and phase."""
+    robot = thesis_robot()
+    points = [robot.skeleton(robot.configuration(run.plan.sample(t).theta)) for t in times]
+    labels = [f"t = {t:.1f} s ({_phase_at(run.plan, t)})" for t in times]
+    return {"run": run, "points": points, "labels": labels}
+
+
+def _snapshot_times(plan: PtpPlan) -> np.ndarray:
+    """Each phase's start and middle, and the end [s]."""
+    times = [t for p in plan.phases for t in (p.start, 0.5 * (p.start + p.end))]
+    return np.array([*times, plan.duration])
+
+
+def _reach(run: PtpRun) -> tuple[np.ndarray, np.ndarray]:
+    """Times [s] (k,) and reach [m] (k,): distance from the joint 1 origin to the camera, every
+    :data:`REACH_STRIDE` samples of ``run`` and at its end (small = folded arm)."""
+    robot = thesis_robot()
+    index = np.unique(np.r_[np.arange(0, len(run.t), REACH_STRIDE), len(run.t) - 1])
+    reach = []
+    for theta in run.theta[index]:
+        points = robot.skeleton(robot.configuration(theta))
+        reach.append(float(np.linalg.norm(points[-1] - points[1])))
+    return run.t[index], np.array(reach)
+
+
+def _joint_travel(run: PtpRun) -> dict[str, np.ndarray]:
+    """{phase: sum of |delta theta_i| over the phase [rad], shape (n,)} of the recorded run."""
+    travel = {}
+    for phase in run.plan.phases:
+        inside = (run.t >= phase.start - 1e-9) & (run.t <= phase.end + 1e-9)
+        travel[phase.name] = np.abs(np.diff(run.theta[inside], axis=0)).sum(axis=0)
+    return travel
+
+
+def elbow_share_row(travel: dict[str, np.ndarray], folds: tuple[str, ...]) -> Comparison:
+    """The reactionless ``folds`` are the elbow folds: joint 4's share of the joint travel there
+    exceeds its share in Phase II (the transfer between the folded configurations) [-]."""
+    share = {name: float(t[ELBOW] / t.sum()) for name, t in travel.items()}
+    holds = all(share[name] > share["II"] for name in folds)
+    facts = "; ".join(
+        f"Phase {name}: joint 4 travels {math.degrees(t[ELBOW]):.1f} deg, {share[name]:.0%} of "
+        f"the joints' {math.degrees(t.sum()):.1f} deg (largest: joint {int(np.argmax(t)) + 1})"
+        for name, t in travel.items()
+    )
+    return Comparison.trend(
+        "elbow_share_of_joint_travel",
+        f"Phase {' and '.join(folds)}: reactionless motion to/from the folded elbow theta_4 = -pi "
+        "(§4.4.2); Phase II transfers between the folds",
+        {name: round(value, 3) for name, value in share.items()},
+        "",
+        holds=holds,
+        note=facts if holds else f"{facts}; the cause is open",
+    )
+
+
+def folded_row(times: np.ndarray, reach: np.ndarray, phase, ends: dict[str, float]) -> Comparison:
+    """Phase II runs folded: its largest reach is below the reach at each of ``ends``
+    ({name: time [s]}) [m]."""
+    inside = (times >= phase.start) & (times <= phase.end)
+    largest = float(reach[inside].max())
+    at = {name: float(np.interp(t, times, reach)) for name, t in ends.items()}
+    note = f"joint 1 -> camera distance: up to {largest:.3f} m in Phase II; " + ", ".join(
+        f"{value:.3f} m at the {name}" for name, value in at.items()
+    )
+    holds = largest < min(at.values())
+    return Comparison.trend(
+        "folded_in_phase_II_m",
+        "Phase II uses the folded configuration, which shortens the path of the arm's CoM (§4.4.1)",
+        {"phase_II_max": round(largest, 4), **{name: round(v, 4) for name, v in at.items()}},
+        "m",
+        holds=holds,
+        note=note if holds else f"{note}; the cause is open",
+    )
+
+
+def _compute_fig4_11(quick: bool) -> Outcome:
+    run = _table_runs(quick)["3-phase"]
+    plan = run.plan
+    times, reach = _reach(run)
+    travel = _joint_travel(run)
+    snapshot_times = _snapshot_times(plan)
+    comparisons = (
+        elbow_share_row(travel, ("I", "III")),
+        folded_row(times, reach, plan.phases[1], {"initial": 0.0, "final": plan.duration}),
+        _phase_two_only(run, "base_moves_only_in_phase_II_deg"),
+    )
+    values = {
+        "snapshot_times_s": snapshot_times.tolist(),
+        "snapshot_phases": [_phase_at(plan, t) for t in snapshot_times],
+        "joint_travel_deg": {k: np.rad2deg(v).round(3).tolist() for k, v in travel.items()},
+        "reach_at_snapshots_m": np.interp(snapshot_times, times, reach).round(4).tolist(),
+        "phases": _phases(plan),
+    }
+    data = _snapshots(run, snapshot_times)
+    return Outcome(comparisons, values, _settings(quick), CHOICES, data)
+
+
+def _compute_fig4_14(quick: bool) -> Outcome:
+    run = _partial(quick)["partial_reactionless"]
+    plan = run.plan
+    times, reach = _reach(run)
+    travel = _joint_travel(run)
+    snapshot_times = _snapshot_times(plan)
+    comparisons = (
+        elbow_share_row(travel, ("III",)),
+        folded_row(times, reach, plan.phases[0], {"goal": plan.duration}),
+        _phase_two_only(run, "base_moves_only_in_phase_II_deg"),
+    )
+    values = {
+        "snapshot_times_s": snapshot_times.tolist(),
+        "snapshot_phases": [_phase_at(plan, t) for t in snapshot_times],
+        "joint_travel_deg": {k: np.rad2deg(v).round(3).tolist() for k, v in travel.items()},
+        "reach_at_snapshots_m": np.interp(snapshot_times, times, reach).round(4).tolist(),
+        "max_base_deviation_deg": run.max_base_deviation_deg,
+        "phases": _phases(plan),
+    }
+    data = _snapshots(run, snapshot_times)
+    return Outcome(comparisons, values, _settings(quick), CHOICES, data)
+
+
+def baseline_rows(late_change: dict, peak: dict, reach: dict) -> tuple[Comparison, ...]:
+    """Fig. 4.15 against Fig. 4.14 over the same times: the joint-space line keeps disturbing the
+    base while the partial deployment is reactionless (``late_change``: change of the base
+    deviation over the partial's Phase III [deg]; ``peak``: max deviation [deg]), and it swings
+    the arm out while the partial one turns it folded (``reach``: mean reach over the partial's
+    Phase II [m]); each {"partial_reactionless": ..., "baseline": ...}."""
+    share = late_change["baseline"] / peak["baseline"]
+    moving = (
+        f"over the partial's Phase III the baseline's deviation changes by "
+        f"{late_change['baseline']:.3f} deg ({share:.0%} of its {peak['baseline']:.3f} deg peak; "
+        f"qualitative above {REACTIONLESS_SHARE:g}), the partial's by "
+        f"{late_change['partial_reactionless']:.1e} deg"
+    )
+    swing = (
+        f"mean joint 1 -> camera distance over the partial's Phase II: baseline "
+        f"{reach['baseline']:.3f} m, partial {reach['partial_reactionless']:.3f} m"
+    )
+    extended = reach["baseline"] > reach["partial_reactionless"]
+    return (
+        Comparison.trend(
+            "base_moves_throughout_deg",
+            "'the joint space controller with straight line trajectory' (§4.5.2) is not "
+            "reactionless: the base moves also where the partial deployment is reactionless",
+            {k: round(v, 6) for k, v in late_change.items()},
+            "deg",
+            holds=share > REACTIONLESS_SHARE,
+            note=moving if share > REACTIONLESS_SHARE else f"{moving}; the cause is open",
+        ),
+        Comparison.trend(
+            "extended_while_turning_m",
+            "the partial deployment turns the arm folded (its Phase II from the stowed, folded "
+            "pose); the straight joint line unfolds the elbow meanwhile (§4.5.2, Figs. 4.14/4.15)",
+            {k: round(v, 4) for k, v in reach.items()},
+            "m",
+            holds=extended,
+            note=swing if extended else f"{swing}; the cause is open",
+        ),
+    )
+
+
+def _compute_fig4_15(quick: bool) -> Outcome:
+    runs = _partial(quick)
+    phase_two, phase_three = runs["partial_reactionless"].plan.phases
+    late_change, peak, reach = {}, {}, {}
+    for name, run in runs.items():
+        late = run.base_deviation[run.t >= phase_three.start]
+        late_change[name] = math.degrees(float(np.ptp(late)))
+        peak[name] = run.max_base_deviation_deg
+        times, series = _reach(run)
+        reach[name] = float(series[times <= phase_two.end].mean())
+    run = runs["baseline"]
+    snapshot_times = _snapshot_times(runs["partial_reactionless"].plan)
+    values = {
+        "snapshot_times_s": snapshot_times.tolist(),
+        "joint_travel_deg": np.rad2deg(_joint_travel(run)["JS-C"]).round(3).tolist(),
+        "max_base_deviation_deg": peak,
+        "late_deviation_change_deg": late_change,
+        "mean_reach_phase_II_m": reach,
+    }
+    choices = (*CHOICES, "Snapshots at the partial deployment's snapshot times (same duration).")
+    data = _snapshots(run, snapshot_times)
+    return Outcome(baseline_rows(late_change, peak, reach), values, _settings(quick), choices, data)
+
+
 REPRODUCTIONS = register_all(
     Reproduction(
         "table4.2",
@@ -626,6 +833,14 @@ REPRODUCTIONS = register_all(
         (10.0, 7.0),
     ),
     Reproduction(
+        "fig4.11",
+        "Fig. 4.11",
+        "3-phase motion snapshots, each with its phase",
+        _compute_fig4_11,
+        _plot_snapshots,
+        (10.0, 9.0),
+    ),
+    Reproduction(
         "fig4.12",
         "Fig. 4.12",
         "base attitude deviation of the 3-phase method and the three baselines",
@@ -638,7 +853,7 @@ REPRODUCTIONS = register_all(
         "Fig. 4.13",
         "full reactionless deployment from the stowed pose (snapshots)",
         _compute_fig4_13,
-        _plot_fig4_13,
+        _plot_snapshots,
         (10.0, 9.0),
     ),
     Reproduction(
@@ -648,5 +863,21 @@ REPRODUCTIONS = register_all(
         _compute_partial,
         _plot_partial,
         (10.0, 7.0),
+    ),
+    Reproduction(
+        "fig4.14",
+        "Fig. 4.14",
+        "partial reactionless deployment snapshots",
+        _compute_fig4_14,
+        _plot_snapshots,
+        (10.0, 9.0),
+    ),
+    Reproduction(
+        "fig4.15",
+        "Fig. 4.15",
+        "joint-space interpolation (partial deployment baseline) snapshots",
+        _compute_fig4_15,
+        _plot_snapshots,
+        (10.0, 9.0),
     ),
 )

@@ -1,4 +1,5 @@
-"""Chapter 4 point-to-point reproductions (Table 4.2, Figs. 4.10-4.15, partial deployment):
+"""Chapter 4 point-to-point and deployment reproductions (chapter4_ptp: Table 4.2, Figs.
+4.10-4.12; chapter4_deployment: Figs. 4.13-4.15, partial deployment):
 each id runs quick into JSON + PNG with the documented keys, and every verdict follows from the
 numbers next to it (Table 4.2 and §4.5.2 as printed numbers, the fitted targets as inputs)."""
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 from rns_testing import comparison_rows, expected_verdict, quick_documents, quick_result_verdicts
 
-from rns_ros.analysis.reproduce import chapter4_ptp, ptp_snapshots
+from rns_ros.analysis.reproduce import chapter4_deployment, chapter4_ptp, ptp_snapshots
 from rns_ros.analysis.reproduce.registry import CHAPTER_MODULES
 
 IDS = (
@@ -36,17 +37,19 @@ def documents(tmp_path_factory):
     return quick_documents(IDS, tmp_path_factory.mktemp("chapter4_ptp"))
 
 
-def test_registered_after_chapter4():
-    assert tuple(chapter4_ptp.REPRODUCTIONS) == IDS
+def test_registered_after_chapter4_in_thesis_order():
+    assert (*chapter4_ptp.REPRODUCTIONS, *chapter4_deployment.REPRODUCTIONS) == IDS
     modules = list(CHAPTER_MODULES)
-    assert modules.index("rns_ros.analysis.reproduce.chapter4_ptp") == (
-        modules.index("rns_ros.analysis.reproduce.chapter4") + 1
-    )
+    first = modules.index("rns_ros.analysis.reproduce.chapter4")
+    assert modules[first + 1 : first + 3] == [
+        "rns_ros.analysis.reproduce.chapter4_ptp",
+        "rns_ros.analysis.reproduce.chapter4_deployment",
+    ]
 
 
 def test_the_thesis_numbers_are_exact_and_the_trend_holds():
     table = chapter4_ptp.table_comparisons(chapter4_ptp.THESIS_TABLE, 0.0)
-    partial = chapter4_ptp.partial_comparisons(chapter4_ptp.THESIS_PARTIAL, -180.0)
+    partial = chapter4_deployment.partial_comparisons(chapter4_ptp.THESIS_PARTIAL, -180.0)
     # the printed ratios are the printed degrees' to within 0.014 (thesis_rest §2.5)
     assert {c.verdict.value for c in table + partial} == {"exact", "qualitative"}
 
@@ -64,7 +67,7 @@ def test_full_resolution_numbers_give_close_and_different_with_a_cause():
 
 
 def test_partial_reduction_of_23_6_against_28_5_is_different():
-    comparisons = chapter4_ptp.partial_comparisons(FULL_PARTIAL, -197.34)
+    comparisons = chapter4_deployment.partial_comparisons(FULL_PARTIAL, -197.34)
     reduction = {c.key: c for c in comparisons}["reduction_percent"]
     assert reduction.ours == pytest.approx(23.61, abs=0.01)
     assert reduction.verdict.value == expected_verdict(28.5, reduction.ours, 0.05) == "different"

@@ -34,6 +34,7 @@ CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter3",
     "rns_ros.analysis.reproduce.chapter4",
     "rns_ros.analysis.reproduce.chapter4_ptp",
+    "rns_ros.analysis.reproduce.chapter4_deployment",
     "rns_ros.analysis.reproduce.chapter5",
     "rns_ros.analysis.reproduce.chapter5_inspection_energy",
     "rns_ros.analysis.reproduce.chapter6",

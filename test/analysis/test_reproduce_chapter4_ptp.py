@@ -1,18 +1,30 @@
-"""Chapter 4 point-to-point reproductions (Table 4.2, Figs. 4.10/4.12/4.13, partial deployment):
+"""Chapter 4 point-to-point and deployment reproductions (chapter4_ptp: Table 4.2, Figs.
+4.10-4.12; chapter4_deployment: Figs. 4.13-4.15, partial deployment):
 each id runs quick into JSON + PNG with the documented keys, and every verdict follows from the
 numbers next to it (Table 4.2 and §4.5.2 as printed numbers, the fitted targets as inputs)."""
 
 from __future__ import annotations
 
+import math
 import re
 
+import numpy as np
 import pytest
 from rns_testing import comparison_rows, expected_verdict, quick_documents, quick_result_verdicts
 
-from rns_ros.analysis.reproduce import chapter4_ptp
+from rns_ros.analysis.reproduce import chapter4_deployment, chapter4_ptp, ptp_snapshots
 from rns_ros.analysis.reproduce.registry import CHAPTER_MODULES
 
-IDS = ("table4.2", "fig4.10", "fig4.12", "fig4.13", "partial_deployment")
+IDS = (
+    "table4.2",
+    "fig4.10",
+    "fig4.11",
+    "fig4.12",
+    "fig4.13",
+    "partial_deployment",
+    "fig4.14",
+    "fig4.15",
+)
 METHODS = {"3-phase", "JS-C", "IJ-C", "TJ-C"}
 #: full-resolution max base deviations [deg] of table4.2 and partial_deployment (docs/ptp.md)
 FULL_TABLE = {"3-phase": 1.934631, "JS-C": 2.651097, "IJ-C": 3.062447, "TJ-C": 3.028953}
@@ -25,17 +37,19 @@ def documents(tmp_path_factory):
     return quick_documents(IDS, tmp_path_factory.mktemp("chapter4_ptp"))
 
 
-def test_registered_after_chapter4():
-    assert tuple(chapter4_ptp.REPRODUCTIONS) == IDS
+def test_registered_after_chapter4_in_thesis_order():
+    assert (*chapter4_ptp.REPRODUCTIONS, *chapter4_deployment.REPRODUCTIONS) == IDS
     modules = list(CHAPTER_MODULES)
-    assert modules.index("rns_ros.analysis.reproduce.chapter4_ptp") == (
-        modules.index("rns_ros.analysis.reproduce.chapter4") + 1
-    )
+    first = modules.index("rns_ros.analysis.reproduce.chapter4")
+    assert modules[first + 1 : first + 3] == [
+        "rns_ros.analysis.reproduce.chapter4_ptp",
+        "rns_ros.analysis.reproduce.chapter4_deployment",
+    ]
 
 
 def test_the_thesis_numbers_are_exact_and_the_trend_holds():
     table = chapter4_ptp.table_comparisons(chapter4_ptp.THESIS_TABLE, 0.0)
-    partial = chapter4_ptp.partial_comparisons(chapter4_ptp.THESIS_PARTIAL, -180.0)
+    partial = chapter4_deployment.partial_comparisons(chapter4_ptp.THESIS_PARTIAL, -180.0)
     # the printed ratios are the printed degrees' to within 0.014 (thesis_rest §2.5)
     assert {c.verdict.value for c in table + partial} == {"exact", "qualitative"}
 
@@ -53,7 +67,7 @@ def test_full_resolution_numbers_give_close_and_different_with_a_cause():
 
 
 def test_partial_reduction_of_23_6_against_28_5_is_different():
-    comparisons = chapter4_ptp.partial_comparisons(FULL_PARTIAL, -197.34)
+    comparisons = chapter4_deployment.partial_comparisons(FULL_PARTIAL, -197.34)
     reduction = {c.key: c for c in comparisons}["reduction_percent"]
     assert reduction.ours == pytest.approx(23.61, abs=0.01)
     assert reduction.verdict.value == expected_verdict(28.5, reduction.ours, 0.05) == "different"
@@ -150,3 +164,86 @@ def test_deployments(documents):
     assert partial["final_error_deg"] < 0.1
     reduction = comparison_rows(partial)["reduction_percent"]
     assert reduction["verdict"] == expected_verdict(28.5, reduction["ours"], 0.05)
+
+
+@pytest.mark.slow
+def test_fig_4_11_snapshots_per_phase(documents):
+    document, _ = documents["fig4.11"]
+    assert document["snapshot_phases"] == ["I", "I", "II", "II", "III", "III", "III"]
+    table = comparison_rows(document)
+    share = table["elbow_share_of_joint_travel"]["ours"]
+    travel = document["joint_travel_deg"]
+    for name in ("I", "II", "III"):
+        assert share[name] == pytest.approx(travel[name][3] / sum(travel[name]), abs=1e-3)
+    holds = share["I"] > share["II"] and share["III"] > share["II"]
+    assert table["elbow_share_of_joint_travel"]["verdict"] == _trend(holds)
+    folded = table["folded_in_phase_II_m"]["ours"]
+    holds = folded["phase_II_max"] < min(folded["initial"], folded["final"])
+    assert table["folded_in_phase_II_m"]["verdict"] == _trend(holds)
+    # the base-in-Phase-II check is fig4.12's alone (one thesis claim, counted once)
+    assert "base_moves_only_in_phase_II_deg" not in table
+
+
+@pytest.mark.slow
+def test_fig_4_14_and_4_15_snapshots(documents):
+    partial, _ = documents["fig4.14"]
+    assert partial["snapshot_phases"] == ["II", "II", "III", "III", "III"]
+    table = comparison_rows(partial)
+    share = table["elbow_share_of_joint_travel"]["ours"]
+    assert share["III"] > share["II"]
+    assert table["elbow_share_of_joint_travel"]["verdict"] == "qualitative"
+    folded = table["folded_in_phase_II_m"]["ours"]
+    assert folded["phase_II_max"] < folded["goal"]
+    assert table["folded_in_phase_II_m"]["verdict"] == "qualitative"
+    # no number row repeats partial_deployment's deviations
+    assert not any(key.startswith("max_base_deviation") for key in table)
+    baseline, _ = documents["fig4.15"]
+    rows = comparison_rows(baseline)
+    late, peak = baseline["late_deviation_change_deg"], baseline["max_base_deviation_deg"]
+    assert peak == pytest.approx(documents["partial_deployment"][0]["max_base_deviation_deg"])
+    moving = late["baseline"] > 1e-3 * peak["baseline"]
+    assert rows["base_moves_throughout_deg"]["verdict"] == _trend(moving)
+    reach = baseline["mean_reach_phase_II_m"]
+    extended = reach["baseline"] > reach["partial_reactionless"]
+    assert rows["extended_while_turning_m"]["verdict"] == _trend(extended)
+
+
+def test_snapshot_trends_fail_on_wrong_numbers():
+    travel = {
+        "I": np.radians([45.0, 17.0, 81.0, 120.0, 0, 0, 0]),
+        "II": np.radians([130.0, 111.0, 182.0, 35.0, 0, 0, 0]),
+        "III": np.radians([30.0, 12.0, 110.0, 85.0, 0, 0, 0]),
+    }
+    assert ptp_snapshots.elbow_share_row(travel, ("I", "III")).verdict.value == "qualitative"
+    # an elbow that turns most in Phase II: the folds are not where the elbow moves
+    travel["II"][3] = math.radians(400.0)
+    row = ptp_snapshots.elbow_share_row(travel, ("I", "III"))
+    assert row.verdict.value == "not reproduced"
+    assert "open" in row.note
+
+    times = np.linspace(0.0, 30.0, 31)
+    reach = np.where((times >= 5.0) & (times <= 25.0), 0.7, 1.4)
+
+    class Phase:  # the only attributes folded_row reads
+        start, end = 5.0, 25.0
+
+    ends = {"initial": 0.0, "final": 30.0}
+    assert ptp_snapshots.folded_row(times, reach, Phase, ends).verdict.value == "qualitative"
+    reach[15] = 1.5  # an extended arm in the middle of Phase II
+    assert ptp_snapshots.folded_row(times, reach, Phase, ends).verdict.value == "not reproduced"
+
+    partial, baseline = "partial_reactionless", "baseline"
+    late = {partial: 2e-6, baseline: 0.441}
+    peak = {partial: 3.105, baseline: 4.065}
+    reach = {partial: 0.609, baseline: 1.282}
+    share = chapter4_ptp.REACTIONLESS_SHARE
+    rows = ptp_snapshots.baseline_rows(late, peak, reach, share)
+    assert [row.verdict.value for row in rows] == ["qualitative", "qualitative"]
+    late, reach = {**late, baseline: 1e-6}, {**reach, baseline: 0.5}
+    rows = ptp_snapshots.baseline_rows(late, peak, reach, share)
+    assert [row.verdict.value for row in rows] == ["not reproduced", "not reproduced"]
+
+
+def _trend(holds: bool) -> str:
+    """The verdict of a trend, written out independently of the registry."""
+    return "qualitative" if holds else "not reproduced"

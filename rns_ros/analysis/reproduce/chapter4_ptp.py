@@ -1,4 +1,4 @@
-"""Chapter 4, §4.4–4.5: point-to-point 3-phase motion, its baselines and the deployment task.
+"""Chapter 4, §4.4: point-to-point 3-phase motion and its baselines.
 
 Plans come from :mod:`rns_ros.control.ptp` and are played by :func:`rns_ros.analysis.ptp_runs.
 run_plan` (kinematic free-floating model, RK4, 100 Hz hold sampled at mid-period):
@@ -7,9 +7,12 @@ run_plan` (kinematic free-floating model, RK4, 100 Hz hold sampled at mid-period
   [−20 −40 0 −60 180 180 0]° to [−120 50 0 −60 180 180 0]°.
 * ``fig4.10``: joint velocities and coupling angular momentum M~_ωm θ̇ of the 3-phase plan.
 * ``fig4.12``: base attitude deviation of the four methods against time.
-* ``fig4.13``: full reactionless deployment from the stowed pose (snapshots, base deviation).
-* ``partial_deployment``: stowed → [90 50 0 −300 0 20 0]° by Phase II + Phase III against a
-  joint-space line.
+* ``fig4.11``: snapshots (stick figures, base at the origin) of the 3-phase run, with trends read
+  from it: where the elbow moves (joint 4's share of the joint travel per phase) and how folded
+  the arm is (joint 1 → camera distance).
+
+The deployment results (figs. 4.13-4.15, ``partial_deployment``) are in
+:mod:`rns_ros.analysis.reproduce.chapter4_deployment`.
 
 The arm is the identified geometry (docs/arm_identification.md; the thesis prints none). Its
 fitting targets (the 3-phase end-effector position, the Phase I fold, the full deployment's end)
@@ -27,6 +30,7 @@ import numpy as np
 
 from rns_ros.analysis.ptp_runs import PtpRun, run_plan
 from rns_ros.analysis.reproduce import plotting as plot
+from rns_ros.analysis.reproduce import ptp_snapshots as snap
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
@@ -37,7 +41,6 @@ from rns_ros.analysis.reproduce.registry import (
 )
 from rns_ros.analysis.reproduce.scenario_runs import default_robot, thesis_robot
 from rns_ros.control.ptp import PtpPlan, PtpSettings
-from rns_ros.control.ptp_phases import plan_deployment, plan_partial_deployment
 from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core.state import FreeFloatingState
 
@@ -83,8 +86,9 @@ CHOICES = (
     "A-2.1/A-2.2: reactionless elbow path by arc length (theta_dot = beta n, n unit null vector "
     "of M~_P_omega_m, sign-continuous); a fold ends at theta_4 = -pi or at the first turning "
     "point of theta_4 (most-folded configuration).",
-    "A-2.3: each reactionless phase is a quintic in arc length, stretched (not clipped) to the "
-    "URDF velocity limits (0.5 rad/s for joints 1-4).",
+    "A-2.3: each reactionless phase is a quintic in arc length; rns_ptp stretches it (never "
+    "clips) to the URDF velocity limits, the reproductions run without limits as the thesis "
+    "(phases at their nominal durations).",
     "A-2.4: Phase II is a quintic joint-space line FA-1 -> FA-2 (20 s nominal).",
     "A-2.5: the IJ-C/TJ-C camera target is our own 3-phase run's final camera position (world).",
     "A-2.7/A-2.8/A-2.9: JS-C quintic; IJ-C Generalized Jacobian pseudoinverse, K_p = 1 1/s; TJ-C "
@@ -102,7 +106,7 @@ def _table_runs(quick: bool) -> dict[str, PtpRun]:
     """The four Table 4.2 runs (3-phase first: its final camera is the IJ-C/TJ-C target)."""
     robot = thesis_robot()
     start, goal = np.deg2rad(INITIAL_DEG), np.deg2rad(FINAL_DEG)
-    runs = {"3-phase": run_plan(robot, plan_ptp(robot, start, goal, "three_phase"), **_loop(quick))}
+    runs = {"3-phase": run_plan(robot, plan_ptp(robot, start, goal, "three_phase"), **loop(quick))}
     settings = PtpSettings(
         camera_target=tuple(runs["3-phase"].camera[-1]),
         integration_step=QUICK_INTEGRATION if quick else INTEGRATION,
@@ -113,15 +117,15 @@ def _table_runs(quick: bool) -> dict[str, PtpRun]:
         ("TJ-C", "transposed_jacobian"),
     ):
         plan = plan_ptp(robot, start, goal, method, settings)
-        runs[name] = run_plan(robot, plan, **_loop(quick))
+        runs[name] = run_plan(robot, plan, **loop(quick))
     return runs
 
 
-def _loop(quick: bool) -> dict:
+def loop(quick: bool) -> dict:
     return {"dt": _step(quick), "rate": RATE}
 
 
-def _settings(quick: bool) -> dict:
+def settings(quick: bool) -> dict:
     defaults = PtpSettings()
     return {
         "model": f"{thesis_robot().name} (config/urdf/rns_7dof_arm.urdf)",
@@ -146,7 +150,7 @@ def _urdf_limited_durations() -> list[float]:
     return [round(p.end - p.start, 3) for p in plan.phases]
 
 
-def _phases(plan: PtpPlan) -> list[dict]:
+def phases(plan: PtpPlan) -> list[dict]:
     return [
         {
             "name": p.name,
@@ -172,7 +176,7 @@ def _plan_coupling(plan: PtpPlan, count: int) -> tuple[np.ndarray, np.ndarray, n
     return times, np.array(rates), np.array(coupling)
 
 
-def _relative_reactionless_coupling(plan: PtpPlan, count: int) -> float:
+def relative_reactionless_coupling(plan: PtpPlan, count: int) -> float:
     """max |M~ theta_dot| / |theta_dot| over the plan's reactionless phases [kg m^2]."""
     times, rates, coupling = _plan_coupling(plan, count)
     worst = 0.0
@@ -183,14 +187,16 @@ def _relative_reactionless_coupling(plan: PtpPlan, count: int) -> float:
     return worst
 
 
-def _number(key, thesis, ours, unit: str, tolerance: float, note: str, cause: str) -> Comparison:
+def judged_number(
+    key, thesis, ours, unit: str, tolerance: float, note: str, cause: str
+) -> Comparison:
     """:meth:`Comparison.number` whose note gains ``cause`` when the verdict is *different*."""
     if number_verdict(thesis, ours, tolerance) is Verdict.DIFFERENT:
         note = f"{note}; {cause}"
     return Comparison.number(key, thesis, ours, unit, tolerance=tolerance, note=note)
 
 
-def _deviation_rows(deviation: dict, thesis: dict, source: str, facts: dict) -> list[Comparison]:
+def deviation_rows(deviation: dict, thesis: dict, source: str, facts: dict) -> list[Comparison]:
     """One max base attitude deviation row [deg] per method named in ``thesis`` (``source``
     cites the thesis; ``facts`` adds what the run shows for some methods)."""
     rows = []
@@ -201,7 +207,7 @@ def _deviation_rows(deviation: dict, thesis: dict, source: str, facts: dict) -> 
             note += f"; {facts[name]}"
         cause = "the thesis prints no arm geometry to compare ours with, so the cause is open"
         rows.append(
-            _number(
+            judged_number(
                 f"max_base_deviation_{name}_deg",
                 printed,
                 ours,
@@ -214,19 +220,13 @@ def _deviation_rows(deviation: dict, thesis: dict, source: str, facts: dict) -> 
     return rows
 
 
-def _phase_lines(ax, plan: PtpPlan, last: bool = False) -> None:
-    """Dashed lines at the phase ends of ``plan`` (the last one too when ``last``)."""
-    phases = plan.phases if last else plan.phases[:-1]
-    plot.event_lines(ax, [phase.end for phase in phases], alpha=0.6)
-
-
 # table 4.2 ----------------------------------------------------------------------------------
 def table_comparisons(deviation: dict[str, float], phase_two_turn_deg: float) -> list[Comparison]:
     """Table 4.2 rows from the max base deviation of each of :data:`METHODS` [deg];
     ``phase_two_turn_deg`` is how far Phase II turns theta_4 [deg] (0 in the thesis, where both
     folds end at -180 deg)."""
     fact = f"Phase II turns theta_4 by {phase_two_turn_deg:.1f} deg (0 in the thesis)"
-    rows = _deviation_rows(deviation, THESIS_TABLE, "Table 4.2", {"3-phase": fact})
+    rows = deviation_rows(deviation, THESIS_TABLE, "Table 4.2", {"3-phase": fact})
     rows += [_ratio_row(name, deviation) for name in METHODS[1:]]
     least = min(deviation, key=deviation.get)
     ratios = [deviation[name] / deviation["3-phase"] for name in METHODS[1:]]
@@ -260,7 +260,9 @@ def _ratio_row(name: str, deviation: dict[str, float]) -> Comparison:
         f"of the thesis', the 3-phase's {three_phase / THESIS_TABLE['3-phase']:.0%}"
     )
     ratio = round(ours / three_phase, 3)
-    return _number(f"ratio_{name}", THESIS_RATIO[name], ratio, "", RATIO_TOLERANCE, note, cause)
+    return judged_number(
+        f"ratio_{name}", THESIS_RATIO[name], ratio, "", RATIO_TOLERANCE, note, cause
+    )
 
 
 def _fold_turn_deg(plan: PtpPlan) -> float:
@@ -289,7 +291,7 @@ def _compute_table4_2(quick: bool) -> Outcome:
     values = {
         "max_base_deviation_deg": {k: round(v, 6) for k, v in deviation.items()},
         "ratio": {k: round(v, 6) for k, v in ratio.items()},
-        "phases": _phases(plan),
+        "phases": phases(plan),
         "notes": {name: list(runs[name].plan.notes) for name in METHODS},
         "tj_c_gain": runs["TJ-C"].plan.details["gain"],
         "final_camera_error_m": {
@@ -300,7 +302,7 @@ def _compute_table4_2(quick: bool) -> Outcome:
     return Outcome(
         tuple(comparisons),
         values,
-        _settings(quick),
+        settings(quick),
         CHOICES,
         {"kind": "deviation", "runs": runs},
     )
@@ -312,7 +314,7 @@ def _plot_deviation(outcome: Outcome, figure) -> None:
     for ax, name in zip(axes, METHODS, strict=True):
         run = runs[name]
         ax.plot(run.t, np.rad2deg(run.base_deviation), color=_COLORS[name])
-        _phase_lines(ax, run.plan)
+        snap.phase_lines(ax, run.plan)
         title = f"{name}: max {run.max_base_deviation_deg:.2f} deg"
         plot.time_axes(ax, "base attitude deviation [deg]", title)
         ax.grid(alpha=0.3)
@@ -322,8 +324,8 @@ def _compute_fig4_12(quick: bool) -> Outcome:
     runs = _table_runs(quick)
     deviation = {name: runs[name].max_base_deviation_deg for name in METHODS}
     comparisons = (
-        _phase_two_only(runs["3-phase"]),
-        _number(
+        phase_two_only(runs["3-phase"]),
+        judged_number(
             "max_base_deviation_deg",
             [THESIS_TABLE[name] for name in METHODS],
             [round(deviation[name], 4) for name in METHODS],
@@ -336,23 +338,24 @@ def _compute_fig4_12(quick: bool) -> Outcome:
         ),
     )
     values = {"max_base_deviation_deg": deviation}
-    return Outcome(comparisons, values, _settings(quick), CHOICES, {"runs": runs})
+    return Outcome(comparisons, values, settings(quick), CHOICES, {"runs": runs})
 
 
-def _phase_two_only(run: PtpRun) -> Comparison:
-    """Fig. 4.12 (a): the 3-phase base deviation grows only in Phase II [deg]."""
-    phase_two = run.plan.phases[1]
+def phase_two_only(run: PtpRun, key: str = "deviation_only_in_phase_II_deg") -> Comparison:
+    """Fig. 4.12 (a): the base deviation of a plan with a Phase II grows only in Phase II [deg]
+    (before it and after it the plan is reactionless)."""
+    phase_two = next(phase for phase in run.plan.phases if phase.name == "II")
     before = math.degrees(float(run.base_deviation[run.t <= phase_two.start].max()))
     after = math.degrees(float(np.ptp(run.base_deviation[run.t >= phase_two.end])))
     share = max(before, after) / run.max_base_deviation_deg
     note = (
-        f"Phase I max and Phase III change are {share:.1e} of the run's "
+        f"the max before Phase II and the change after it are {share:.1e} of the run's "
         f"{run.max_base_deviation_deg:.3f} deg peak (qualitative below {REACTIONLESS_SHARE:g})"
     )
     if share >= REACTIONLESS_SHARE:
         note += "; the plan reference is reactionless there (fig4.10), the cause is open"
     return Comparison.trend(
-        "deviation_only_in_phase_II_deg",
+        key,
         "the base deviates only in Phase II: 'only Phase II introduced the coupling angular "
         "momentum' (§4.4.2)",
         {"phase_I_max": round(before, 6), "phase_III_change": round(after, 6)},
@@ -368,7 +371,7 @@ def _compute_fig4_10(quick: bool) -> Outcome:
     plan = run.plan
     count = 301 if quick else 1201
     times, rates, coupling = _plan_coupling(plan, count)
-    relative = _relative_reactionless_coupling(plan, count)
+    relative = relative_reactionless_coupling(plan, count)
     phase_of = [plan.sample(t).phase for t in times]
     per_phase = {
         p.name: float(
@@ -406,11 +409,11 @@ def _compute_fig4_10(quick: bool) -> Outcome:
     values = {
         "max_coupling_per_phase": per_phase,
         "reactionless_relative_coupling": relative,
-        "phases": _phases(plan),
+        "phases": phases(plan),
         "notes": list(plan.notes),
     }
     data = {"times": times, "rates": rates, "coupling": coupling, "plan": plan}
-    return Outcome(comparisons, values, _settings(quick), CHOICES, data)
+    return Outcome(comparisons, values, settings(quick), CHOICES, data)
 
 
 def _plot_fig4_10(outcome: Outcome, figure) -> None:
@@ -420,7 +423,7 @@ def _plot_fig4_10(outcome: Outcome, figure) -> None:
     for i, axis in enumerate("xyz"):
         axes[1].plot(data["times"], data["coupling"][:, i], label=axis)
     for ax in axes:
-        _phase_lines(ax, data["plan"], last=True)
+        snap.phase_lines(ax, data["plan"], last=True)
         for phase in data["plan"].phases:
             ax.text(
                 0.5 * (phase.start + phase.end),
@@ -436,176 +439,26 @@ def _plot_fig4_10(outcome: Outcome, figure) -> None:
     axes[1].set_xlabel("t [s]")
 
 
-# fig 4.13: deployment -----------------------------------------------------------------------
-@functools.cache
-def _deployment(quick: bool) -> PtpRun:
-    robot = thesis_robot()
-    return run_plan(robot, plan_deployment(robot, STOWED), **_loop(quick))
-
-
-def _compute_fig4_13(quick: bool) -> Outcome:
-    run = _deployment(quick)
+# snapshots: figs 4.11, 4.14, 4.15 ------------------------------------------------------------
+def _compute_fig4_11(quick: bool) -> Outcome:
+    run = _table_runs(quick)["3-phase"]
     plan = run.plan
-    robot = thesis_robot()
-    snapshot_times = np.linspace(0.0, plan.duration, 6)
-    snapshots = [plan.sample(t).theta for t in snapshot_times]
-    reached = math.degrees(plan.phases[0].fold_reached)
-    comparisons = (_deployment_row(run, quick), _theta4_row(plan))
+    times, reach = snap.reach(run)
+    travel = snap.joint_travel(run)
+    snapshot_times = snap.snapshot_times(plan)
+    comparisons = (
+        snap.elbow_share_row(travel, ("I", "III")),
+        snap.folded_row(times, reach, plan.phases[1], {"initial": 0.0, "final": plan.duration}),
+    )
     values = {
-        "max_base_deviation_deg": run.max_base_deviation_deg,
-        "theta4_final_deg": reached,
-        "final_theta_deg": np.rad2deg(run.theta[-1]).tolist(),
         "snapshot_times_s": snapshot_times.tolist(),
-        "notes": list(plan.notes),
+        "snapshot_phases": [snap.phase_at(plan, t) for t in snapshot_times],
+        "joint_travel_deg": {k: np.rad2deg(v).round(3).tolist() for k, v in travel.items()},
+        "reach_at_snapshots_m": np.interp(snapshot_times, times, reach).round(4).tolist(),
+        "phases": phases(plan),
     }
-    points = [robot.skeleton(robot.configuration(theta)) for theta in snapshots]
-    data = {"run": run, "points": points, "times": snapshot_times}
-    return Outcome(comparisons, values, _settings(quick), CHOICES, data)
-
-
-def _deployment_row(run: PtpRun, quick: bool) -> Comparison:
-    """§4.5.1: the full deployment leaves the base still [deg]."""
-    deviation = run.max_base_deviation_deg
-    relative = _relative_reactionless_coupling(run.plan, 301 if quick else 1201)
-    holds = deviation < REACTIONLESS_DEVIATION_DEG
-    note = (
-        f"qualitative below {REACTIONLESS_DEVIATION_DEG:g} deg; the plan reference has "
-        f"|M~ theta_dot| / |theta_dot| <= {relative:.1e} kg m^2, so what remains comes from the "
-        "100 Hz hold of its joint velocity"
-    )
-    return Comparison.trend(
-        "max_base_deviation_deg",
-        "'The possibility of the reactionless deployment was confirmed' (§4.5.1): no base "
-        "deviation",
-        float(f"{deviation:.3g}"),
-        "deg",
-        holds=holds,
-        note=note if holds else f"{note}; why it exceeds the threshold is open",
-    )
-
-
-def _theta4_row(plan: PtpPlan) -> Comparison:
-    """§4.5.1: theta_4 at the end of the deployment [deg], set by the plan."""
-    settings = PtpSettings()
-    target = math.degrees(STOWED[3] + settings.deploy_rate * settings.deploy_duration)
-    reached = math.degrees(plan.phases[0].fold_reached)
-    turned = math.radians(reached) - STOWED[3]
-    return Comparison.input(
-        "theta4_final_deg",
-        round(target, 2),
-        round(reached, 2),
-        "deg",
-        f"set: -180 deg + {settings.deploy_rate} rad/s x {settings.deploy_duration:g} s "
-        f"(§4.5.1); the plan ends the fold there (quintic in arc length over {plan.duration:.1f} "
-        f"s, mean theta_dot_4 {turned / plan.duration:.3f} rad/s) and the arm geometry was "
-        "fitted so that the path reaches it (docs/arm_identification.md)",
-    )
-
-
-def _plot_fig4_13(outcome: Outcome, figure) -> None:
-    data = outcome.figure_data
-    axes = figure.subplots(2, 2)
-    colors = [f"C{i}" for i in range(len(data["points"]))]
-    for ax, (i, j), label in (
-        (axes[0, 0], (0, 2), ("x [m]", "z [m]")),
-        (axes[0, 1], (0, 1), ("x [m]", "y [m]")),
-        (axes[1, 0], (1, 2), ("y [m]", "z [m]")),
-    ):
-        for points, color, t in zip(data["points"], colors, data["times"], strict=True):
-            ax.plot(points[:, i], points[:, j], "-o", color=color, ms=3, label=f"t = {t:.0f} s")
-        ax.plot(0.0, 0.0, "ks", ms=8)
-        ax.set_xlabel(label[0])
-        ax.set_ylabel(label[1])
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=7)
-    run = data["run"]
-    axes[1, 1].plot(run.t, np.rad2deg(run.base_deviation))
-    plot.time_axes(axes[1, 1], "base attitude deviation [deg]")
-    axes[1, 1].grid(alpha=0.3)
-
-
-# partial deployment -------------------------------------------------------------------------
-@functools.cache
-def _partial(quick: bool) -> dict[str, PtpRun]:
-    robot = thesis_robot()
-    goal = np.deg2rad(PARTIAL_FINAL_DEG)
-    plan = plan_partial_deployment(robot, STOWED, goal)
-    baseline = plan_ptp(robot, STOWED, goal, "joint_space", PtpSettings(duration=plan.duration))
-    return {
-        "partial_reactionless": run_plan(robot, plan, **_loop(quick)),
-        "baseline": run_plan(robot, baseline, **_loop(quick)),
-    }
-
-
-def partial_comparisons(deviation: dict[str, float], fold_deg: float) -> list[Comparison]:
-    """§4.5.2 rows from the max base deviation [deg] of ``partial_reactionless`` and ``baseline``;
-    ``fold_deg`` is theta_4 where the Phase III fold ends [deg] (-180 deg in the thesis)."""
-    partial, baseline = deviation["partial_reactionless"], deviation["baseline"]
-    reduction = 100.0 * (baseline - partial) / baseline
-    turn = abs(fold_deg - math.degrees(STOWED[3]))
-    fact = (
-        f"the Phase III fold ends at theta_4 = {fold_deg:.1f} deg, so Phase II turns theta_4 by "
-        f"{turn:.1f} deg (0 in the thesis)"
-    )
-    rows = _deviation_rows(deviation, THESIS_PARTIAL, "§4.5.2", {"partial_reactionless": fact})
-    cause = (
-        f"partial {partial:.3f} deg and baseline {baseline:.3f} deg are "
-        f"{partial / THESIS_PARTIAL['partial_reactionless']:.0%} and "
-        f"{baseline / THESIS_PARTIAL['baseline']:.0%} of the thesis'; {fact}; which of these sets "
-        "the gap is open"
-    )
-    rows.append(
-        _number(
-            "reduction_percent",
-            THESIS_REDUCTION,
-            round(reduction, 2),
-            "%",
-            REDUCTION_TOLERANCE,
-            "§4.5.2: (baseline - partial) / baseline",
-            cause,
-        )
-    )
-    return rows
-
-
-def _compute_partial(quick: bool) -> Outcome:
-    runs = _partial(quick)
-    deviation = {name: run.max_base_deviation_deg for name, run in runs.items()}
-    plan = runs["partial_reactionless"].plan
-    comparisons = partial_comparisons(deviation, math.degrees(plan.phases[-1].fold_reached))
-    reduction = 100.0 * (1.0 - deviation["partial_reactionless"] / deviation["baseline"])
-    values = {
-        "max_base_deviation_deg": {k: round(v, 6) for k, v in deviation.items()},
-        "reduction_percent": reduction,
-        "phases": _phases(plan),
-        "notes": list(plan.notes),
-        "final_error_deg": float(
-            np.abs(np.rad2deg(runs["partial_reactionless"].theta[-1]) - PARTIAL_FINAL_DEG).max()
-        ),
-    }
-    choices = (
-        *CHOICES,
-        "A-2.11: the goal's theta_4 = -300 deg is read literally; its fold runs towards -180 deg.",
-        "A-2.12/A-2.13: Phase II (20 s nominal) and Phase III (5 s nominal) as in 4.4, all seven "
-        "joints interpolated in Phase II; the joint-space baseline runs over the same total time "
-        "(the kinematic base deviation depends on the path only, not its timing).",
-    )
-    return Outcome(tuple(comparisons), values, _settings(quick), choices, {"runs": runs})
-
-
-def _plot_partial(outcome: Outcome, figure) -> None:
-    runs = outcome.figure_data["runs"]
-    axes = figure.subplots(2, 1)
-    for name, run in runs.items():
-        axes[0].plot(run.t, np.rad2deg(run.base_deviation), label=name)
-    run = runs["partial_reactionless"]
-    _phase_lines(axes[0], run.plan)
-    plot.time_axes(axes[0], "base attitude deviation [deg]")
-    plot.legend_grid(axes[0], fontsize=8)
-    plot.joint_lines(axes[1], run.t, np.rad2deg(run.theta))
-    plot.time_axes(axes[1], "partial: theta [deg]")
-    plot.legend_grid(axes[1], ncol=4)
+    data = snap.snapshots(run, snapshot_times)
+    return Outcome(comparisons, values, settings(quick), CHOICES, data)
 
 
 REPRODUCTIONS = register_all(
@@ -626,27 +479,19 @@ REPRODUCTIONS = register_all(
         (10.0, 7.0),
     ),
     Reproduction(
+        "fig4.11",
+        "Fig. 4.11",
+        "3-phase motion snapshots, each with its phase",
+        _compute_fig4_11,
+        snap.plot_snapshots,
+        (10.0, 9.0),
+    ),
+    Reproduction(
         "fig4.12",
         "Fig. 4.12",
         "base attitude deviation of the 3-phase method and the three baselines",
         _compute_fig4_12,
         _plot_deviation,
-        (10.0, 7.0),
-    ),
-    Reproduction(
-        "fig4.13",
-        "Fig. 4.13",
-        "full reactionless deployment from the stowed pose (snapshots)",
-        _compute_fig4_13,
-        _plot_fig4_13,
-        (10.0, 9.0),
-    ),
-    Reproduction(
-        "partial_deployment",
-        "§4.5.2",
-        "partial reactionless deployment vs joint-space baseline",
-        _compute_partial,
-        _plot_partial,
         (10.0, 7.0),
     ),
 )

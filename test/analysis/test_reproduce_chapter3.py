@@ -13,7 +13,7 @@ import pytest
 from rns_testing import quick_result_verdicts
 
 from rns_ros.analysis.planar_field import PlanarArm, critical_distance, fixed_points
-from rns_ros.analysis.reproduce import chapter3
+from rns_ros.analysis.reproduce import chapter3, chapter3_bifurcation
 from rns_ros.analysis.reproduce.registry import CLOSE_FRACTION, Verdict, run_one
 
 IDS = ("fig3.1", "fig3.2", "fig3.3", "bifurcation")
@@ -23,20 +23,24 @@ def _rows(document) -> dict[str, dict]:
     return {row["key"]: row for row in document["comparisons"]}
 
 
+#: chapter 3's results in report order: chapter3's three, then the bifurcation module's
+REPRODUCTIONS = {**chapter3.REPRODUCTIONS, **chapter3_bifurcation.REPRODUCTIONS}
+
+
 def _run(identifier, tmp_path, *, quick=True) -> dict:
-    record = run_one(chapter3.REPRODUCTIONS[identifier], tmp_path, quick=quick)
+    record = run_one(REPRODUCTIONS[identifier], tmp_path, quick=quick)
     return json.loads(record.json_path.read_text())
 
 
 def test_the_four_results_are_registered():
-    assert tuple(chapter3.REPRODUCTIONS) == IDS
-    figures = [r.figure for r in chapter3.REPRODUCTIONS.values()]
+    assert tuple(REPRODUCTIONS) == IDS
+    figures = [r.figure for r in REPRODUCTIONS.values()]
     assert figures == ["Fig. 3.1", "Fig. 3.2", "Fig. 3.3", "§3.2.2"]
 
 
 @pytest.mark.parametrize("identifier", IDS)
 def test_quick_run_writes_json_and_png(identifier, tmp_path):
-    record = run_one(chapter3.REPRODUCTIONS[identifier], tmp_path, quick=True)
+    record = run_one(REPRODUCTIONS[identifier], tmp_path, quick=True)
     assert record.seconds < 5.0
     document = json.loads(record.json_path.read_text())
     verdicts = quick_result_verdicts(document, record.png_path, identifier)
@@ -103,9 +107,9 @@ def _records(distances, theta2_of_r) -> list[dict]:
 
 def test_the_limit_trend_fails_when_the_branches_stop_short():
     converging = _records((1.0, 10.0, 100.0), lambda r: (0.5 / r, np.pi - 0.3 / r))
-    assert chapter3._limit_row(converging).verdict is Verdict.QUALITATIVE
+    assert chapter3_bifurcation._limit_row(converging).verdict is Verdict.QUALITATIVE
     stalled = _records((1.0, 10.0, 100.0), lambda r: (0.5 - 0.1 * np.log10(r), 2.9))
-    assert chapter3._limit_row(stalled).verdict is Verdict.NOT_REPRODUCED
+    assert chapter3_bifurcation._limit_row(stalled).verdict is Verdict.NOT_REPRODUCED
 
 
 @pytest.mark.parametrize(

@@ -9,7 +9,12 @@ import numpy as np
 import pytest
 from rns_testing import quick_documents, quick_result_verdicts
 
-from rns_ros.analysis.reproduce import chapter4, scenario_runs
+from rns_ros.analysis.reproduce import (
+    chapter4,
+    chapter4_singularity,  # noqa: F401  (registers figs. 4.6-4.8)
+    scenario_runs,
+    trace_windows,
+)
 from rns_ros.analysis.reproduce.registry import Verdict, number_verdict, trend_verdict
 
 # whole closed-loop reproductions (quick grids): make test, not test-quick
@@ -40,12 +45,12 @@ def rows_of(documents, identifier: str) -> dict[str, dict]:
 
 def test_runs_of_and_first_pass_find_the_first_interval_below_epsilon():
     sigma = np.array([0.5, 0.1, 0.05, 0.3, 0.1, 0.4])
-    assert chapter4._runs_of(sigma < 0.2) == [(1, 3), (4, 5)]
+    assert trace_windows.runs_of(sigma < 0.2) == [(1, 3), (4, 5)]
     trace = SimpleNamespace(sigma_min=sigma, t_mid=np.arange(6.0))
-    assert chapter4._first_pass(trace, 0.2) == slice(1, 3)
+    assert trace_windows.first_pass(trace, 0.2) == slice(1, 3)
     # never inside: the whole run
-    assert chapter4._first_pass(trace, 0.01) == slice(0, 6)
-    assert chapter4._intervals(trace.t_mid, sigma < 0.2) == [[1.0, 2.0], [4.0, 4.0]]
+    assert trace_windows.first_pass(trace, 0.01) == slice(0, 6)
+    assert trace_windows.intervals(trace.t_mid, sigma < 0.2) == [[1.0, 2.0], [4.0, 4.0]]
 
 
 def test_peak_names_the_two_fastest_joints_of_the_peak_period():
@@ -55,12 +60,12 @@ def test_peak_names_the_two_fastest_joints_of_the_peak_period():
     trace = SimpleNamespace(
         theta_dot=theta_dot, t_mid=np.arange(4.0), sigma_min=np.array([0.5, 0.1, 0.2, 0.9])
     )
-    peak = chapter4._peak(trace, slice(0, 3))
+    peak = trace_windows.peak(trace, slice(0, 3))
     assert peak["peak_rad_s"] == 2.0
     assert peak["fastest_joints"] == [5, 7]
     assert peak["their_rates_rad_s"] == [2.0, -1.5]
     assert peak["window_s"] == [0.0, 2.0]
-    assert chapter4._peak(trace, slice(0, 4))["peak_rad_s"] == 5.0
+    assert trace_windows.peak(trace, slice(0, 4))["peak_rad_s"] == 5.0
 
 
 def test_task_bound_is_the_inverse_norm_bound():
@@ -70,7 +75,7 @@ def test_task_bound_is_the_inverse_norm_bound():
         speed_scale=np.array([2.0]),
         sigma_min=np.array([0.5]),
     )
-    assert chapter4._task_bound(trace, 0) == pytest.approx(0.8)
+    assert trace_windows.task_bound(trace, 0) == pytest.approx(0.8)
 
 
 # --------------------------------------------------------------------------- quick runs
@@ -259,7 +264,7 @@ def test_sc_verdicts_follow_the_numbers(documents):
 @slow
 def test_singularity_choices_come_from_the_run(documents):
     pinv = scenario_runs.recorded_run(chapter4.SINGULARITY, "pinv", True)
-    regions = chapter4._intervals(pinv.trace.t_mid, pinv.trace.sigma_min < 0.2)
+    regions = trace_windows.intervals(pinv.trace.t_mid, pinv.trace.sigma_min < 0.2)
     duration = scenario_runs.shipped_scenario(chapter4.SINGULARITY).duration
     for identifier in ("fig4.6", "fig4.7", "fig4.8"):
         (choice,) = [c for c in documents[identifier][0]["choices"] if c.startswith("Duration")]

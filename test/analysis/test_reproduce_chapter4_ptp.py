@@ -37,10 +37,10 @@ def documents(tmp_path_factory):
     return quick_documents(IDS, tmp_path_factory.mktemp("chapter4_ptp"))
 
 
-def test_registered_after_chapter4_in_thesis_order():
+def test_registered_after_the_singularity_results_in_thesis_order():
     assert (*chapter4_ptp.REPRODUCTIONS, *chapter4_deployment.REPRODUCTIONS) == IDS
     modules = list(CHAPTER_MODULES)
-    first = modules.index("rns_ros.analysis.reproduce.chapter4")
+    first = modules.index("rns_ros.analysis.reproduce.chapter4_singularity")
     assert modules[first + 1 : first + 3] == [
         "rns_ros.analysis.reproduce.chapter4_ptp",
         "rns_ros.analysis.reproduce.chapter4_deployment",

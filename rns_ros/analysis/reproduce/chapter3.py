@@ -1,9 +1,10 @@
 """Chapter 3 results: the planar reactionless field (Fig. 3.1), nullclines and fixed points
-(Fig. 3.2), the coupling-inertia determinant and CoM distance (Fig. 3.3), and the bifurcation
-in r (§3.2.2). All numbers come from :mod:`rns_ros.analysis.planar_field` (closed form).
+(Fig. 3.2), the coupling-inertia determinant and CoM distance (Fig. 3.3). All numbers come from
+:mod:`rns_ros.analysis.planar_field` (closed form); the bifurcation in r (§3.2.2) is in
+:mod:`rns_ros.analysis.reproduce.chapter3_bifurcation`.
 
-Importing this module registers four results: ``fig3.1``, ``fig3.2``, ``fig3.3`` and
-``bifurcation``; :data:`REPRODUCTIONS` holds them by id.
+Importing this module registers ``fig3.1``, ``fig3.2`` and ``fig3.3``; :data:`REPRODUCTIONS`
+holds them by id.
 """
 
 from __future__ import annotations
@@ -18,7 +19,6 @@ from rns_ros.analysis.planar_field import (
     com_distance_map,
     critical_distance,
     det_map,
-    fixed_point_curve,
     fixed_points,
     integral_curve,
     torus_grid,
@@ -63,7 +63,7 @@ MARKERS = {
 THETA1_LABEL, THETA2_LABEL = "θ1 [rad]", "θ2 [rad]"
 
 
-def _model_settings(arm: PlanarArm = ARM) -> dict:
+def model_settings(arm: PlanarArm = ARM) -> dict:
     """The model parameters (PlanarArm fields) with units in the names."""
     fields = dataclasses.asdict(arm)
     return {
@@ -77,7 +77,7 @@ def _model_settings(arm: PlanarArm = ARM) -> dict:
     }
 
 
-def _points_json(points, r: float) -> list[dict]:
+def points_json(points, r: float) -> list[dict]:
     return [
         {
             "r_m": r,
@@ -177,11 +177,11 @@ def compute_fig3_1(quick: bool) -> Outcome:
         "min_abs_n2": min_n2,
         "max_abs_n1": max_n1,
         "min_coupling_norm_kg_m2": float(coupling_norm.min()),
-        "fixed_points": _points_json(points, arm.attach_distance),
+        "fixed_points": points_json(points, arm.attach_distance),
     }
     settings = {
         "attach_distance_r_m": arm.attach_distance,
-        **_model_settings(arm),
+        **model_settings(arm),
         "arrow_grid": [arrows_n, arrows_n],
         "check_grid": [check_n, check_n],
         "integral_curves": f"RK4 on dθ/ds = n(θ), step {step} rad, from θ = (−π + kπ/4, −π) "
@@ -275,8 +275,8 @@ def compute_fig3_2(quick: bool) -> Outcome:
             note="§3.2.2 'there is no fixed point … Joint 2 never stops' (a count); min M~_1 = "
             f"{minima_m1[0.5]:.1f} kg m² at r = 0.5 m",
         ),
-        _r_star_row(critical),
-        _created_row(
+        r_star_row(critical),
+        created_row(
             critical,
             f"{counts[near]} fixed points at r = {near} m ({near - critical.r_star:.1e} m above "
             f"r*), nearest pair {_gap_text(near_gap)} apart",
@@ -286,13 +286,13 @@ def compute_fig3_2(quick: bool) -> Outcome:
     values = {
         "fixed_point_counts": {f"{r}": counts[r] for r in FIG3_2_DISTANCES},
         "fixed_points": [
-            point for panel in panels for point in _points_json(panel["points"], panel["r"])
+            point for panel in panels for point in points_json(panel["points"], panel["r"])
         ],
         "min_M1_kg_m2": {f"{r}": minima_m1[r] for r in FIG3_2_DISTANCES},
     }
     settings = {
         "attach_distances_r_m": list(FIG3_2_DISTANCES),
-        **_model_settings(),
+        **model_settings(),
         "arrow_grid": [arrows_n, arrows_n],
         "nullcline_contour_grid": [contour_n, contour_n],
     }
@@ -404,11 +404,11 @@ def compute_fig3_3(quick: bool) -> Outcome:
         "det_min_where_distance_above_median_kg2_m4": float(
             det[distance > np.median(distance)].min()
         ),
-        "fixed_points": _points_json(points, FIG3_3_DISTANCE),
+        "fixed_points": points_json(points, FIG3_3_DISTANCE),
     }
     settings = {
         "attach_distance_r_m": FIG3_3_DISTANCE,
-        **_model_settings(),
+        **model_settings(),
         "map_grid": [n, n],
     }
     return Outcome(
@@ -519,130 +519,49 @@ def plot_fig3_3(outcome: Outcome, figure) -> None:
         _torus_axes(ax, title)
 
 
-# --- bifurcation ------------------------------------------------------------------------------
-BIFURCATION_DISTANCES = (0.946, 0.95, 1.0, 1.5, 3.0, 10.0, 100.0)
+#: |M~_ωm| [kg m²] below which a point counts as a zero (its entries are ~1e2 kg m²)
+ZERO_RESIDUAL = 1e-6
+#: the thesis prints "r ≈ 0.945 m": three decimals, so half a unit of the last one [m]
+R_STAR_TOLERANCE = 5e-4
 
 
-def compute_bifurcation(quick: bool) -> Outcome:
-    """r* and the fixed points above it; the whole branch from the closed-form curve ρ(θ2)."""
-    critical = critical_distance(ARM)
-    records = []
-    for r in BIFURCATION_DISTANCES:
-        records += _points_json(fixed_points(ARM.at(r)), r)
-    curve_n = 400 if quick else 4000
-    s = np.linspace(1e-3, np.pi - 1e-3, curve_n)
-    rho, theta1 = fixed_point_curve(ARM, s)
-    counts = {r: sum(p["r_m"] == r for p in records) for r in BIFURCATION_DISTANCES}
-    above = ", ".join(f"{counts[r]} at {r:g} m" for r in BIFURCATION_DISTANCES)
-    comparisons = (
-        _r_star_row(critical),
-        _created_row(
-            critical,
-            f"above r*: {above}; the thesis does not state the total above r*",
-            key="fixed_points_created",
-        ),
-        _limit_row(records),
+def r_star_row(critical) -> Comparison:
+    """The critical attachment distance r* [m] next to the thesis' 'r ≈ 0.945 m' (§3.2.2)."""
+    return Comparison.number(
+        "r_star_m",
+        0.945,
+        critical.r_star,
+        "m",
+        tolerance=R_STAR_TOLERANCE,
+        note="§3.2.2 'r ≈ 0.945 m' (three decimals); ours min_θ2 ρ(θ2) by brentq on "
+        f"dρ²/dθ2 = 0, θ2 tolerance {critical.theta2_tolerance:g} rad",
     )
-    values = {
-        "r_star_m": critical.r_star,
-        "r_star_theta_rad": critical.theta.tolist(),
-        "fixed_point_counts": {f"{r:g}": counts[r] for r in BIFURCATION_DISTANCES},
-        "fixed_points": records,
+
+
+def born_at_r_star(critical) -> int:
+    """How many distinct degenerate zeros of M~_ωm the bifurcation creates at r* (A-1.5)."""
+    arm = ARM.at(critical.r_star)
+    born = [classify(arm, theta) for theta in critical.theta]
+    zeros = {
+        tuple(np.round(p.theta, 9))
+        for p in born
+        if p.kind == "degenerate" and p.residual <= ZERO_RESIDUAL
     }
-    settings = {
-        **_model_settings(),
-        "r_values_m": list(BIFURCATION_DISTANCES),
-        "branch_samples": curve_n,
-        "method": "fixed points: roots of ρ(θ2) = r per monotone piece of ρ (brentq) + Newton "
-        "polish; r* = min ρ via brentq on dρ²/dθ2",
-    }
-    choices = (CHOICES["A-1.1"], CHOICES["A-1.3"], CHOICES["A-1.5"], CHOICES["I_i"])
-    figure_data = {
-        "rho": rho,
-        "theta1": theta1,
-        "theta2": s,
-        "s_star": float(critical.theta[0][1]),
-        "r_star": critical.r_star,
-        "records": records,
-    }
-    return Outcome(comparisons, values, settings, choices, figure_data)
+    return len(zeros)
 
 
-#: distance [rad] to θ2 = 0 or ±π within which the fixed points at the largest tabulated r count
-#: as at their limit (they approach it like 1/r: ~5e-3 rad at r = 100 m)
-LIMIT_TOLERANCE = 0.01
-
-
-def _limit_row(records) -> Comparison:
-    """§3.2.2 'when r → ∞, two of the fixed points converge to θ2 → 0 rad and the rest to θ2 → ±π
-    rad': along the tabulated r the lower |θ2| branch falls, the upper one rises, and at the
-    largest r two are within :data:`LIMIT_TOLERANCE` of 0 and the rest of π."""
-    by_r: dict[float, list[float]] = {}
-    for point in records:
-        by_r.setdefault(point["r_m"], []).append(abs(point["theta_rad"][1]))
-    distances = sorted(by_r)
-    low = np.array([min(by_r[r]) for r in distances])
-    high = np.array([max(by_r[r]) for r in distances])
-    far = sorted(by_r[distances[-1]])
-    far_theta1 = sorted(abs(p["theta_rad"][0]) for p in records if p["r_m"] == distances[-1])
-    holds = (
-        len(far) > 2
-        and far[1] < LIMIT_TOLERANCE
-        and min(far[2:]) > np.pi - LIMIT_TOLERANCE
-        and bool(np.all(np.diff(low) < 0.0) and np.all(np.diff(high) > 0.0))
+def created_row(critical, detail: str, key: str = "fixed_points_created_at_r_star"):
+    """§3.2.2 'two fixed points are created' at r ≈ 0.945 m, against our count at r*."""
+    born = born_at_r_star(critical)
+    return Comparison.number(
+        key,
+        2,
+        born,
+        "",
+        tolerance=0.0,
+        note="§3.2.2 'two fixed points are created' (a count); ours: distinct degenerate zeros "
+        f"of M~_ωm at r* = {critical.r_star:.6f} m (A-1.5); {detail}",
     )
-    return Comparison.trend(
-        "limit_theta2_rad",
-        "two → θ2 = 0, the rest → θ2 = ±π as r → ∞",
-        f"at r = {distances[-1]:g} m: |θ2| = " + ", ".join(f"{v:.4f}" for v in far),
-        "rad",
-        holds=holds,
-        note=f"holds when min |θ2| falls and max |θ2| rises over r = {distances[0]:g}–"
-        f"{distances[-1]:g} m and at {distances[-1]:g} m two are within {LIMIT_TOLERANCE:g} rad "
-        f"of 0 and the rest of π; also |θ1| = {far_theta1[0]:.4f}–{far_theta1[-1]:.4f} there "
-        "(→ π/2)",
-    )
-
-
-def plot_bifurcation(outcome: Outcome, figure) -> None:
-    data = outcome.figure_data
-    axes = figure.subplots(1, 2, sharex=True)
-    rho, theta1, theta2, s_star = data["rho"], data["theta1"], data["theta2"], data["s_star"]
-    shown = rho <= 200.0
-    branches = (
-        (theta2 > s_star, "saddles", "black"),
-        (theta2 <= s_star, "nodes → foci", "tab:green"),
-    )
-    for ax, coordinate, label in (
-        (axes[0], theta1, THETA1_LABEL),
-        (axes[1], theta2, THETA2_LABEL),
-    ):
-        for mask, name, colour in branches:
-            keep = mask & shown
-            ax.plot(rho[keep], coordinate[keep], color=colour, label=name)
-            ax.plot(rho[keep], -coordinate[keep], color=colour, linestyle="--")
-        for record in data["records"]:
-            ax.plot(
-                record["r_m"],
-                record["theta_rad"][0 if ax is axes[0] else 1],
-                marker="o",
-                color="tab:red",
-                markersize=3,
-                linestyle="none",
-            )
-        ax.axvline(
-            data["r_star"], color="gray", linestyle=":", label=f"r* = {data['r_star']:.6f} m"
-        )
-        for level in (-np.pi, -np.pi / 2, 0.0, np.pi / 2, np.pi):
-            ax.axhline(level, color="lightgray", linewidth=0.6, zorder=0)
-        ax.set_xscale("log")
-        ax.set_xlim(0.9, 200.0)
-        ax.set_ylim(-np.pi - 0.2, np.pi + 0.2)
-        ax.set_xlabel("attachment distance r [m]")
-        ax.set_ylabel(label)
-    axes[0].legend(fontsize=7, loc="center right")
-    axes[0].set_title("fixed-point θ1 (dashed: mirror images)", fontsize=9)
-    axes[1].set_title("fixed-point θ2 (dots: tabulated r)", fontsize=9)
 
 
 REPRODUCTIONS = register_all(
@@ -670,57 +589,4 @@ REPRODUCTIONS = register_all(
         plot_fig3_3,
         (11.0, 5.0),
     ),
-    Reproduction(
-        "bifurcation",
-        "§3.2.2",
-        "fixed points of the reactionless field versus the attachment distance r",
-        compute_bifurcation,
-        plot_bifurcation,
-        (11.0, 5.0),
-    ),
 )
-
-
-#: |M~_ωm| [kg m²] below which a point counts as a zero (its entries are ~1e2 kg m²)
-ZERO_RESIDUAL = 1e-6
-#: the thesis prints "r ≈ 0.945 m": three decimals, so half a unit of the last one [m]
-R_STAR_TOLERANCE = 5e-4
-
-
-def _r_star_row(critical) -> Comparison:
-    """The critical attachment distance r* [m] next to the thesis' 'r ≈ 0.945 m' (§3.2.2)."""
-    return Comparison.number(
-        "r_star_m",
-        0.945,
-        critical.r_star,
-        "m",
-        tolerance=R_STAR_TOLERANCE,
-        note="§3.2.2 'r ≈ 0.945 m' (three decimals); ours min_θ2 ρ(θ2) by brentq on "
-        f"dρ²/dθ2 = 0, θ2 tolerance {critical.theta2_tolerance:g} rad",
-    )
-
-
-def born_at_r_star(critical) -> int:
-    """How many distinct degenerate zeros of M~_ωm the bifurcation creates at r* (A-1.5)."""
-    arm = ARM.at(critical.r_star)
-    born = [classify(arm, theta) for theta in critical.theta]
-    zeros = {
-        tuple(np.round(p.theta, 9))
-        for p in born
-        if p.kind == "degenerate" and p.residual <= ZERO_RESIDUAL
-    }
-    return len(zeros)
-
-
-def _created_row(critical, detail: str, key: str = "fixed_points_created_at_r_star"):
-    """§3.2.2 'two fixed points are created' at r ≈ 0.945 m, against our count at r*."""
-    born = born_at_r_star(critical)
-    return Comparison.number(
-        key,
-        2,
-        born,
-        "",
-        tolerance=0.0,
-        note="§3.2.2 'two fixed points are created' (a count); ours: distinct degenerate zeros "
-        f"of M~_ωm at r* = {critical.r_star:.6f} m (A-1.5); {detail}",
-    )

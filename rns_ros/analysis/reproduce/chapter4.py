@@ -1,4 +1,5 @@
-"""Chapter 4, §4.2–4.3: the reactionless camera inspection and its singularities (Figs. 4.4–4.8).
+"""Chapter 4, §4.2: the reactionless camera inspection (Figs. 4.4–4.5); the singularity results
+(Figs. 4.6–4.8, §4.3) are in :mod:`rns_ros.analysis.reproduce.chapter4_singularity`.
 
 Every result runs a shipped scenario through the in-process closed loop
 (:mod:`rns_ros.analysis.reproduce.scenario_runs`) and compares the recorded time series with
@@ -19,8 +20,6 @@ is therefore an input here. The three singularity figures share their cached run
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from rns_ros.analysis.reproduce import plotting as plot
@@ -36,12 +35,10 @@ from rns_ros.analysis.reproduce.scenario_runs import (
     QUICK_RATE,
     QUICK_STEP,
     Run,
-    Trace,
     default_robot,
     recorded_run,
     run_settings,
     run_values,
-    shipped_scenario,
 )
 
 #: ETS-VII's allowed base attitude deviation, thesis §4.2.2 footnote 1 [deg]; thesis_rest takes
@@ -78,7 +75,7 @@ SATELLITE = "satellite_observation"
 OWN_DEVICE = "own_device_inspection"
 SINGULARITY = "algorithmic_singularity"
 
-_CHOICES_COMMON = (
+CHOICES_COMMON = (
     "Geometry: the identified 7-DoF URDF (config/urdf/rns_7dof_arm.urdf, docs/arm_identification"
     ".md): fitted to the thesis' kinematic facts (3-phase end-effector position, elbow folds, "
     "deployment, singular window start), since the thesis prints no link lengths; times and "
@@ -97,7 +94,7 @@ _CHOICES_COMMON = (
 )
 
 
-def _limits_choice() -> str:
+def limits_choice() -> str:
     """Which joint limits the runs use: none, as the thesis; the URDF's only as a labelled
     series."""
     limits = default_robot().velocity_limits
@@ -136,37 +133,7 @@ def _subchain_excursion_deg(run: Run) -> tuple[float, float]:
     )
 
 
-def _intervals(t: np.ndarray, inside: np.ndarray) -> list[list[float]]:
-    """[[start, end], ...] of the runs of True in ``inside`` sampled at ``t`` [s]."""
-    return [[round(float(t[a]), 4), round(float(t[b - 1]), 4)] for a, b in _runs_of(inside)]
-
-
-def _runs_of(inside: np.ndarray) -> list[tuple[int, int]]:
-    """[(a, b), ...]: the index ranges [a, b) of the runs of True in ``inside``."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(int), [0]))))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
-
-
-def _first_pass(trace: Trace, epsilon: float) -> slice:
-    """The periods of the run's first pass through the singular region sigma_min < epsilon
-    (§4.3.2), the pass the thesis' Figs. 4.6-4.8 show; the whole run if it never enters."""
-    runs = _runs_of(trace.sigma_min < epsilon)
-    return slice(*runs[0]) if runs else slice(0, len(trace.t_mid))
-
-
-def _acceleration(trace: Trace) -> np.ndarray:
-    """max_i |theta_dot_i(k+1) - theta_dot_i(k)| / T between consecutive periods [rad/s^2]."""
-    dt = np.diff(trace.t_mid)
-    return (np.abs(np.diff(trace.theta_dot, axis=0)) / dt[:, None]).max(axis=1)
-
-
-def _mean_singular_ratio(determinants: np.ndarray, k: int) -> float:
-    """(det_k / det_0)^(1/6): how far the geometric mean of the three singular values of a
-    3-row matrix A moved from the start, det(A A^T) being the product of their squares."""
-    return float((determinants[k] / determinants[0]) ** (1.0 / 6.0))
-
-
-def _geometry_note(what: str) -> str:
+def geometry_note(what: str) -> str:
     return (
         f"{what} depends on the link lengths, which the thesis does not print: ours are fitted "
         "to its kinematic facts (docs/arm_identification.md), which do not pin this down"
@@ -215,7 +182,7 @@ def _conventional_base_row(conventional: Run, rns: Run) -> Comparison:
         f"{ratio:.1e} x the reactionless run"
         + ("" if holds else "; cause open")
         + "; the curve itself is not comparable ("
-        + _geometry_note("its size")
+        + geometry_note("its size")
         + ").",
     )
 
@@ -348,617 +315,18 @@ def _inspection_outcome(
         tuple(rows),
         values,
         run_settings(name, runs, quick),
-        (*_CHOICES_COMMON, _limits_choice(), wrist_choice, _quick_choice(quick)),
+        (*CHOICES_COMMON, limits_choice(), wrist_choice, quick_choice(quick)),
         {"runs": runs},
     )
 
 
-def _quick_choice(quick: bool) -> str:
+def quick_choice(quick: bool) -> str:
     return resolution_choice(
         quick,
         f"the whole scenario at a {QUICK_RATE:g} Hz controller and a {QUICK_STEP * 1e3:g} ms "
         "RK4 step instead of 100 Hz / 1 ms; base deviations grow (second order in the period).",
         "the whole scenario at the closed loop's default rate and step.",
     )
-
-
-# --------------------------------------------------------------------------- Figs. 4.6-4.8
-
-
-def _singularity_outcome(
-    rows: list, values: dict, runs: list[Run], lines: list[float], quick: bool, *extra_choices
-) -> Outcome:
-    """The Outcome of Figs. 4.6-4.8: ``runs[0]`` is plotted with event lines at ``lines`` [s]."""
-    return Outcome(
-        tuple(rows),
-        values,
-        run_settings(SINGULARITY, runs, quick),
-        (
-            *_CHOICES_COMMON,
-            _limits_choice(),
-            *_singularity_choices(quick),
-            *extra_choices,
-            _quick_choice(quick),
-        ),
-        {"runs": runs[:1], "lines": lines},
-    )
-
-
-def _singularity_choices(quick: bool) -> tuple[str, ...]:
-    """The choices of Figs. 4.6-4.8, with the plain-pinv run's singular intervals."""
-    pinv = recorded_run(SINGULARITY, "pinv", quick)
-    epsilon = pinv.settings["gains"]["epsilon"]
-    regions = _intervals(pinv.trace.t_mid, pinv.trace.sigma_min < epsilon)
-    return (
-        f"Duration: the scenario file runs {shipped_scenario(SINGULARITY).duration:g} s (the "
-        f"thesis gives none for Figs. 4.6-4.8); with plain pinv our arm is inside sigma_min(J-bar)"
-        f" < {epsilon:g} during {regions} s.",
-        "The singularity of Figs. 4.6-4.8 is the run's first pass through the singular region "
-        "sigma_min(J-bar) < epsilon (the pass the thesis' 1.71-4.18 s region shows); later passes "
-        "are reported in the notes and values.",
-        f"Wrist gain: the thesis' k_g = {pinv.settings['gains']['wrist_gain']:g} (scenario "
-        "default); SC multiplies the wrist term by det(J-bar J-bar^T) as eq. (4.15).",
-    )
-
-
-def _pass_note(trace: Trace, window: slice) -> str:
-    """'first pass a-b s' of ``window`` [s]."""
-    return f"first pass {trace.t_mid[window.start]:.3f}-{trace.t_mid[window.stop - 1]:.3f} s"
-
-
-def _singularity_time_row(trace: Trace, window: slice, k: int, deepest: int) -> Comparison:
-    """Thesis Fig. 4.6: the vertical line, inside the Fig. 4.7 region (same conditions)."""
-    t, low, high = float(trace.t_mid[k]), *THESIS_SINGULAR_REGION_S
-    holds = low <= t <= high
-    note = (
-        f"smallest det(J-bar J-bar^T) of the {_pass_note(trace, window)}; that pass starts where "
-        "the geometry was fitted to start the singular region (docs/arm_identification.md)"
-    )
-    if deepest != k:
-        note += (
-            f"; the run passes again, deeper, at {trace.t_mid[deepest]:.3f} s (sigma_min "
-            f"{trace.sigma_min[deepest]:.4f})"
-        )
-    if not holds:
-        note += "; " + _geometry_note("when it happens")
-    return Comparison.trend(
-        "singularity_time_s",
-        f"vertical line inside {low}-{high} s (the Fig. 4.7 region, same conditions)",
-        t,
-        "s",
-        holds=holds,
-        note=note + ".",
-    )
-
-
-def _approaches_zero_row(trace: Trace, k: int, deepest: int) -> Comparison:
-    """Thesis Fig. 4.6: det(J-bar J-bar^T) approaches 0 at the vertical line."""
-    det = trace.det_algorithmic
-    holds = det[k] < APPROACH_SHARE * det[0]
-    return Comparison.trend(
-        "min_det_algorithmic",
-        "approaches 0",
-        float(det[k]),
-        "",
-        holds=holds,
-        note=f"det(J-bar J-bar^T) falls from {det[0]:.3f} at the start to {det[k]:.3g} (sigma_min "
-        f"{trace.sigma_min[k]:.3f}) at {trace.t_mid[k]:.3f} s (holds below {APPROACH_SHARE:g} of "
-        f"the start); the run's smallest is {det[deepest]:.2g} at {trace.t_mid[deepest]:.3f} s"
-        + ("" if holds else "; cause open")
-        + ".",
-    )
-
-
-def _not_singular_row(
-    key: str,
-    what: tuple[str, str],
-    determinants: np.ndarray,
-    trace: Trace,
-    k: int,
-    deepest: int,
-    kind: str,
-) -> Comparison:
-    """Thesis Fig. 4.6: the determinant ``what`` = (name, unit) does not approach 0 at the
-    algorithmic singularity (sample k)."""
-    name, unit = what
-    ratio = _mean_singular_ratio(determinants, k)
-    holds = ratio > KEPT_SHARE
-    verdict = f"not {kind}" if holds else "it shrinks with det(J-bar J-bar^T); cause open"
-    return Comparison.trend(
-        key,
-        "does not approach 0",
-        float(determinants[k]),
-        unit,
-        holds=holds,
-        note=f"{name} at {trace.t_mid[k]:.3f} s (start {determinants[0]:.3g}; geometric-mean "
-        f"singular value at {ratio:.2f} of its start, holds above {KEPT_SHARE:g}): {verdict}; at "
-        f"the deepest pass ({trace.t_mid[deepest]:.3f} s) it is at "
-        f"{_mean_singular_ratio(determinants, deepest):.2f}.",
-    )
-
-
-def _peak(trace: Trace, window: slice) -> dict:
-    """The largest |theta_dot_i| within ``window``: ``peak_rad_s`` [rad/s], ``time_s`` [s], the
-    two fastest joints of that period (1-based) and their rates [rad/s], ``window_s`` [s]."""
-    rates = np.abs(trace.theta_dot[window]).max(axis=1)
-    k = (window.start or 0) + int(np.argmax(rates))
-    joints = sorted(int(i) + 1 for i in np.argsort(np.abs(trace.theta_dot[k]))[-2:])
-    return {
-        "peak_rad_s": float(rates.max()),
-        "time_s": float(trace.t_mid[k]),
-        "fastest_joints": joints,
-        "their_rates_rad_s": [float(trace.theta_dot[k, j - 1]) for j in joints],
-        "sigma_min": float(trace.sigma_min[k]),
-        "window_s": [float(trace.t_mid[window][0]), float(trace.t_mid[window][-1])],
-    }
-
-
-def _deepest_pass(trace: Trace, epsilon: float) -> slice:
-    """The pass through sigma_min < epsilon holding the run's smallest sigma_min."""
-    deepest = int(np.argmin(trace.sigma_min))
-    for a, b in _runs_of(trace.sigma_min < epsilon):
-        if a <= deepest < b:
-            return slice(a, b)
-    return slice(deepest, deepest + 1)
-
-
-def _task_bound(trace: Trace, k: int) -> float:
-    """Upper bound of the task part of the command at period k [rad/s]: |omega_ref| s /
-    sigma_min, s the speed scale (SC's b sigma_1 sigma_2 sigma_3, 1 for pinv and DLS), since the
-    pinv, DLS (eq. 4.11) and SC (eq. 4.13) inverses have a 2-norm of at most s / sigma_min.
-    The rest of |theta_dot| comes from the null-space wrist term (4.6)."""
-    speed = float(np.linalg.norm(trace.omega_ref[k]))
-    return speed * float(trace.speed_scale[k]) / float(trace.sigma_min[k])
-
-
-def _burst_note(trace: Trace, k: int, wrist_gain: float) -> str:
-    """What the command at period k is made of: its size against the task bound, and the wrist
-    drift the period before and 0.1 s after it."""
-    before = max(k - 1, 0)
-    after = min(int(np.searchsorted(trace.t_mid, trace.t_mid[k] + 0.1)), len(trace.t_mid) - 1)
-    return (
-        f"|theta_dot| = {np.linalg.norm(trace.theta_dot[k]):.1f} rad/s at sigma_min "
-        f"{trace.sigma_min[k]:.3f}, where the task part is at most "
-        f"{_task_bound(trace, k):.2f} rad/s: the rest is the wrist term (k_g = {wrist_gain:g}) "
-        f"pulling the wrist back (drift {trace.wrist_drift[before]:.2f} m the period before, "
-        f"{trace.wrist_drift[after]:.2f} m 0.1 s later)"
-    )
-
-
-def _joint_text(peak: dict) -> str:
-    (i, j), (a, b) = peak["fastest_joints"], peak["their_rates_rad_s"]
-    return (
-        f"{peak['peak_rad_s']:.3g} rad/s at {peak['time_s']:.3f} s on joints {i} and {j} "
-        f"({a:+.2f}, {b:+.2f} rad/s)"
-    )
-
-
-def _fastest_joints_row(run: Run, window: slice, peaks: dict) -> Comparison:
-    """Thesis §4.3.1: near the singularity joints 5 and 7 rotate in opposite directions with
-    high joint rates: the two fastest joints of the first pass's peak are 5 and 7, opposite in
-    sign, at :data:`HIGH_RATE_FACTOR` x the run's median rate or more."""
-    trace = run.trace
-    peak = _peak(trace, window)
-    median = float(np.median(np.abs(trace.theta_dot).max(axis=1)))
-    ratio = peak["peak_rad_s"] / median
-    a, b = peak["their_rates_rad_s"]
-    holds = peak["fastest_joints"] == [5, 7] and a * b < 0.0 and ratio >= HIGH_RATE_FACTOR
-    whole = peaks["whole_run"]
-    k = int(np.searchsorted(trace.t_mid, whole["time_s"]))
-    kp = int(np.searchsorted(trace.t_mid, peak["time_s"]))
-    note = (
-        f"the peak |theta_dot_i| of the {_pass_note(trace, window)} (the thesis' vertical line) "
-        f"is {ratio:.1f}x the run's median per-period peak {median:.3f} rad/s (holds when the two "
-        f"fastest are 5 and 7, opposite, at {HIGH_RATE_FACTOR:g}x or more); no joint limits. The "
-        f"deepest pass peaks at {_joint_text(peaks['deepest_pass'])}; the whole run at "
-        f"{_joint_text(whole)}: {_burst_note(trace, k, run.settings['gains']['wrist_gain'])}"
-    )
-    return Comparison.trend(
-        "fastest_joints_near_singularity",
-        "joints 5 and 7, opposite directions, high rates",
-        f"joints {peak['fastest_joints'][0]} and {peak['fastest_joints'][1]} at "
-        f"{peak['time_s']:.3f} s: theta_dot_5 = {trace.theta_dot[kp, 4]:+.3f}, "
-        f"theta_dot_7 = {trace.theta_dot[kp, 6]:+.3f} rad/s",
-        "",
-        holds=holds,
-        note=note + ("" if holds else "; cause open") + ".",
-    )
-
-
-def _pinv_peaks(pinv: Run) -> dict:
-    """Plain pinv's peak |theta_dot_i| in its first pass, its deepest pass and the whole run."""
-    trace, epsilon = pinv.trace, pinv.settings["gains"]["epsilon"]
-    return {
-        "first_pass": _peak(trace, _first_pass(trace, epsilon)),
-        "deepest_pass": _peak(trace, _deepest_pass(trace, epsilon)),
-        "whole_run": _peak(trace, slice(0, len(trace.t_mid))),
-    }
-
-
-def _suppression(dls: Run, pinv: Run) -> dict:
-    """pinv's peak |theta_dot_i| over DLS's (Fig. 4.7 run) in the same window: the whole run,
-    and plain pinv's first pass through the singular region (the same periods of both)."""
-    window = _first_pass(pinv.trace, pinv.settings["gains"]["epsilon"])
-    whole = slice(0, min(len(pinv.trace.t_mid), len(dls.trace.t_mid)))
-    result = {}
-    for name, span in (("whole_run", whole), ("pinv_first_pass", window)):
-        ours, theirs = _peak(dls.trace, span), _peak(pinv.trace, span)
-        result[name] = {
-            "pinv_rad_s": theirs["peak_rad_s"],
-            "dls_rad_s": ours["peak_rad_s"],
-            "factor": theirs["peak_rad_s"] / ours["peak_rad_s"],
-            "window_s": theirs["window_s"],
-        }
-    return result
-
-
-def _urdf_series(run: Run) -> dict:
-    """The labelled URDF-limits series of Fig. 4.6 (the product's limits, not the thesis')."""
-    trace = run.trace
-    command = np.abs(trace.theta_dot).max(axis=1) / trace.limit_scale
-    return {
-        "label": run.label,
-        "joint_limits": run.settings["joint_limits"],
-        "peak_joint_speed_rad_s": float(np.abs(trace.theta_dot).max()),
-        "min_joint_limit_scale": float(trace.limit_scale.min()),
-        "peak_command_before_scaling_rad_s": float(command.max()),
-        "camera_turn_deg": run.result.achieved_angle_deg,
-    }
-
-
-def _compute_fig4_6(quick: bool) -> Outcome:
-    run = recorded_run(SINGULARITY, "pinv", quick)
-    limited = recorded_run(SINGULARITY, "pinv", quick, urdf_limits=True)
-    dls = recorded_run(SINGULARITY, "dls", quick)
-    trace = run.trace
-    window = _first_pass(trace, run.settings["gains"]["epsilon"])
-    k = window.start + int(np.argmin(trace.det_algorithmic[window]))
-    deepest = int(np.argmin(trace.det_algorithmic))
-    peaks = _pinv_peaks(run)
-    suppression = _suppression(dls, run)
-    series = _urdf_series(limited)
-    rows = [
-        _singularity_time_row(trace, window, k, deepest),
-        _approaches_zero_row(trace, k, deepest),
-        _not_singular_row(
-            "det_kinematic_at_singularity",
-            ("det(J_omega_e J_omega_e^T)", ""),
-            trace.det_kinematic,
-            trace,
-            k,
-            deepest,
-            "a kinematic singularity",
-        ),
-        _not_singular_row(
-            "det_coupling_at_singularity",
-            ("det(M~_omega_m M~_omega_m^T)", "(kg m^2)^6"),
-            trace.det_coupling,
-            trace,
-            k,
-            deepest,
-            "a coupling-inertia singularity, so the singularity is algorithmic",
-        ),
-        _fastest_joints_row(run, window, peaks),
-        Comparison.input(
-            "peak_joint_speed_urdf_limits_rad_s",
-            None,
-            series["peak_joint_speed_rad_s"],
-            "rad/s",
-            f"the labelled series '{limited.label}': the same run with the product's URDF limits "
-            f"(commands scaled down uniformly, scale down to {series['min_joint_limit_scale']:.4f}"
-            f"; the command before the scaling peaks at "
-            f"{series['peak_command_before_scaling_rad_s']:.1f} rad/s); not the thesis' setting, "
-            f"shown for reference (unlimited run: {peaks['whole_run']['peak_rad_s']:.1f} rad/s)",
-        ),
-    ]
-    values = run_values([run, limited])
-    values["singularity_time_s"] = float(trace.t_mid[k])
-    values["deepest_pass_time_s"] = float(trace.t_mid[deepest])
-    values["determinants_at_singularity"] = {
-        "kinematic": float(trace.det_kinematic[k]),
-        "coupling_kg6m12": float(trace.det_coupling[k]),
-        "algorithmic": float(trace.det_algorithmic[k]),
-    }
-    whole = peaks["whole_run"]
-    values["pinv_peak_joint_speed_rad_s"] = whole["peak_rad_s"]
-    values["pinv_peak_window"] = "whole run, no joint limits (per window: pinv_peaks)"
-    values["pinv_peak_joints"] = whole["fastest_joints"]
-    values["pinv_peak_time_s"] = whole["time_s"]
-    values["pinv_peaks"] = peaks
-    values["dls_suppression_factor"] = suppression["whole_run"]["factor"]
-    values["dls_suppression_window"] = "whole run, the Fig. 4.7 DLS run (per window: suppression)"
-    values["suppression"] = suppression
-    values["urdf_limits_series"] = series
-    outcome = _singularity_outcome(rows, values, [run, limited], [float(trace.t_mid[k])], quick)
-    return dataclasses.replace(outcome, figure_data={**outcome.figure_data, "urdf": limited})
-
-
-def _region_end_note(dls: Run, pinv: Run, start: float, end: float) -> str:
-    """The first singular region of the DLS run [start, end] [s]: its depth, plain pinv's first
-    pass, and why it may end before the thesis' 4.18 s."""
-    epsilon = dls.settings["gains"]["epsilon"]
-    trace, window = dls.trace, _first_pass(dls.trace, epsilon)
-    k = window.start + int(np.argmin(trace.sigma_min[window]))
-    pinv_window = _first_pass(pinv.trace, epsilon)
-    pinv_t = pinv.trace.t_mid
-    low, high = THESIS_SINGULAR_REGION_S
-    note = (
-        f"; the first lasts {end - start:.2f} s (thesis {high - low:.2f} s), sigma_min bottoms "
-        f"at {trace.sigma_min[k]:.3f} at {trace.t_mid[k]:.3f} s; plain pinv's first pass "
-        f"lasts {pinv_t[pinv_window.stop - 1] - pinv_t[pinv_window.start]:.2f} s"
-    )
-    if end < high - THESIS_TIME_TOLERANCE_S:
-        note += "; the geometry was fitted to the start only: " + _geometry_note("the end")
-    return note
-
-
-def _region_rows(dls: Run, pinv: Run) -> list[Comparison]:
-    """Thesis Fig. 4.7: the singular region 1.71 s <= t <= 4.18 s; its start is an input (the
-    geometry was fitted to it), its end a result."""
-    epsilon = dls.settings["gains"]["epsilon"]
-    regions = _intervals(dls.trace.t_mid, dls.trace.sigma_min < epsilon)
-    start, end = regions[0] if regions else (None, None)
-    low, high = THESIS_SINGULAR_REGION_S
-    note = f"sigma_min(J-bar) < {epsilon:g} during {regions} s"
-    if regions:
-        note += _region_end_note(dls, pinv, start, end)
-    return [
-        Comparison.input(
-            "singular_region_start_s",
-            low,
-            start,
-            "s",
-            "fitted: the identified geometry was chosen to start the region here "
-            "(docs/arm_identification.md)",
-        ),
-        Comparison.number(
-            "singular_region_end_s",
-            high,
-            end,
-            "s",
-            tolerance=THESIS_TIME_TOLERANCE_S,
-            note=note + "; tolerance half the thesis' last printed digit",
-        ),
-    ]
-
-
-def _suppression_row(dls: Run, pinv: Run) -> Comparison:
-    """Thesis §4.3.2: "the growth of the joint velocity has been successfully suppressed", read
-    as DLS's peak |theta_dot_i| over the whole run below :data:`SUPPRESSED_SHARE` of plain
-    pinv's (Fig. 4.6 run, same conditions, no joint limits)."""
-    suppression = _suppression(dls, pinv)
-    whole, first = suppression["whole_run"], suppression["pinv_first_pass"]
-    holds = whole["dls_rad_s"] < SUPPRESSED_SHARE * whole["pinv_rad_s"]
-    epsilon = pinv.settings["gains"]["epsilon"]
-    peak = _peak(pinv.trace, slice(0, len(pinv.trace.t_mid)))
-    k = int(np.searchsorted(pinv.trace.t_mid, peak["time_s"]))
-    dls_first = _first_pass(dls.trace, epsilon)
-    note = (
-        f"largest |theta_dot_i| over the whole run, no joint limits: pinv / DLS = "
-        f"{whole['factor']:.1f} (holds when DLS's is below {SUPPRESSED_SHARE:g} of pinv's). "
-        f"Pinv peaks at {_joint_text(peak)}, {_burst_note(pinv.trace, k, _gain(pinv))}, after "
-        f"its deepest pass (sigma_min {pinv.trace.sigma_min.min():.4f}); DLS stays below "
-        f"epsilon only in {_intervals(dls.trace.t_mid, dls.trace.sigma_min < epsilon)} s. Over "
-        f"plain pinv's {_pass_note(pinv.trace, _first_pass(pinv.trace, epsilon))} the factor "
-        f"is {first['factor']:.2f} (pinv {first['pinv_rad_s']:.3f}, DLS "
-        f"{first['dls_rad_s']:.3f} rad/s): DLS's first pass goes deeper (sigma_min "
-        f"{dls.trace.sigma_min[dls_first].min():.3f} vs "
-        f"{pinv.trace.sigma_min[_first_pass(pinv.trace, epsilon)].min():.3f})"
-    )
-    return Comparison.trend(
-        "peak_joint_speed_rad_s",
-        "'growth of the joint velocity successfully suppressed'",
-        {"dls": whole["dls_rad_s"], "pinv": whole["pinv_rad_s"]},
-        "rad/s",
-        holds=holds,
-        note=note + ("" if holds else "; cause open") + ".",
-    )
-
-
-def _gain(run: Run) -> float:
-    return run.settings["gains"]["wrist_gain"]
-
-
-def _tracking_error_row(dls: Run) -> Comparison:
-    """Thesis §4.3.2: "an end-effector tracking error can be observed within the singular
-    region", caused by the damping (none outside, where DLS is the exact inverse)."""
-    trace = dls.trace
-    inside = trace.sigma_min < dls.settings["gains"]["epsilon"]
-    error_in = float(trace.omega_error[inside].max(initial=0.0))
-    outside = np.where(inside, -1.0, trace.omega_error)
-    j = int(np.argmax(outside))
-    error_out = max(float(outside[j]), 0.0)
-    holds = error_in > ERROR_CONTRAST * error_out
-    note = (
-        f"max |omega_achieved - omega_ref| inside vs {error_out:.1e} rad/s outside (holds at "
-        f"{ERROR_CONTRAST:g}x); the rotation axis is off by up to "
-        f"{dls.result.max_axis_error_deg:.1f} deg and the camera ends "
-        f"{dls.result.final_orientation_error_deg:.1f} deg from the target"
-    )
-    if not holds:
-        note += f"; outside, the error peaks at {trace.t_mid[j]:.3f} s; cause open"
-    return Comparison.trend(
-        "max_angular_velocity_error_in_singular_region_rad_s",
-        "'an end-effector tracking error can be observed within the singular region'",
-        error_in,
-        "rad/s",
-        holds=holds,
-        note=note + ".",
-    )
-
-
-def _region_base_row(dls: Run) -> Comparison:
-    """Thesis §4.3.2: "the base attitude does not deviate, even within the singular region"."""
-    trace = dls.trace
-    inside = trace.sigma_min < dls.settings["gains"]["epsilon"]
-    base_in = float(trace.base_deviation_deg[inside].max(initial=0.0))
-    holds = base_in < UNDISTURBED_DEG
-    return Comparison.trend(
-        "max_base_deviation_in_singular_region_deg",
-        "'the base attitude does not deviate, even within the singular region'",
-        base_in,
-        "deg",
-        holds=holds,
-        note=f"holds below {UNDISTURBED_DEG:g} deg; "
-        + ("sampled controller, midpoint hold" if holds else "cause open")
-        + ".",
-    )
-
-
-def _compute_fig4_7(quick: bool) -> Outcome:
-    dls, pinv = recorded_run(SINGULARITY, "dls", quick), recorded_run(SINGULARITY, "pinv", quick)
-    trace = dls.trace
-    gains = dls.settings["gains"]
-    regions = _intervals(trace.t_mid, trace.sigma_min < gains["epsilon"])
-    rows = [
-        Comparison.input(
-            "epsilon_lambda2_max",
-            [THESIS_EPSILON, THESIS_LAMBDA2_MAX],
-            [gains["epsilon"], gains["lambda2_max"]],
-            "",
-            "our settings: the thesis' singular region and maximum damping of §4.3.2, eq. (4.12) "
-            "with the sigma^4 term",
-        ),
-        *_region_rows(dls, pinv),
-        _suppression_row(dls, pinv),
-        _tracking_error_row(dls),
-        _region_base_row(dls),
-    ]
-    values = run_values([dls, pinv])
-    values["singular_region_s"] = regions
-    values["max_damping_applied"] = dls.result.max_damping
-    return _singularity_outcome(
-        rows,
-        values,
-        [dls, pinv],
-        [x for r in regions for x in r],
-        quick,
-        "Singular region: the control periods whose mid-period sigma_min(J-bar) < epsilon, "
-        "drawn as vertical lines at their first and last period.",
-    )
-
-
-def _acceleration_row(runs: dict[str, Run], no_wrist: Run) -> Comparison:
-    """Thesis §4.3.3 on SC: "the rapid change of the joint velocity can be avoided", read as SC's
-    largest |delta theta_dot_i| / T over the run below plain pinv's (Fig. 4.6, the untreated
-    singularity); DLS's is given for reference."""
-    peak = {label: float(_acceleration(run.trace).max()) for label, run in runs.items()}
-    holds = peak["sc"] < peak["pinv"]
-    in_pass = ", ".join(f"{label} {_pass_acceleration(run):.2f}" for label, run in runs.items())
-    pinv = runs["pinv"]
-    j = int(np.argmax(_acceleration(pinv.trace)))
-    note = (
-        "largest |delta theta_dot_i| / T between periods, no joint limits (holds when SC's is "
-        f"below pinv's); {_where_fastest_change(runs['sc'])}; pinv's is at "
-        f"{pinv.trace.t_mid[j]:.2f} s, {_burst_note(pinv.trace, j + 1, _gain(pinv))}"
-        f"; in each run's first pass through the singular region: {in_pass} rad/s^2; without the "
-        f"wrist term (k_g = 0) SC's is {float(_acceleration(no_wrist.trace).max()):.2f} rad/s^2, "
-        f"but that run never enters the region (sigma_min >= {no_wrist.trace.sigma_min.min():.3f})"
-    )
-    return Comparison.trend(
-        "max_joint_acceleration_rad_s2",
-        "'the rapid change of the joint velocity can be avoided' (against the untreated "
-        "singularity, Fig. 4.6)",
-        {"sc": peak["sc"], "pinv": peak["pinv"]},
-        "rad/s^2",
-        holds=holds,
-        note=note + ("" if holds else "; why the wrist term grows this large is open") + ".",
-    )
-
-
-def _pass_acceleration(run: Run) -> float:
-    """Largest |delta theta_dot| / T within the run's first pass through sigma_min < epsilon."""
-    window = _first_pass(run.trace, run.settings["gains"]["epsilon"])
-    return float(
-        _acceleration(run.trace)[window.start : max(window.stop - 1, window.start + 1)].max()
-    )
-
-
-def _where_fastest_change(run: Run) -> str:
-    """Where the run's largest |delta theta_dot| / T happens: time, joint and what the command
-    after the change is made of."""
-    trace = run.trace
-    k = int(np.argmax(_acceleration(trace)))
-    joint = int(np.argmax(np.abs(np.diff(trace.theta_dot, axis=0))[k])) + 1
-    return (
-        f"SC's is at {trace.t_mid[k]:.2f} s on joint {joint}, SC's speed factor "
-        f"{trace.speed_scale[k + 1]:.2f}, {_burst_note(trace, k + 1, _gain(run))}"
-    )
-
-
-def _axis_row(sc: Run, dls: Run, no_wrist: Run) -> Comparison:
-    """Thesis §4.3.3: SC follows the commanded direction y, in contrast with DLS."""
-    axis = {run.label: run.result.max_axis_error_deg for run in (sc, dls)}
-    follows = axis["sc"] < 1.0 and axis["dls"] > 10.0 * axis["sc"]
-    trace = sc.trace
-    errors = np.nan_to_num(trace.axis_error_deg)
-    k = int(np.argmax(errors))
-    window = _first_pass(trace, sc.settings["gains"]["epsilon"])
-    through = float(errors[: window.stop].max())
-    note = (
-        "largest angle between achieved and commanded rotation axis over one period, no joint "
-        "limits (holds when SC's is below 1 deg and DLS's above 10x SC's)"
-    )
-    if not follows:
-        note += (
-            f"; SC's is at {trace.t_mid[k]:.3f} s, {_burst_note(trace, k, _gain(sc))}; up to the "
-            f"end of SC's {_pass_note(trace, window)} it is {through:.3g} deg; without the wrist "
-            f"term (k_g = 0) SC's is {no_wrist.result.max_axis_error_deg:.2g} deg (that run never "
-            f"enters the region); why the wrist term grows this large is open"
-        )
-    return Comparison.trend(
-        "max_axis_error_deg",
-        "SC follows the commanded direction y; DLS does not",
-        axis,
-        "deg",
-        holds=follows,
-        note=note + ".",
-    )
-
-
-def _compute_fig4_8(quick: bool) -> Outcome:
-    runs = {m: recorded_run(SINGULARITY, m, quick) for m in ("sc", "dls", "pinv")}
-    no_wrist = recorded_run(SINGULARITY, "sc", quick, 0.0)
-    sc, dls = runs["sc"], runs["dls"]
-    trace = sc.trace
-    window = _first_pass(trace, sc.settings["gains"]["epsilon"])
-    k = window.start + int(np.argmin(trace.det_algorithmic[window]))
-    speed_error = sc.result.min_speed_scale < 0.9 or sc.result.max_speed_scale > 1.1
-    rows = [
-        Comparison.input(
-            "sc_gain_b",
-            THESIS_SC_GAIN,
-            sc.settings["gains"]["sc_gain"],
-            "",
-            "our setting: the thesis' empirically chosen b of eq. (4.13)",
-        ),
-        _axis_row(sc, dls, no_wrist),
-        Comparison.trend(
-            "speed_scale_range",
-            "'an error only appears in the speed along the path'",
-            [sc.result.min_speed_scale, sc.result.max_speed_scale],
-            "",
-            holds=speed_error,
-            note="achieved / commanded speed b sigma_1 sigma_2 sigma_3, no joint limits (holds "
-            f"outside 0.9-1.1); the camera turns {sc.result.achieved_angle_deg:.0f} deg of the "
-            f"commanded {np.rad2deg(abs(shipped_scenario(SINGULARITY).angle)):.0f} deg"
-            + ("" if speed_error else "; cause open")
-            + ".",
-        ),
-        _acceleration_row(runs, no_wrist),
-    ]
-    values = run_values(list(runs.values()))
-    values["max_joint_acceleration_rad_s2"] = {
-        label: float(_acceleration(run.trace).max()) for label, run in runs.items()
-    }
-    values["sc_without_wrist_term"] = {
-        "label": no_wrist.label,
-        "max_axis_error_deg": no_wrist.result.max_axis_error_deg,
-        "max_joint_acceleration_rad_s2": float(_acceleration(no_wrist.trace).max()),
-        "min_sigma": no_wrist.result.min_sigma,
-    }
-    values["singularity_time_s"] = float(trace.t_mid[k])
-    return _singularity_outcome(rows, values, list(runs.values()), [float(trace.t_mid[k])], quick)
 
 
 # --------------------------------------------------------------------------- plots
@@ -978,34 +346,6 @@ def _plot_inspection(outcome: Outcome, figure) -> None:
     plot.trace_sigma(axes[3, 1], runs)
 
 
-#: The twin-axis series drawn next to sigma_min per method of Figs. 4.6-4.8.
-_SIGMA_EXTRA = {"dls": "damping", "sc": "speed"}
-
-
-def _plot_singularity(outcome: Outcome, figure) -> None:
-    """Figs. 4.6-4.8: one run with event lines at the singularity / singular region."""
-    run, lines = outcome.figure_data["runs"][0], outcome.figure_data["lines"]
-    axes = figure.subplots(3, 2)
-    plot.trace_joint_velocities(axes[0, 0], run, lines)
-    plot.trace_determinants(axes[0, 1], run, lines)
-    plot.trace_angular_velocity(axes[1, 0], [run], lines)
-    plot.trace_angular_velocity_error(axes[1, 1], [run], lines, axis_error=True)
-    plot.trace_base_deviation(axes[2, 0], [run], lines)
-    extra = _SIGMA_EXTRA.get(run.settings["method"])
-    plot.trace_sigma(axes[2, 1], [run], lines, extra)
-    limited = outcome.figure_data.get("urdf")
-    if limited is not None:
-        axes[0, 0].plot(
-            limited.trace.t_mid,
-            np.abs(limited.trace.theta_dot).max(axis=1),
-            color="k",
-            ls="--",
-            lw=1.0,
-            label=r"max$_i|\dot\theta_i|$, URDF limits (not the thesis')",
-        )
-        axes[0, 0].legend(fontsize=6, ncol=4, loc="best")
-
-
 REPRODUCTIONS = register_all(
     Reproduction(
         "fig4.4",
@@ -1022,29 +362,5 @@ REPRODUCTIONS = register_all(
         _compute_fig4_5,
         _plot_inspection,
         (11.0, 13.0),
-    ),
-    Reproduction(
-        "fig4.6",
-        "Fig. 4.6",
-        "algorithmic singularity with the plain pseudoinverse",
-        _compute_fig4_6,
-        _plot_singularity,
-        (11.0, 10.0),
-    ),
-    Reproduction(
-        "fig4.7",
-        "Fig. 4.7",
-        "algorithmic singularity with the DLS inverse (numerical filtering)",
-        _compute_fig4_7,
-        _plot_singularity,
-        (11.0, 10.0),
-    ),
-    Reproduction(
-        "fig4.8",
-        "Fig. 4.8",
-        "algorithmic singularity with the Singularity-Consistent method",
-        _compute_fig4_8,
-        _plot_singularity,
-        (11.0, 10.0),
     ),
 )

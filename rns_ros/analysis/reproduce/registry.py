@@ -32,8 +32,10 @@ from rns_ros.core.errors import ConfigError
 #: Modules that register results when imported, in report order (a new chapter appends its own).
 CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter3",
+    "rns_ros.analysis.reproduce.chapter3_bifurcation",
     "rns_ros.analysis.reproduce.chapter4_model",
     "rns_ros.analysis.reproduce.chapter4",
+    "rns_ros.analysis.reproduce.chapter4_singularity",
     "rns_ros.analysis.reproduce.chapter4_ptp",
     "rns_ros.analysis.reproduce.chapter4_deployment",
     "rns_ros.analysis.reproduce.chapter5",

@@ -47,6 +47,7 @@ from rns_ros.core.contact_geometry import ArcConstraint
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
 from rns_ros.runs.logger import start_logger
+from rns_ros.runs.recorded import latest_status_values
 
 #: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
 CONTACT_METHODS = {
@@ -125,13 +126,6 @@ class ContactDemoRow:
             "core_peak_joint_speed": self.core_peak_joint_speed,
             "loop_rate_hz": self.loop_rate_hz,
         }
-
-
-def _status_values(log: TopicLog) -> dict[str, str]:
-    latest = log.latest()
-    if latest is None or not latest.status:
-        return {}
-    return {kv.key: kv.value for kv in latest.status[0].values}
 
 
 def _error_columns(log: TopicLog) -> dict[str, np.ndarray]:
@@ -226,7 +220,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
             lambda: _finished(setpoints, errors, joints, scenario.duration), timeout=budget
         )
         wall = time.perf_counter() - start
-        values = _status_values(status)
+        values = latest_status_values(status)
         states = {_state(msg) for msg in status.messages}
         if not done:
             raise RnsError(

@@ -38,6 +38,7 @@ from rns_ros.runs.recorded import (
     EnergyFigures,
     PartialRecordingError,
     energy_figures,
+    latest_status_values,
     missed_samples,
     robot_arrays,
 )
@@ -413,11 +414,7 @@ def _has_twist(status: TopicLog | None) -> bool:
     """rns_controller's newest ``status`` counts a received twist (True without a log)."""
     if status is None:
         return True
-    latest = status.latest()
-    if latest is None or not latest.status:
-        return False
-    values = {item.key: item.value for item in latest.status[0].values}
-    return int(values.get(TWISTS_RECEIVED, "0")) > 0
+    return int(latest_status_values(status).get(TWISTS_RECEIVED, "0")) > 0
 
 
 def _wait_for_start(

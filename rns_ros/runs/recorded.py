@@ -2,7 +2,8 @@
 
 :func:`robot_arrays` turns recorded ``joint_states`` / ``base_odom`` / ``momentum`` /
 ``cmd_twist`` into the arrays of :func:`rns_ros.analysis.recorded_run.run_figures` (rns_demo and
-rns_observer); :func:`energy_figures` reads rns_simulator's ``energy`` topic (thesis chapter 5).
+rns_observer); :func:`energy_figures` reads rns_simulator's ``energy`` topic (thesis chapter 5);
+:func:`latest_status_values` reads a node's newest ``~/status``.
 """
 
 from __future__ import annotations
@@ -13,6 +14,14 @@ import numpy as np
 
 from rns_ros.core import RnsError
 from rns_ros.harness import TopicLog, header_seconds
+
+
+def latest_status_values(log: TopicLog) -> dict[str, str]:
+    """Key values of the first entry of the newest DiagnosticArray in ``log`` ({} before one)."""
+    latest = log.latest()
+    if latest is None or not latest.status:
+        return {}
+    return {kv.key: kv.value for kv in latest.status[0].values}
 
 
 @dataclass(frozen=True)

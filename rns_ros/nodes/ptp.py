@@ -137,9 +137,9 @@ class PtpNode(Node):
         # (goal, plan, input-clock time it was ready [s]): compared with state receipt times
         self._planned: tuple[int, object, float] | None = None
         self._last_status: DiagnosticStatus | None = None
-        # the graph, read once a second: joint_states sources, other joint commanders
+        # the graph, read once a second: joint_states sources (other joint commanders: the
+        # commander watch made with the output below)
         self._state_publishers: list[str] = []
-        self._commanders: list[str] = []
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
         # (goal, input-clock time of the stop [s]): compared with state receipt times
         self._deferred: tuple[JointState, float] | None = None
@@ -554,10 +554,11 @@ class PtpNode(Node):
         message = f"{state.value}: {detail}" if detail else state.value
         if self._rejected and state is not PtpState.INVALID_GOAL:
             message += f"; last goal rejected: {self._rejected}"
-        if self._commanders:
+        commanders = self._commander_watch.others
+        if commanders:
             level = max(level, DiagnosticStatus.WARN, key=level_rank)
             message += (
-                f"; {', '.join(self._commanders)} also publish(es) on {self._output_topic}: "
+                f"; {', '.join(commanders)} also publish(es) on {self._output_topic}: "
                 "run only one of rns_controller / rns_ptp"
             )
         status = DiagnosticStatus(
@@ -592,7 +593,7 @@ class PtpNode(Node):
             for info in self.get_publishers_info_by_topic(self._state_topic)
             if info.topic_type == "sensor_msgs/msg/JointState"
         )
-        self._commanders = self._commander_watch.check()
+        self._commander_watch.check()
 
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""

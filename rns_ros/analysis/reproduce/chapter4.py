@@ -146,7 +146,7 @@ def geometry_note(what: str) -> str:
 def _reactionless_base_row(run: Run) -> Comparison:
     """Thesis §4.2.2: "under reactionless motion control there is no base attitude deviation"."""
     value = run.result.max_base_deviation_deg
-    gain = run.settings["gains"]["wrist_gain"]
+    gain = run.wrist_gain
     holds = value < UNDISTURBED_DEG
     cause = (
         "not exactly 0 because the controller is sampled (midpoint hold, O(T^2))"
@@ -217,7 +217,7 @@ def _wrist_drift_row(rns: Run, no_wrist: Run, thesis: str) -> Comparison:
         drift,
         "m",
         holds=holds,
-        note=f"max |p_w - p_w^init| with k_g = {rns.settings['gains']['wrist_gain']:g}; without "
+        note=f"max |p_w - p_w^init| with k_g = {rns.wrist_gain:g}; without "
         f"the wrist term (k_g = 0) it is {free:.3f} m, {free / max(drift, FLOOR):.1f}x more "
         f"(holds when below {WRIST_HELD_SHARE:g} of it){cause}.",
     )
@@ -235,7 +235,7 @@ def _travel_row(rns: Run, no_wrist: Run) -> Comparison:
         "deg",
         holds=holds,
         note=f"largest joint travel in joints 1-4 vs 5-7 with k_g = "
-        f"{rns.settings['gains']['wrist_gain']:g} (holds when below "
+        f"{rns.wrist_gain:g} (holds when below "
         f"{POSITIONING_SHARE:g} of it); with k_g = 0 (no wrist term) the positioning joints "
         f"travel {positioning_0:.1f} deg vs {wrist_0:.1f} deg"
         + ("" if holds else "; cause open")
@@ -307,7 +307,7 @@ def _inspection_outcome(
     """The Outcome of Fig. 4.4 / 4.5 on scenario ``name`` (runs: DLS, DLS k_g = 0, conv.)."""
     values["ets_vii_allowance_deg"] = ETS_VII_ALLOWANCE_DEG
     wrist_choice = (
-        f"Wrist gain: the thesis' k_g = {runs[0].settings['gains']['wrist_gain']:g} (scenario "
+        f"Wrist gain: the thesis' k_g = {runs[0].wrist_gain:g} (scenario "
         "file default); 'dls_kg0' runs without the wrist term to show what the cost function "
         "(4.6) does."
     )

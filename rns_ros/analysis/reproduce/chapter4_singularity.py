@@ -78,7 +78,7 @@ def _singularity_choices(quick: bool) -> tuple[str, ...]:
         "The singularity of Figs. 4.6-4.8 is the run's first pass through the singular region "
         "sigma_min(J-bar) < epsilon (the pass the thesis' 1.71-4.18 s region shows); later passes "
         "are reported in the notes and values.",
-        f"Wrist gain: the thesis' k_g = {pinv.settings['gains']['wrist_gain']:g} (scenario "
+        f"Wrist gain: the thesis' k_g = {pinv.wrist_gain:g} (scenario "
         "default); SC multiplies the wrist term by det(J-bar J-bar^T) as eq. (4.15).",
     )
 
@@ -172,7 +172,7 @@ def _fastest_joints_row(run: Run, window: slice, peaks: dict) -> Comparison:
         f"is {ratio:.1f}x the run's median per-period peak {median:.3f} rad/s (holds when the two "
         f"fastest are 5 and 7, opposite, at {HIGH_RATE_FACTOR:g}x or more); no joint limits. The "
         f"deepest pass peaks at {tw.joint_text(peaks['deepest_pass'])}; the whole run at "
-        f"{tw.joint_text(whole)}: {tw.burst_note(trace, k, run.settings['gains']['wrist_gain'])}"
+        f"{tw.joint_text(whole)}: {tw.burst_note(trace, k, run.wrist_gain)}"
     )
     return Comparison.trend(
         "fastest_joints_near_singularity",
@@ -357,7 +357,8 @@ def _suppression_row(dls: Run, pinv: Run) -> Comparison:
     note = (
         f"largest |theta_dot_i| over the whole run, no joint limits: pinv / DLS = "
         f"{whole['factor']:.1f} (holds when DLS's is below {SUPPRESSED_SHARE:g} of pinv's). "
-        f"Pinv peaks at {tw.joint_text(peak)}, {tw.burst_note(pinv.trace, k, _gain(pinv))}, after "
+        f"Pinv peaks at {tw.joint_text(peak)}, "
+        f"{tw.burst_note(pinv.trace, k, pinv.wrist_gain)}, after "
         f"its deepest pass (sigma_min {pinv.trace.sigma_min.min():.4f}); DLS stays below "
         f"epsilon only in {tw.intervals(dls.trace.t_mid, dls.trace.sigma_min < epsilon)} s. Over "
         f"plain pinv's {tw.pass_note(pinv.trace, tw.first_pass(pinv.trace, epsilon))} the factor "
@@ -374,10 +375,6 @@ def _suppression_row(dls: Run, pinv: Run) -> Comparison:
         holds=holds,
         note=note + ("" if holds else "; cause open") + ".",
     )
-
-
-def _gain(run: Run) -> float:
-    return run.settings["gains"]["wrist_gain"]
 
 
 def _tracking_error_row(dls: Run) -> Comparison:
@@ -471,7 +468,7 @@ def _acceleration_row(runs: dict[str, Run], no_wrist: Run) -> Comparison:
     note = (
         "largest |delta theta_dot_i| / T between periods, no joint limits (holds when SC's is "
         f"below pinv's); {_where_fastest_change(runs['sc'])}; pinv's is at "
-        f"{pinv.trace.t_mid[j]:.2f} s, {tw.burst_note(pinv.trace, j + 1, _gain(pinv))}"
+        f"{pinv.trace.t_mid[j]:.2f} s, {tw.burst_note(pinv.trace, j + 1, pinv.wrist_gain)}"
         f"; in each run's first pass through the singular region: {in_pass} rad/s^2; without the "
         f"wrist term (k_g = 0) SC's is {float(tw.acceleration(no_wrist.trace).max()):.2f} rad/s^2, "
         f"but that run never enters the region (sigma_min >= {no_wrist.trace.sigma_min.min():.3f})"
@@ -503,7 +500,7 @@ def _where_fastest_change(run: Run) -> str:
     joint = int(np.argmax(np.abs(np.diff(trace.theta_dot, axis=0))[k])) + 1
     return (
         f"SC's is at {trace.t_mid[k]:.2f} s on joint {joint}, SC's speed factor "
-        f"{trace.speed_scale[k + 1]:.2f}, {tw.burst_note(trace, k + 1, _gain(run))}"
+        f"{trace.speed_scale[k + 1]:.2f}, {tw.burst_note(trace, k + 1, run.wrist_gain)}"
     )
 
 
@@ -522,7 +519,8 @@ def _axis_row(sc: Run, dls: Run, no_wrist: Run) -> Comparison:
     )
     if not follows:
         note += (
-            f"; SC's is at {trace.t_mid[k]:.3f} s, {tw.burst_note(trace, k, _gain(sc))}; up to the "
+            f"; SC's is at {trace.t_mid[k]:.3f} s, {tw.burst_note(trace, k, sc.wrist_gain)}; "
+            "up to the "
             f"end of SC's {tw.pass_note(trace, window)} it is {through:.3g} deg; without the wrist "
             f"term (k_g = 0) SC's is {no_wrist.result.max_axis_error_deg:.2g} deg (that run never "
             f"enters the region); why the wrist term grows this large is open"

@@ -99,7 +99,7 @@ def method_name(run) -> str:
     method = run.settings["method"]
     if method == "conventional":
         return "conventional (4.7-4.8)"
-    return f"{method} (k_g = {run.settings['gains']['wrist_gain']:g})"
+    return f"{method} (k_g = {run.wrist_gain:g})"
 
 
 def trace_joint_velocities(ax, run, lines=()) -> None:

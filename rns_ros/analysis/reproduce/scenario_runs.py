@@ -80,6 +80,11 @@ class Run:
     trace: Trace
     settings: dict
 
+    @property
+    def wrist_gain(self) -> float:
+        """k_g of the wrist term (4.6) the run used [1/s]."""
+        return self.settings["gains"]["wrist_gain"]
+
 
 class TraceRecorder:
     """Collects :class:`PeriodSample` rows into a :class:`Trace`."""

@@ -220,7 +220,11 @@ def coupling(robot: FreeFloatingModel, theta) -> np.ndarray:
 def wrist_map(robot: FreeFloatingModel, theta) -> np.ndarray:
     """B = -M~_P_omega_m^+ M~_W_omega_m of eq. (4.2) [-], shape (p, w): the positioning rates
     that cancel the angular momentum of unit wrist rates."""
-    matrix, chains = coupling(robot, theta), robot.subchains
+    return _wrist_map(coupling(robot, theta), robot.subchains)
+
+
+def _wrist_map(matrix: np.ndarray, chains) -> np.ndarray:
+    """:func:`wrist_map` from M~_omega_m (3, n) and the robot's subchains."""
     return -np.linalg.pinv(matrix[:, chains.positioning]) @ matrix[:, chains.wrist]
 
 
@@ -230,7 +234,7 @@ def structure(robot: FreeFloatingModel, theta) -> dict[str, float]:
     largest component of n (1.0 or 0.0), and the smallest singular value of M~_P_omega_m
     [kg m^2]."""
     matrix, chains = coupling(robot, theta), robot.subchains
-    b = wrist_map(robot, theta)
+    b = _wrist_map(matrix, chains)
     n = positioning_null_vector(robot, theta)
     columns = np.sum(b[:2] ** 2, axis=0) / np.maximum(np.sum(b**2, axis=0), 1e-300)
     return {

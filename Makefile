@@ -64,10 +64,16 @@ $(STAMP): $(STAMP_DEPS)
 demo: venv
 	$(VENV_BIN)/rns_demo $(ARGS)
 
+# The suite runs in one pytest-xdist worker, in order. A DDS call that never returns (seen once
+# in ~20 runs, inside Fast DDS) ends that worker through the hang watchdog (test/conftest.py);
+# xdist starts a new one and the test is run once more. `--rerun-except .` keeps every ordinary
+# failure a failure: only a worker's death is rerun.
+SUITE_FLAGS := -n 1 --reruns 1 --rerun-except .
+
 test: venv
 	$(VENV_BIN)/ruff check .
 	$(VENV_BIN)/ruff format --check .
-	$(VENV_PY) -m pytest -q
+	$(VENV_PY) -m pytest -q $(SUITE_FLAGS)
 
 # The ROS-free rooms (core, control, sim, analysis, viz) and the layering rules.
 QUICK_TESTS := test/core test/control test/sim test/analysis test/viz test/test_layering.py

@@ -8,6 +8,10 @@ import sys
 
 import pytest
 
+# A test stuck inside C code (a DDS call that never returns) ends its process with a stack dump
+# instead of stalling the run.
+from hang_watchdog import pytest_configure, pytest_runtest_protocol  # noqa: F401
+
 from rns_ros.core import FreeFloatingModel, load_model
 from rns_ros.resources import default_model_config
 

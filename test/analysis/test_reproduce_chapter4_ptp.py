@@ -117,8 +117,23 @@ def test_table_4_2(documents):
         row = table[f"ratio_{name}"]
         assert row["verdict"] == expected_verdict(row["thesis"], row["ours"], 0.02)
     assert table["three_phase_least"]["verdict"] == "qualitative"
-    # the arm geometry was fitted to the thesis' end-effector position: an input
+    # the target is our own 3-phase end (A-2.5): an input
     assert table["camera_target_m"]["verdict"] == "input"
+    # the labelled runs aimed at the thesis' printed point reach it
+    for name, run in document["thesis_point_target"].items():
+        assert run["final_camera_error_m"] < (0.05 if name == "IJ-C" else 0.01)
+
+
+def test_the_base_frame_camera_is_the_world_camera_until_the_base_moves():
+    """World = base frame at t = 0: the fitted (base-frame) camera point and the run's world
+    camera agree at the start and part by the base's motion at the end."""
+    run = chapter4_ptp._table_runs(True)["3-phase"]
+    start = chapter4_ptp._camera_in_base_frame(run.theta[0])
+    np.testing.assert_allclose(start, run.camera[0], atol=1e-9)
+    end = chapter4_ptp._camera_in_base_frame(run.theta[-1])
+    lever = np.linalg.norm(end)
+    # a base turned by the final deviation moves a point at this lever arm by about angle * lever
+    assert np.linalg.norm(end - run.camera[-1]) > 0.5 * run.base_deviation[-1] * lever
 
 
 @pytest.mark.slow

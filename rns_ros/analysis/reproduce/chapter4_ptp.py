@@ -39,7 +39,11 @@ from rns_ros.analysis.reproduce.registry import (
     number_verdict,
     register_all,
 )
-from rns_ros.analysis.reproduce.scenario_runs import default_robot, thesis_robot
+from rns_ros.analysis.reproduce.scenario_runs import (
+    default_robot,
+    resized_arm,
+    thesis_robot,
+)
 from rns_ros.control.ptp import PtpPlan, PtpSettings
 from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core.state import FreeFloatingState
@@ -73,6 +77,8 @@ REACTIONLESS_DEVIATION_DEG = 1e-3
 STEP, QUICK_STEP = 1e-3, 1e-2
 INTEGRATION, QUICK_INTEGRATION = 0.01, 0.05
 RATE = 100.0
+#: Upper-arm and forearm length factors of the labelled sensitivity runs (:func:`resized_arm`).
+ARM_SCALES = (0.9, 1.1)
 METHODS = ("3-phase", "JS-C", "IJ-C", "TJ-C")
 TASK_SPACE_METHODS = (("IJ-C", "inverse_jacobian"), ("TJ-C", "transposed_jacobian"))
 _COLORS = {"3-phase": "tab:blue", "JS-C": "tab:orange", "IJ-C": "tab:green", "TJ-C": "tab:red"}
@@ -103,9 +109,10 @@ def _step(quick: bool) -> float:
 
 
 @functools.cache
-def _table_runs(quick: bool) -> dict[str, PtpRun]:
-    """The four Table 4.2 runs (3-phase first: its final camera is the IJ-C/TJ-C target)."""
-    robot = thesis_robot()
+def _table_runs(quick: bool, arm_scale: float = 1.0) -> dict[str, PtpRun]:
+    """The four Table 4.2 runs (3-phase first: its final camera is the IJ-C/TJ-C target);
+    ``arm_scale`` != 1 runs them on :func:`resized_arm`."""
+    robot = thesis_robot() if arm_scale == 1.0 else resized_arm(arm_scale)
     start, goal = np.deg2rad(INITIAL_DEG), np.deg2rad(FINAL_DEG)
     runs = {"3-phase": run_plan(robot, plan_ptp(robot, start, goal, "three_phase"), **loop(quick))}
     settings = PtpSettings(
@@ -216,16 +223,22 @@ def judged_number(
     return Comparison.number(key, thesis, ours, unit, tolerance=tolerance, note=note)
 
 
-def deviation_rows(deviation: dict, thesis: dict, source: str, facts: dict) -> list[Comparison]:
+def deviation_rows(
+    deviation: dict,
+    thesis: dict,
+    source: str,
+    facts: dict,
+    sensitivity: dict[float, dict[str, float]] | None = None,
+) -> list[Comparison]:
     """One max base attitude deviation row [deg] per method named in ``thesis`` (``source``
-    cites the thesis; ``facts`` adds what the run shows for some methods)."""
+    cites the thesis; ``facts`` adds what the run shows for some methods; ``sensitivity``
+    {arm scale: {method: deviation [deg]}} the same runs on :func:`resized_arm`)."""
     rows = []
     for name, printed in thesis.items():
         ours = round(deviation[name], 4)
         note = f"{source}; ours is {ours / printed:.0%} of the thesis'"
         if name in facts:
             note += f"; {facts[name]}"
-        cause = "the thesis prints no arm geometry to compare ours with, so the cause is open"
         rows.append(
             judged_number(
                 f"max_base_deviation_{name}_deg",
@@ -234,20 +247,52 @@ def deviation_rows(deviation: dict, thesis: dict, source: str, facts: dict) -> l
                 "deg",
                 DEVIATION_TOLERANCE,
                 note,
-                cause,
+                _length_cause(name, deviation, printed, sensitivity),
             )
         )
     return rows
 
 
+def _length_cause(
+    name: str, deviation: dict, printed: float, sensitivity: dict | None, ratio: bool = False
+) -> str:
+    """Why a deviation (or, with ``ratio``, its ratio to the 3-phase one) differs, from the
+    sensitivity runs on resized arms when there are any."""
+    if not sensitivity:
+        return "the thesis prints no arm geometry to compare ours with, so the cause is open"
+
+    def value(table: dict) -> float:
+        return table[name] / table["3-phase"] if ratio else table[name]
+
+    ours = value(deviation)
+    moved = ", ".join(
+        f"{value(table):.3f} at {scale:g}x" for scale, table in sorted(sensitivity.items())
+    )
+    swing = max(abs(value(table) / ours - 1.0) for table in sensitivity.values())
+    text = (
+        f"the thesis prints no arm geometry; with the upper arm and forearm resized (labelled "
+        f"runs, arm_length_sensitivity) it is {moved}: up to {swing:.0%} for "
+        f"{max(abs(scale - 1.0) for scale in sensitivity):.0%} in length, against a "
+        f"{abs(printed / ours - 1.0):.0%} gap"
+    )
+    if swing < abs(printed / ours - 1.0):
+        text += ", so the link lengths alone do not explain it; the rest of the geometry "
+        text += "(axes, offsets, theta = 0 pose) is open"
+    return text
+
+
 # table 4.2 ----------------------------------------------------------------------------------
-def table_comparisons(deviation: dict[str, float], phase_two_turn_deg: float) -> list[Comparison]:
+def table_comparisons(
+    deviation: dict[str, float],
+    phase_two_turn_deg: float,
+    sensitivity: dict[float, dict[str, float]] | None = None,
+) -> list[Comparison]:
     """Table 4.2 rows from the max base deviation of each of :data:`METHODS` [deg];
     ``phase_two_turn_deg`` is how far Phase II turns theta_4 [deg] (0 in the thesis, where both
-    folds end at -180 deg)."""
+    folds end at -180 deg); ``sensitivity`` as in :func:`deviation_rows`."""
     fact = f"Phase II turns theta_4 by {phase_two_turn_deg:.1f} deg (0 in the thesis)"
-    rows = deviation_rows(deviation, THESIS_TABLE, "Table 4.2", {"3-phase": fact})
-    rows += [_ratio_row(name, deviation) for name in METHODS[1:]]
+    rows = deviation_rows(deviation, THESIS_TABLE, "Table 4.2", {"3-phase": fact}, sensitivity)
+    rows += [_ratio_row(name, deviation, sensitivity) for name in METHODS[1:]]
     least = min(deviation, key=deviation.get)
     ratios = [deviation[name] / deviation["3-phase"] for name in METHODS[1:]]
     note = f"the least max deviation of the four: {least}, {deviation[least]:.3f} deg"
@@ -266,7 +311,7 @@ def table_comparisons(deviation: dict[str, float], phase_two_turn_deg: float) ->
     return rows
 
 
-def _ratio_row(name: str, deviation: dict[str, float]) -> Comparison:
+def _ratio_row(name: str, deviation: dict[str, float], sensitivity: dict | None) -> Comparison:
     """Table 4.2's ratio of ``name``'s max deviation to the 3-phase one [-]."""
     ours, three_phase = deviation[name], deviation["3-phase"]
     note = (
@@ -277,7 +322,8 @@ def _ratio_row(name: str, deviation: dict[str, float]) -> Comparison:
     cause = (
         f"ours {ours:.3f} / {three_phase:.3f} deg against {THESIS_TABLE[name]} / "
         f"{THESIS_TABLE['3-phase']} deg: {name}'s deviation is {ours / THESIS_TABLE[name]:.0%} "
-        f"of the thesis', the 3-phase's {three_phase / THESIS_TABLE['3-phase']:.0%}"
+        f"of the thesis', the 3-phase's {three_phase / THESIS_TABLE['3-phase']:.0%}; "
+        + _length_cause(name, deviation, THESIS_RATIO[name], sensitivity, ratio=True)
     )
     ratio = round(ours / three_phase, 3)
     return judged_number(
@@ -296,7 +342,11 @@ def _compute_table4_2(quick: bool) -> Outcome:
     ratio = {name: deviation[name] / deviation["3-phase"] for name in METHODS}
     plan = runs["3-phase"].plan
     target = runs["IJ-C"].plan.details["camera_target"]
-    comparisons = table_comparisons(deviation, _fold_turn_deg(plan))
+    sensitivity = {
+        scale: {name: run.max_base_deviation_deg for name, run in _table_runs(quick, scale).items()}
+        for scale in ARM_SCALES
+    }
+    comparisons = table_comparisons(deviation, _fold_turn_deg(plan), sensitivity)
     comparisons.append(_camera_target_row(runs, _thesis_point_runs(quick)))
     values = {
         "max_base_deviation_deg": {k: round(v, 6) for k, v in deviation.items()},
@@ -308,6 +358,10 @@ def _compute_table4_2(quick: bool) -> Outcome:
             name: float(np.linalg.norm(runs[name].camera[-1] - target)) for name in METHODS
         },
         "durations_s": {name: runs[name].plan.duration for name in METHODS},
+        "arm_length_sensitivity": {
+            str(scale): {name: round(v, 6) for name, v in table.items()}
+            for scale, table in sensitivity.items()
+        },
         "thesis_point_target": {
             name: {
                 "max_base_deviation_deg": round(run.max_base_deviation_deg, 6),

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.analysis.arm_geometry import IDENTIFIED_GEOMETRY, build_model
 from rns_ros.analysis.closed_loop import ClosedLoopResult, PeriodSample, run_scenario
 from rns_ros.control.camera_law import wrist_offset
 from rns_ros.control.scenario import Scenario, load_scenario
@@ -151,7 +152,24 @@ def thesis_robot() -> FreeFloatingModel:
     """The default 7-DoF model without joint speed or position limits, as the thesis simulates
     it (its runs scale nothing down): the model every reproduction runs on unless it says
     otherwise. The URDF's limits are a product safety choice (:func:`default_robot`)."""
-    robot = copy.copy(load_model(default_model_config()))
+    return _without_limits(load_model(default_model_config()))
+
+
+@functools.cache
+def resized_arm(scale: float) -> FreeFloatingModel:
+    """:func:`thesis_robot` with the upper arm and the forearm (links 3 and 4, the identified
+    geometry's longest) ``scale`` times as long, masses and moments kept: how much a result
+    depends on link lengths the thesis does not print."""
+    lengths = list(IDENTIFIED_GEOMETRY.lengths)
+    lengths[2] *= scale
+    lengths[3] *= scale
+    return _without_limits(
+        build_model(dataclasses.replace(IDENTIFIED_GEOMETRY, lengths=tuple(lengths)))
+    )
+
+
+def _without_limits(model: FreeFloatingModel) -> FreeFloatingModel:
+    robot = copy.copy(model)
     robot.velocity_limits = np.full(robot.n, np.inf)
     robot.lower_limits = np.full(robot.n, -np.inf)
     robot.upper_limits = np.full(robot.n, np.inf)

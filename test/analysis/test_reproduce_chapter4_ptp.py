@@ -193,6 +193,9 @@ def test_deployments(documents):
     assert partial["final_error_deg"] < 0.1
     reduction = comparison_rows(partial)["reduction_percent"]
     assert reduction["verdict"] == expected_verdict(28.5, reduction["ours"], 0.05)
+    # the same joint-space baseline path on a longer arm disturbs the base more
+    sensitivity = partial["arm_length_sensitivity"]
+    assert sensitivity["0.9"]["baseline"] < deviation["baseline"] < sensitivity["1.1"]["baseline"]
 
 
 @pytest.mark.slow

@@ -22,6 +22,7 @@ from rns_ros.analysis.ptp_runs import PtpRun, run_plan
 from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce import ptp_snapshots as snap
 from rns_ros.analysis.reproduce.chapter4_ptp import (
+    ARM_SCALES,
     CHOICES,
     PARTIAL_FINAL_DEG,
     REACTIONLESS_DEVIATION_DEG,
@@ -39,7 +40,7 @@ from rns_ros.analysis.reproduce.chapter4_ptp import (
     settings,
 )
 from rns_ros.analysis.reproduce.registry import Comparison, Outcome, Reproduction, register_all
-from rns_ros.analysis.reproduce.scenario_runs import thesis_robot
+from rns_ros.analysis.reproduce.scenario_runs import resized_arm, thesis_robot
 from rns_ros.control.ptp import PtpPlan, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment, plan_partial_deployment
 from rns_ros.control.ptp_planner import plan_ptp
@@ -114,8 +115,10 @@ def _theta4_row(plan: PtpPlan) -> Comparison:
 
 # partial deployment -------------------------------------------------------------------------
 @functools.cache
-def _partial(quick: bool) -> dict[str, PtpRun]:
-    robot = thesis_robot()
+def _partial(quick: bool, arm_scale: float = 1.0) -> dict[str, PtpRun]:
+    """The partial deployment and its joint-space baseline; ``arm_scale`` != 1 runs them on
+    :func:`resized_arm`."""
+    robot = thesis_robot() if arm_scale == 1.0 else resized_arm(arm_scale)
     goal = np.deg2rad(PARTIAL_FINAL_DEG)
     plan = plan_partial_deployment(robot, STOWED, goal)
     baseline = plan_ptp(robot, STOWED, goal, "joint_space", PtpSettings(duration=plan.duration))
@@ -125,23 +128,40 @@ def _partial(quick: bool) -> dict[str, PtpRun]:
     }
 
 
-def partial_comparisons(deviation: dict[str, float], fold_deg: float) -> list[Comparison]:
+def _reduction(deviation: dict[str, float]) -> float:
+    """(baseline - partial) / baseline [%]."""
+    return 100.0 * (1.0 - deviation["partial_reactionless"] / deviation["baseline"])
+
+
+def partial_comparisons(
+    deviation: dict[str, float], fold_deg: float, sensitivity: dict | None = None
+) -> list[Comparison]:
     """§4.5.2 rows from the max base deviation [deg] of ``partial_reactionless`` and ``baseline``;
-    ``fold_deg`` is theta_4 where the Phase III fold ends [deg] (-180 deg in the thesis)."""
+    ``fold_deg`` is theta_4 where the Phase III fold ends [deg] (-180 deg in the thesis);
+    ``sensitivity`` {arm scale: deviations} of the same runs on resized arms."""
     partial, baseline = deviation["partial_reactionless"], deviation["baseline"]
-    reduction = 100.0 * (baseline - partial) / baseline
+    reduction = _reduction(deviation)
     turn = abs(fold_deg - math.degrees(STOWED[3]))
     fact = (
         f"the Phase III fold ends at theta_4 = {fold_deg:.1f} deg, so Phase II turns theta_4 by "
         f"{turn:.1f} deg (0 in the thesis)"
     )
-    rows = deviation_rows(deviation, THESIS_PARTIAL, "§4.5.2", {"partial_reactionless": fact})
+    rows = deviation_rows(
+        deviation, THESIS_PARTIAL, "§4.5.2", {"partial_reactionless": fact}, sensitivity
+    )
     cause = (
         f"partial {partial:.3f} deg and baseline {baseline:.3f} deg are "
         f"{partial / THESIS_PARTIAL['partial_reactionless']:.0%} and "
-        f"{baseline / THESIS_PARTIAL['baseline']:.0%} of the thesis'; {fact}; which of these sets "
-        "the gap is open"
+        f"{baseline / THESIS_PARTIAL['baseline']:.0%} of the thesis'; {fact}"
     )
+    if sensitivity:
+        cause += "; with the upper arm and forearm resized (arm_length_sensitivity) it is " + (
+            ", ".join(
+                f"{_reduction(table):.1f} % at {scale:g}x"
+                for scale, table in sorted(sensitivity.items())
+            )
+        )
+    cause += "; which of these sets the gap is open"
     rows.append(
         judged_number(
             "reduction_percent",
@@ -160,9 +180,21 @@ def _compute_partial(quick: bool) -> Outcome:
     runs = _partial(quick)
     deviation = {name: run.max_base_deviation_deg for name, run in runs.items()}
     plan = runs["partial_reactionless"].plan
-    comparisons = partial_comparisons(deviation, math.degrees(plan.phases[-1].fold_reached))
-    reduction = 100.0 * (1.0 - deviation["partial_reactionless"] / deviation["baseline"])
+    sensitivity = {
+        scale: {name: run.max_base_deviation_deg for name, run in _partial(quick, scale).items()}
+        for scale in ARM_SCALES
+    }
+    fold_deg = math.degrees(plan.phases[-1].fold_reached)
+    comparisons = partial_comparisons(deviation, fold_deg, sensitivity)
+    reduction = _reduction(deviation)
     values = {
+        "arm_length_sensitivity": {
+            str(scale): {
+                **{name: round(v, 6) for name, v in table.items()},
+                "reduction_percent": _reduction(table),
+            }
+            for scale, table in sensitivity.items()
+        },
         "max_base_deviation_deg": {k: round(v, 6) for k, v in deviation.items()},
         "reduction_percent": reduction,
         "phases": phases(plan),

@@ -137,6 +137,22 @@ def test_each_trend_follows_its_median_and_threshold():
     }
 
 
+def test_a_failed_trend_names_the_geometry_that_meets_it():
+    named = {"pose": {key: 0.0 for key in _sampled(0.0)}}
+    meets = {"inferred": _medians(0.05), "longer": _medians(0.9)}
+    rows = {c.key: c for c in model.structure_comparisons(named, _sampled(0.9), meets)}
+    note = rows["wrist_compensation_small"].note
+    assert rows["wrist_compensation_small"].verdict.value == "not reproduced"
+    assert "it holds on inferred, so it is set by the arm's geometry" in note
+    neither = {"inferred": _medians(0.9), "longer": _medians(0.8)}
+    rows = {c.key: c for c in model.structure_comparisons(named, _sampled(0.9), neither)}
+    assert "none meets it" in rows["wrist_compensation_small"].note
+
+
+def _medians(value: float) -> dict[str, float]:
+    return {key: value for key in _sampled(0.0)}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("identifier", IDS)
 def test_each_result_writes_json_and_png(documents, identifier):

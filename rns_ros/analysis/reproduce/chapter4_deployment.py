@@ -22,7 +22,6 @@ from rns_ros.analysis.ptp_runs import PtpRun, run_plan
 from rns_ros.analysis.reproduce import plotting as plot
 from rns_ros.analysis.reproduce import ptp_snapshots as snap
 from rns_ros.analysis.reproduce.chapter4_ptp import (
-    ARM_SCALES,
     CHOICES,
     PARTIAL_FINAL_DEG,
     REACTIONLESS_DEVIATION_DEG,
@@ -40,7 +39,7 @@ from rns_ros.analysis.reproduce.chapter4_ptp import (
     settings,
 )
 from rns_ros.analysis.reproduce.registry import Comparison, Outcome, Reproduction, register_all
-from rns_ros.analysis.reproduce.scenario_runs import resized_arm, thesis_robot
+from rns_ros.analysis.reproduce.scenario_runs import ARM_SCALES, resized_arm, thesis_robot
 from rns_ros.control.ptp import PtpPlan, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment, plan_partial_deployment
 from rns_ros.control.ptp_planner import plan_ptp

@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from rns_ros.analysis.arm_geometry import INFERRED_GEOMETRY, build_model
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
@@ -23,7 +24,12 @@ from rns_ros.analysis.reproduce.registry import (
     register_all,
     resolution_choice,
 )
-from rns_ros.analysis.reproduce.scenario_runs import default_robot, thesis_robot
+from rns_ros.analysis.reproduce.scenario_runs import (
+    ARM_SCALES,
+    default_robot,
+    resized_arm,
+    thesis_robot,
+)
 from rns_ros.control.reactionless_path import positioning_null_vector, reactionless_path
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import FreeFloatingState
@@ -258,10 +264,13 @@ def random_configurations(robot: FreeFloatingModel, count: int) -> np.ndarray:
     return rng.uniform(robot.lower_limits, robot.upper_limits, size=(count, robot.n))
 
 
-def structure_comparisons(named: dict[str, dict], sampled: dict[str, np.ndarray]) -> list:
+def structure_comparisons(
+    named: dict[str, dict], sampled: dict[str, np.ndarray], variants: dict[str, dict] | None = None
+) -> list:
     """The §4.1.2 trends, each judged on the median over ``sampled`` (measure -> values over the
     random configurations) against its threshold; ``named`` gives the measures at the named
-    poses for the notes."""
+    poses for the notes, ``variants`` {arm: {measure: median}} the same medians on other arm
+    geometries (:func:`geometry_variants`), for the cause of a trend that fails."""
     rows = []
     for key, quote, measure, threshold, below in (
         (
@@ -327,12 +336,40 @@ def structure_comparisons(named: dict[str, dict], sampled: dict[str, np.ndarray]
         ours |= {name: round(m[measure], 4) for name, m in named.items()}
         holds = median < threshold if below else median >= threshold
         if not holds:
-            note += (
-                "; the arm geometry is identified, not printed (docs/arm_identification.md), so "
-                "the cause is open"
-            )
+            note += "; " + _geometry_cause(variants, measure, threshold, below)
         rows.append(Comparison.trend(key, quote, ours, "", holds=holds, note=note))
     return rows
+
+
+def _geometry_cause(variants: dict | None, measure: str, threshold: float, below: bool) -> str:
+    """Whether another arm geometry meets a failed trend: the cause, from those medians."""
+    text = "the arm geometry is identified, not printed (docs/arm_identification.md)"
+    if not variants:
+        return text + ", so the cause is open"
+    medians = {name: table[measure] for name, table in variants.items()}
+    meets = [name for name, v in medians.items() if (v < threshold if below else v >= threshold)]
+    text += "; the same median on other geometries (geometry_variants): " + ", ".join(
+        f"{name} {v:.3g}" for name, v in medians.items()
+    )
+    if meets:
+        return text + f": it holds on {', '.join(meets)}, so it is set by the arm's geometry"
+    return text + (
+        ": none meets it, so neither these link lengths nor the inferred layout explain it; "
+        "the configurations the thesis means (it names none) are open"
+    )
+
+
+def geometry_variants(thetas: np.ndarray) -> dict[str, dict[str, float]]:
+    """Median of each :func:`structure` measure over ``thetas`` on the first, inferred geometry
+    (straight and coaxial at theta = 0, no lateral offsets) and on the identified arm with the
+    upper arm and forearm 0.9x / 1.1x as long (:func:`resized_arm`)."""
+    arms = {"inferred": build_model(INFERRED_GEOMETRY)}
+    arms |= {f"links 3-4 {scale:g}x": resized_arm(scale) for scale in ARM_SCALES}
+    medians = {}
+    for name, robot in arms.items():
+        rows = [structure(robot, theta) for theta in thetas]
+        medians[name] = {key: float(np.median([row[key] for row in rows])) for key in rows[0]}
+    return medians
 
 
 def wrist_motion(robot: FreeFloatingModel, theta0, steps: int = 60) -> np.ndarray:
@@ -368,18 +405,18 @@ def fold_motion(robot: FreeFloatingModel, theta0) -> np.ndarray:
 
 
 @functools.cache
-def _structure(quick: bool) -> tuple[dict, dict]:
+def _structure(quick: bool) -> tuple[dict, dict, dict]:
     robot = thesis_robot()
     named = {name: structure(robot, np.deg2rad(deg)) for name, deg in NAMED_DEG.items()}
     thetas = random_configurations(default_robot(), QUICK_RANDOM_COUNT if quick else RANDOM_COUNT)
     rows = [structure(robot, theta) for theta in thetas]
     sampled = {key: np.array([row[key] for row in rows]) for key in rows[0]}
-    return named, sampled
+    return named, sampled, geometry_variants(thetas)
 
 
 def _compute_fig4_2(quick: bool) -> Outcome:
     robot = thesis_robot()
-    named, sampled = _structure(quick)
+    named, sampled, variants = _structure(quick)
     start = np.deg2rad(NAMED_DEG["satellite_observation"])
     wrist = wrist_motion(robot, start, 20 if quick else 60)
     fold = fold_motion(robot, start)
@@ -389,6 +426,7 @@ def _compute_fig4_2(quick: bool) -> Outcome:
         "random_median": {key: float(np.median(v)) for key, v in sampled.items()},
         "random_max": {key: float(v.max()) for key, v in sampled.items()},
         "random_min": {key: float(v.min()) for key, v in sampled.items()},
+        "geometry_variants": variants,
         "wrist_motion_theta_deg": np.rad2deg(wrist[picks]).round(3).tolist(),
         "fold_motion_theta_deg": np.rad2deg(fold).round(3).tolist(),
     }
@@ -422,7 +460,8 @@ def _compute_fig4_2(quick: bool) -> Outcome:
         "fold": [robot.skeleton(robot.configuration(t)) for t in fold],
     }
     data = {"points": points, "sampled": sampled}
-    return Outcome(tuple(structure_comparisons(named, sampled)), values, settings, choices, data)
+    comparisons = structure_comparisons(named, sampled, variants)
+    return Outcome(tuple(comparisons), values, settings, choices, data)
 
 
 def _skeletons(ax, points, title: str) -> None:

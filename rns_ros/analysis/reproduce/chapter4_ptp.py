@@ -40,6 +40,7 @@ from rns_ros.analysis.reproduce.registry import (
     register_all,
 )
 from rns_ros.analysis.reproduce.scenario_runs import (
+    ARM_SCALES,
     default_robot,
     resized_arm,
     thesis_robot,
@@ -77,8 +78,6 @@ REACTIONLESS_DEVIATION_DEG = 1e-3
 STEP, QUICK_STEP = 1e-3, 1e-2
 INTEGRATION, QUICK_INTEGRATION = 0.01, 0.05
 RATE = 100.0
-#: Upper-arm and forearm length factors of the labelled sensitivity runs (:func:`resized_arm`).
-ARM_SCALES = (0.9, 1.1)
 METHODS = ("3-phase", "JS-C", "IJ-C", "TJ-C")
 TASK_SPACE_METHODS = (("IJ-C", "inverse_jacobian"), ("TJ-C", "transposed_jacobian"))
 _COLORS = {"3-phase": "tab:blue", "JS-C": "tab:orange", "IJ-C": "tab:green", "TJ-C": "tab:red"}

@@ -155,6 +155,10 @@ def thesis_robot() -> FreeFloatingModel:
     return _without_limits(load_model(default_model_config()))
 
 
+#: Upper-arm and forearm length factors of the labelled sensitivity runs (:func:`resized_arm`).
+ARM_SCALES = (0.9, 1.1)
+
+
 @functools.cache
 def resized_arm(scale: float) -> FreeFloatingModel:
     """:func:`thesis_robot` with the upper arm and the forearm (links 3 and 4, the identified

@@ -3,7 +3,8 @@ r"""Thesis chapter 6 closed loops: one controller on one motion/force task, torq
 Every control period (= the simulator step ``dt``, 1 ms by default) :func:`run_closed_loop`
 computes the :class:`FixedBaseState`, the task references, the motion loop (6.33), the force loop
 (6.34) with the contact force measured at that instant and the controller torque (RNS-C closed
-form, OS-C literal or OS-C kinematic), and holds that torque over the next
+form, OS-C literal or OS-C kinematic; labelled variants: the literal RNS-C loop with the exact or
+the momentum-approximated C_hat_A), and holds that torque over the next
 :class:`~rns_ros.sim.contact.ContactSimulator` RK4 step (zero-order hold). The tasks:
 :mod:`rns_ros.control.contact_tasks`; errors, signs and the contact frame {E}: docs/part2.md.
 """
@@ -26,10 +27,11 @@ from rns_ros.control.motion_force.outer_loops import (
 )
 from rns_ros.control.motion_force.projectors import kernel_projector
 from rns_ros.control.motion_force.reversed_model import ReversedModel
-from rns_ros.control.motion_force.rnsc import rns_control
+from rns_ros.control.motion_force.rnsc import rns_control, rns_literal_step
 from rns_ros.control.motion_force.task_space import TaskSpace
 from rns_ros.core.contact_geometry import PlaneConstraint
-from rns_ros.core.fixed_base import FixedBaseState
+from rns_ros.core.errors import ConfigError
+from rns_ros.core.fixed_base import FixedBaseModel, FixedBaseState
 from rns_ros.core.validation import Choice, positive
 from rns_ros.sim.contact import ContactSimulator
 
@@ -48,6 +50,10 @@ class Controller(Choice):
     RNS_C = "RNS-C"
     OSC = "OS-C"
     OSC_KINEMATIC = "OS-C-kinematic"
+    # labelled variants (section 6.1.2): (6.22) + (6.17) + (6.18) with the previous period's
+    # motion torque, exact C_hat_A or its momentum approximation
+    RNS_C_LITERAL = "RNS-C-literal"
+    RNS_C_MOMENTUM = "RNS-C-literal-momentum"
 
 
 class ForceMeasurement(Choice):
@@ -216,12 +222,13 @@ class _MotionForceLoop:
         force_gains: ForceGains,
         virtual_mass: float,
         dt: float,
+        plant: FixedBaseModel,
     ) -> None:
         self.setup, self.measurement = setup, measurement
         self.motion_gains, self.force_gains = motion_gains, force_gains
         robot, constraint, rows = setup.robot, setup.constraint, setup.rows
         self.reversed_model = ReversedModel(robot, rows, virtual_mass=virtual_mass)
-        self.sim = ContactSimulator(robot, constraint, initial_q=setup.initial_q, dt=dt)
+        self.sim = ContactSimulator(plant, constraint, initial_q=setup.initial_q, dt=dt)
         self.orientation_rows = [i for i, r in enumerate(rows) if r >= 3]
         self.fixed_task = None
         if isinstance(constraint, PlaneConstraint):
@@ -230,6 +237,11 @@ class _MotionForceLoop:
             Controller.OSC: OscVariant.LITERAL,
             Controller.OSC_KINEMATIC: OscVariant.KINEMATIC,
         }.get(controller)
+        self.momentum_approximation = {
+            Controller.RNS_C_LITERAL: False,
+            Controller.RNS_C_MOMENTUM: True,
+        }.get(controller)
+        self.previous_motion_torque: np.ndarray | None = None
 
     def period(self, t: float, log: _Log, i: int) -> None:
         """Compute and hold the torque of time ``t`` [s]; record sample ``i``."""
@@ -247,12 +259,26 @@ class _MotionForceLoop:
         if setup.normal_feedforward:
             a_n = [-constraint.curvature(p, p_dot)]  # n . p_ddot keeping phi_ddot = 0
         w = self.reversed_model.w(state.q)
-        if self.variant is None:
+        if self.variant is not None:
+            command = os_control(state, task, a_ref, variant=self.variant, normal_acceleration=a_n)
+        elif self.momentum_approximation is not None:
+            previous = self.previous_motion_torque
+            if previous is None:  # before the first period: the torque holding the arm at rest
+                previous = state.coriolis + state.gravity
+            command = rns_literal_step(
+                state,
+                task,
+                self.reversed_model,
+                a_ref,
+                previous_torque=previous,
+                normal_acceleration=a_n,
+                momentum_approximation=self.momentum_approximation,
+            ).command
+            self.previous_motion_torque = command.torque
+        else:
             command = rns_control(
                 state, task, self.reversed_model, a_ref, normal_acceleration=a_n, w=w
             )
-        else:
-            command = os_control(state, task, a_ref, variant=self.variant, normal_acceleration=a_n)
         # the force term of every controller is J^T N f_ref, added to the motion torque tau_0
         push = task.jacobian(state).T @ task.force_wrench([1.0])
         f_ref = self._force_reference(command.torque, f_des)
@@ -299,6 +325,7 @@ def run_closed_loop(
     force_gains: ForceGains = THESIS_FORCE_GAINS,
     virtual_mass: float = VIRTUAL_MASS,
     force_measurement: ForceMeasurement | str = ForceMeasurement.SAME_INSTANT,
+    plant: FixedBaseModel | None = None,
 ) -> ClosedLoopRun:
     """Run ``controller`` on ``scenario`` (see the module docstring for one period).
 
@@ -311,9 +338,13 @@ def run_closed_loop(
         virtual_mass: m_hat [kg] of the RNS-C control model (and of P_hat_RNS in the log).
         force_measurement: which contact force f the force loop (6.34) sees
             (:class:`ForceMeasurement`).
+        plant: the arm the simulator moves; default the scenario's, which the controllers
+            use as their model. Another model (same joints and EE frame, e.g. with a payload)
+            is a model error the controllers do not know.
 
     Raises:
-        ConfigError: bad controller, dt, duration or scenario. SimulationDivergedError: the
+        ConfigError: bad controller, dt, duration, scenario or plant (another joint count).
+            SimulationDivergedError: the
             closed loop blew up (the message names the step). InputError: a task singularity
             (OS-C: J M^-1 J^T singular).
     """
@@ -323,8 +354,11 @@ def run_closed_loop(
     dt = positive(dt, "dt", "[s]")
     duration = setup.duration if duration is None else positive(duration, "duration", "[s]")
     steps = max(1, round(duration / dt))
+    plant = setup.robot if plant is None else plant
+    if plant.n != setup.robot.n:
+        raise ConfigError(f"plant has {plant.n} joints, the controllers' model {setup.robot.n}")
     loop = _MotionForceLoop(
-        setup, controller, measurement, motion_gains, force_gains, virtual_mass, dt
+        setup, controller, measurement, motion_gains, force_gains, virtual_mass, dt, plant
     )
     log = _Log(steps + 1, setup.robot.n, len(loop.orientation_rows))
     started = time.perf_counter()

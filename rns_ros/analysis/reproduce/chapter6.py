@@ -34,7 +34,9 @@ from rns_ros.analysis.motion_force_runs import (
     ForceMeasurement,
     run_closed_loop,
 )
+from rns_ros.analysis.reproduce import chapter6_causes as causes
 from rns_ros.analysis.reproduce import plotting as plot
+from rns_ros.analysis.reproduce.chapter6_causes import THESIS_PEAK_OSC, THESIS_PEAK_RNS
 from rns_ros.analysis.reproduce.registry import (
     Comparison,
     Outcome,
@@ -54,8 +56,6 @@ from rns_ros.control.contact_tasks import (
     WallScenario,
 )
 
-#: Thesis §6.2.1 (Fig. 6.4) peak joint speeds [rad/s], printed to two decimals.
-THESIS_PEAK_RNS, THESIS_PEAK_OSC = 0.73, 4.22
 #: Half a unit of the thesis' last printed digit [rad/s].
 PEAK_TOLERANCE = 5e-3
 #: "much larger fluctuations" under OS-C: its peak over RNS-C's above this in every OS-C variant
@@ -103,6 +103,12 @@ _PLANAR_CHOICES = (
     "the constraint supplies the centripetal force, outside the controllers' choice "
     "(docs/part2.md [A-4.8] gives a full run without the term).",
     "Model (A-4.4): links 1 m, 10 kg, uniform rods (I = m l^2 / 12), plane x-y (thesis x-z).",
+    "Cause runs (labelled, chapter6_causes): fig6.4's ratio_sweep changes one factor of the "
+    "baseline at a time: T_half, (k_p, k_d), gravity 9.81 m/s^2 along -y (the plane's vertical; "
+    "thesis x-z with z up), compensated by every controller's own g_l / G_e, and the start "
+    "configuration on the self-motion at the start point (psi_0 = theta_1 + theta_2 + theta_3, "
+    "ours 4.5 deg; elbow theta_2 < 0 as ours); fig6.3's payload run gives the plant a "
+    f"{causes.PAYLOAD:g} kg point mass at the EE that no controller models.",
 )
 _WALL_CHOICES = (
     "Wall geometry (A-4.12): the LWR4-class URDF config/urdf/lwr_7dof.urdf; the thesis frame is "
@@ -136,6 +142,8 @@ def _period(quick: bool) -> float:
 
 @functools.cache
 def _run(name: str, controller: Controller, quick: bool) -> ClosedLoopRun:
+    if name == PLANAR:  # shared with the cause runs of chapter6_causes
+        return causes.planar_run(causes.BASELINE, controller, quick)
     return run_closed_loop(_scenario(name, quick), controller, dt=_period(quick))
 
 
@@ -207,14 +215,15 @@ def _choices(name: str, quick: bool) -> tuple[str, ...]:
     )
 
 
-def _outcome(name: str, quick: bool, rows: list, values: dict, runs) -> Outcome:
-    """The Outcome of one scenario's result: settings with the scenario's, its choices."""
+def _outcome(name: str, quick: bool, rows: list, values: dict, runs, **extra) -> Outcome:
+    """The Outcome of one scenario's result: settings with the scenario's, its choices;
+    ``extra`` goes to the figure data."""
     return Outcome(
         tuple(rows),
         values,
         {**_settings(name, quick), **values["scenario"]},
         _choices(name, quick),
-        {"runs": runs, "name": name},
+        {"runs": runs, "name": name, **extra},
     )
 
 
@@ -250,9 +259,20 @@ def _task_outcome(name: str, quick: bool) -> Outcome:
             "reached by construction of the same-instant force loop (see the force error).",
         ),
     ]
+    payload = None
     if name == WALL:
         rows.append(_orientation_row(values["max_orientation_error_rad"]))
-    return _outcome(name, quick, rows, values, runs)
+    else:
+        payload = causes.payload_runs(quick)
+        force = _per_controller(payload, "max_force_error")
+        position = _per_controller(payload, "max_position_error")
+        values["payload"] = {
+            "payload_kg": causes.PAYLOAD,
+            "max_force_error_N": force,
+            "max_position_error_m": position,
+        }
+        rows.insert(2, causes.force_spread_row(force, position))
+    return _outcome(name, quick, rows, values, runs, payload=payload)
 
 
 def _position_spread_row(name: str, position: dict[str, float]) -> Comparison:
@@ -281,7 +301,8 @@ def _force_error_row(force: dict[str, float]) -> Comparison:
         + ", ".join(f"{k} {v:.3g} N" for k, v in force.items())
         + ". The force loop (6.34) is solved at the same instant on a model-exact rigid "
         "contact, so f = f_des up to round-off for any controller: identical by construction, "
-        "not evidence for the thesis' claim.",
+        "not evidence for the thesis' claim (task_force_error_spread_payload compares them "
+        "under a model error).",
     )
 
 
@@ -301,7 +322,8 @@ def _orientation_row(orientation: dict[str, float]) -> Comparison:
 
 def _plot_task(outcome: Outcome, figure) -> None:
     runs, name = outcome.figure_data["runs"], outcome.figure_data["name"]
-    panels = 3 if name == WALL else 2
+    payload = outcome.figure_data.get("payload")
+    panels = 3 if name == WALL or payload else 2
     axes = figure.subplots(panels, 1, sharex=True)
     for controller, run in runs.items():
         style = {"color": _COLORS[controller], "lw": 1.0, "label": controller.value}
@@ -310,6 +332,9 @@ def _plot_task(outcome: Outcome, figure) -> None:
         else:
             axes[0].plot(run.t, run.tangential_error * 1e3, **style)
             axes[1].plot(run.t, np.linalg.norm(run.orientation_error, axis=1) * 1e3, **style)
+        axes[1 if payload else -1].plot(run.t, run.force_error, **style)
+    for controller, run in (payload or {}).items():
+        style = {"color": _COLORS[controller], "lw": 1.0, "label": controller.value}
         axes[-1].plot(run.t, run.force_error, **style)
     plot.label_axes(
         axes[0],
@@ -322,6 +347,9 @@ def _plot_task(outcome: Outcome, figure) -> None:
         title = "orientation error |log(R_des R^T)|"
         plot.label_axes(axes[1], None, "|orientation error| [mrad]", title)
     title = "force error along the normal z_E (10 N after a 1 s ramp)"
+    if payload:
+        plot.label_axes(axes[1], None, "f_des - f [N]", title)
+        title = f"the same with a {causes.PAYLOAD:g} kg EE payload no controller models (labelled)"
     plot.time_axes(axes[-1], "f_des - f [N]", title)
     for ax in axes:
         plot.legend_grid(ax)
@@ -334,6 +362,7 @@ def _velocity_outcome(name: str, quick: bool) -> Outcome:
     runs = _runs(name, quick)
     values = _values(name, runs)
     if name == PLANAR:
+        values["ratio_sweep"] = causes.ratio_sweep(quick)
         rows = _planar_velocity_rows(values, quick)
     else:
         rows = [_wall_ratio_row(runs, values["peak_ratio_to_rns_c"])]
@@ -367,12 +396,14 @@ def _planar_velocity_rows(values: dict, quick: bool) -> list[Comparison]:
         f"{THESIS_PEAK_OSC / THESIS_PEAK_RNS:.3g} is compared through the OS-C peaks, since the "
         "RNS-C peak is fitted.",
     )
-    osc = [_osc_peak_row(c, peaks, ratios) for c in (Controller.OSC, Controller.OSC_KINEMATIC)]
+    sweep = values["ratio_sweep"]
+    osc = [_osc_peak_row(c, peaks, ratios, sweep) for c in causes.OSC_VARIANTS]
     return [rns, *osc, trend]
 
 
-def _osc_peak_row(controller: Controller, peaks: dict, ratios: dict) -> Comparison:
-    """One OS-C reading's peak joint speed against the thesis' 4.22 rad/s (§6.2.1)."""
+def _osc_peak_row(controller: Controller, peaks: dict, ratios: dict, sweep: dict) -> Comparison:
+    """One OS-C reading's peak joint speed against the thesis' 4.22 rad/s (§6.2.1); the cause
+    of a difference from the ratio sweep (the RNS-C peak is fitted, the ratio is the test)."""
     other = Controller.OSC_KINEMATIC if controller == Controller.OSC else Controller.OSC
     ours = peaks[controller.value]
     reading = (
@@ -383,10 +414,9 @@ def _osc_peak_row(controller: Controller, peaks: dict, ratios: dict) -> Comparis
     note = f"{reading}; untuned, {ratios[controller.value]:.3g}x RNS-C"
     if number_verdict(THESIS_PEAK_OSC, ours, PEAK_TOLERANCE) is Verdict.DIFFERENT:
         note += (
-            f"; ours is {ours / THESIS_PEAK_OSC:.3g}x the thesis'. The run shows that the OS-C "
-            f"reading alone moves the peak ({other.value}: {peaks[other.value]:.3g} rad/s); the "
-            "thesis prints neither its OS-C details nor a duration or a start on the arc "
-            "(thesis_rest 4.8), so the cause is open"
+            f"; ours is {ours / THESIS_PEAK_OSC:.3g}x the thesis'. The OS-C reading moves the "
+            f"peak ({other.value}: {peaks[other.value]:.3g} rad/s); "
+            + causes.ratio_cause(sweep, controller.value)
         )
     return Comparison.number(
         f"peak_joint_speed_{controller.value.lower().replace('-', '_')}_rad_s",

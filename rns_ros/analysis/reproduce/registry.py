@@ -41,6 +41,7 @@ CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter5",
     "rns_ros.analysis.reproduce.chapter5_inspection_energy",
     "rns_ros.analysis.reproduce.chapter6",
+    "rns_ros.analysis.reproduce.chapter6_remarks",
     "rns_ros.analysis.reproduce.chapter7",
 )
 

@@ -178,8 +178,15 @@ class ReversedModel:
             w = w - root[np.ix_(rows, free)] @ solve[:, len(rows) :]
         return ReversedQuantities(mass, root, coupling, 0.5 * (reduced + reduced.T), w)
 
-    def dynamics(self, state: FixedBaseState) -> ReversedDynamics:
+    def dynamics(
+        self, state: FixedBaseState, *, momentum_approximation: bool = False
+    ) -> ReversedDynamics:
         """The control model's equation of motion (6.21) at the REAL state (B at rest).
+
+        ``momentum_approximation`` replaces the exact C_hat_A (the root rows of c_hat) by the
+        approximation C_hat_A ~ M_hat_A_dot V_A + M_hat_Al_dot theta_dot that momentum
+        conservation uses (section 6.1.2 warns against it): :meth:`momentum_bias`. The linear
+        rows agree exactly; the angular rows (about the moving point A) differ by v_A x p.
 
         Coordinates q_hat_dot = [V_A; theta_dot] with V_A = J_e theta_dot. With spatial twists
         V_k = J_k q_hat_dot at the world origin and world-axes spatial inertias I_k (Featherstone):
@@ -224,7 +231,21 @@ class ReversedModel:
             weight -= jac.T @ (inertia @ gravity_acc)
             if k == 0:
                 constraint, drift_b = jac, drift
+        if momentum_approximation:
+            bias[:6] = self.momentum_bias(state.q, state.v)
         return ReversedDynamics(0.5 * (mass + mass.T), bias, weight, constraint, drift_b, velocity)
+
+    def momentum_bias(self, q, v, step: float = 1e-6) -> np.ndarray:
+        """The momentum approximation of C_hat_A: M_hat_A_dot V_A + M_hat_Al_dot theta_dot =
+        (M_hat_dot q_hat_dot)[:6] along the real motion (B at rest, V_A = J_e theta_dot), M_hat_dot
+        by a central difference of M_hat(q +- h theta_dot), h = ``step`` [s]; (6,) [N, N m].
+        """
+        step = positive(step, "step", "[s]")
+        q = as_vector(q, self.robot.n, "q")
+        v = as_vector(v, self.robot.n, "v")
+        rate = (self.evaluate(q + step * v).mass - self.evaluate(q - step * v).mass) / (2 * step)
+        state = FixedBaseState.compute(self.robot, q, v)
+        return rate[:6] @ np.concatenate([state.jacobian @ v, v])
 
     def w(self, q) -> np.ndarray:
         """W (m, n) at q."""

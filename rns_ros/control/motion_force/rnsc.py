@@ -90,6 +90,7 @@ def rns_literal_step(
     *,
     previous_torque,
     normal_acceleration=None,
+    momentum_approximation: bool = False,
     rcond: float = DEFAULT_RCOND,
 ) -> LiteralRnsStep:
     """RNS-C as printed ([A-4.3]): the algebraic loop broken by the previous step's torque.
@@ -101,6 +102,8 @@ def rns_literal_step(
     3. tau of (6.16)/(6.18): M_Al^T V_dot_A + M_l theta_ddot + c_l + g_l - J_B^T F_B.
 
     The fixed point of tau_prev -> tau is the closed form of :func:`rns_control` (tested).
+    ``momentum_approximation``: C_hat_A ~ M_hat_A_dot V_A + M_hat_Al_dot theta_dot instead of the
+    exact C_hat_A (:meth:`ReversedModel.dynamics`), the variant section 6.1.2 rules out.
     """
     if reversed_model.rows != task.rows:
         raise ConfigError(
@@ -110,7 +113,7 @@ def rns_literal_step(
     previous_torque = as_vector(previous_torque, n, "previous_torque")
     task_accel = task.compose(acceleration_ref, normal_acceleration)
     wrench = task.force_wrench(np.zeros(task.k) if force_ref is None else force_ref)
-    dyn = reversed_model.dynamics(state)
+    dyn = reversed_model.dynamics(state, momentum_approximation=momentum_approximation)
     rows, free = list(task.rows), list(reversed_model.free_rows)
     root_force = np.zeros(6)
     root_force[rows] = -wrench  # the environment's reaction on A [A-4.1]

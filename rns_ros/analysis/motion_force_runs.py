@@ -17,6 +17,7 @@ import numpy as np
 
 from rns_ros.analysis.arrays import read_only
 from rns_ros.control.contact_tasks import ArcScenario, Reference, Setup, WallScenario
+from rns_ros.control.motion_force.null_space import damper_term, velocity_level_term
 from rns_ros.control.motion_force.osc import OscVariant, os_control
 from rns_ros.control.motion_force.outer_loops import (
     ForceGains,
@@ -70,6 +71,21 @@ class ForceMeasurement(Choice):
 
 #: Report order.
 CONTROLLERS = (Controller.RNS_C, Controller.OSC, Controller.OSC_KINEMATIC)
+
+
+class NullSpaceTerm(Choice):
+    """The chapter-7 null-space acceleration theta_ddot_a added to RNS-C (7.3) (OS-C: unused).
+
+    * ``none``: theta_ddot_a = 0 (chapter 6 as printed).
+    * ``velocity-level``: (7.13) in the velocity form +P_hat_RNS Wdot^T W^{+T} theta_dot.
+    * ``damper``: theta_ddot_a = -k_d theta_dot (section 7.2.2), held over the period like the
+      torque: the sampled loop is stable for k_d dt < 2 (deadbeat at k_d dt = 1).
+    """
+
+    __label__ = "null-space term"
+    NONE = "none"
+    VELOCITY_LEVEL = "velocity-level"
+    DAMPER = "damper"
 
 
 @dataclass(frozen=True)
@@ -216,8 +232,10 @@ class _MotionForceLoop:
         force_gains: ForceGains,
         virtual_mass: float,
         dt: float,
+        null_space: tuple[NullSpaceTerm, float],
     ) -> None:
         self.setup, self.measurement = setup, measurement
+        self.null_space, self.damper_gain = null_space
         self.motion_gains, self.force_gains = motion_gains, force_gains
         robot, constraint, rows = setup.robot, setup.constraint, setup.rows
         self.reversed_model = ReversedModel(robot, rows, virtual_mass=virtual_mass)
@@ -248,8 +266,15 @@ class _MotionForceLoop:
             a_n = [-constraint.curvature(p, p_dot)]  # n . p_ddot keeping phi_ddot = 0
         w = self.reversed_model.w(state.q)
         if self.variant is None:
+            extra = self._null_space_acceleration(state, task)
             command = rns_control(
-                state, task, self.reversed_model, a_ref, normal_acceleration=a_n, w=w
+                state,
+                task,
+                self.reversed_model,
+                a_ref,
+                normal_acceleration=a_n,
+                null_space_acceleration=extra,
+                w=w,
             )
         else:
             command = os_control(state, task, a_ref, variant=self.variant, normal_acceleration=a_n)
@@ -266,6 +291,14 @@ class _MotionForceLoop:
         log.rns[i] = np.linalg.norm(kernel_projector(w) @ state.v)
         log.jacobian[i] = np.linalg.norm(kernel_projector(task.jacobian(state)) @ state.v)
         log.phi[i] = constraint.phi(p)
+
+    def _null_space_acceleration(self, state: FixedBaseState, task: TaskSpace):
+        """theta_ddot_a of RNS-C [rad/s^2] (n,), or None (:class:`NullSpaceTerm`)."""
+        if self.null_space is NullSpaceTerm.VELOCITY_LEVEL:
+            return velocity_level_term(state, task, self.reversed_model)
+        if self.null_space is NullSpaceTerm.DAMPER:
+            return damper_term(state.v, self.damper_gain)
+        return None
 
     def _acceleration_reference(
         self, task: TaskSpace, state: FixedBaseState, ref: Reference, error: np.ndarray
@@ -299,6 +332,8 @@ def run_closed_loop(
     force_gains: ForceGains = THESIS_FORCE_GAINS,
     virtual_mass: float = VIRTUAL_MASS,
     force_measurement: ForceMeasurement | str = ForceMeasurement.SAME_INSTANT,
+    null_space: NullSpaceTerm | str = NullSpaceTerm.NONE,
+    damper_gain: float | None = None,
 ) -> ClosedLoopRun:
     """Run ``controller`` on ``scenario`` (see the module docstring for one period).
 
@@ -311,6 +346,8 @@ def run_closed_loop(
         virtual_mass: m_hat [kg] of the RNS-C control model (and of P_hat_RNS in the log).
         force_measurement: which contact force f the force loop (6.34) sees
             (:class:`ForceMeasurement`).
+        null_space: RNS-C's chapter-7 null-space term (:class:`NullSpaceTerm`).
+        damper_gain: k_d of the ``damper`` term [1/s] (> 0); None -> 1 / dt (deadbeat).
 
     Raises:
         ConfigError: bad controller, dt, duration or scenario. SimulationDivergedError: the
@@ -323,8 +360,10 @@ def run_closed_loop(
     dt = positive(dt, "dt", "[s]")
     duration = setup.duration if duration is None else positive(duration, "duration", "[s]")
     steps = max(1, round(duration / dt))
+    term = NullSpaceTerm.parse(null_space)
+    gain = 1.0 / dt if damper_gain is None else positive(damper_gain, "damper_gain", "[1/s]")
     loop = _MotionForceLoop(
-        setup, controller, measurement, motion_gains, force_gains, virtual_mass, dt
+        setup, controller, measurement, motion_gains, force_gains, virtual_mass, dt, (term, gain)
     )
     log = _Log(steps + 1, setup.robot.n, len(loop.orientation_rows))
     started = time.perf_counter()
@@ -349,5 +388,6 @@ __all__ = [
     "ClosedLoopRun",
     "Controller",
     "ForceMeasurement",
+    "NullSpaceTerm",
     "run_closed_loop",
 ]

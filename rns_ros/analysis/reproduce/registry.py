@@ -42,6 +42,7 @@ CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter5_inspection_energy",
     "rns_ros.analysis.reproduce.chapter6",
     "rns_ros.analysis.reproduce.chapter7",
+    "rns_ros.analysis.reproduce.chapter7_wall",
 )
 
 

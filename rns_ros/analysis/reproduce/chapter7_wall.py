@@ -104,7 +104,9 @@ def _stopped(runs: dict) -> str:
     stopped = {m: run for m, run in runs.items() if isinstance(run, str)}
     if not stopped:
         return ""
-    return " Stopped (left out): " + "; ".join(f"{m:g} kg: {why}" for m, why in stopped.items())
+    return (
+        " Stopped (left out): " + "; ".join(f"{m:g} kg: {why}" for m, why in stopped.items()) + "."
+    )
 
 
 def _compute(quick: bool) -> Outcome:

@@ -98,10 +98,15 @@ def velocity_level_cause(runs: dict, threshold: float) -> str:
     if after > threshold:
         return sentence + "RNS-C's undamped null-space velocity is the cause."
     largest = max(o.peak_joint_speed for o in osc.values())
+    drift = (
+        "the undamped null-space velocity explains the drop of the ratio over the strokes but "
+        if after > before
+        else "removing the undamped null-space velocity does not raise the ratio, and "
+    )
     return sentence + (
-        f"the undamped null-space velocity is not the cause (the ratio stays below {threshold:g} "
-        f"without it); the ratio is bounded by the OS-C peaks (largest {largest:.3g} rad/s), "
-        "which chapter 7 does not change; why they are that low is open."
+        f"{drift}the ratio stays below {threshold:g} without it; it is bounded by the OS-C peaks "
+        f"(largest {largest:.3g} rad/s), which chapter 7 does not change; why they are that low "
+        "is open."
     )
 
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from rns_ros.analysis.arrays import read_only
 from rns_ros.control.contact_tasks import ArcScenario, Reference, Setup, WallScenario
+from rns_ros.control.motion_force.null_space import damper_term, velocity_level_term
 from rns_ros.control.motion_force.osc import OscVariant, os_control
 from rns_ros.control.motion_force.outer_loops import (
     ForceGains,
@@ -76,6 +77,21 @@ class ForceMeasurement(Choice):
 
 #: Report order.
 CONTROLLERS = (Controller.RNS_C, Controller.OSC, Controller.OSC_KINEMATIC)
+
+
+class NullSpaceTerm(Choice):
+    """The chapter-7 null-space acceleration theta_ddot_a added to RNS-C (7.3) (OS-C: unused).
+
+    * ``none``: theta_ddot_a = 0 (chapter 6 as printed).
+    * ``velocity-level``: (7.13) in the velocity form +P_hat_RNS Wdot^T W^{+T} theta_dot.
+    * ``damper``: theta_ddot_a = -k_d theta_dot (section 7.2.2), held over the period like the
+      torque: the sampled loop is stable for k_d dt < 2 (deadbeat at k_d dt = 1).
+    """
+
+    __label__ = "null-space term"
+    NONE = "none"
+    VELOCITY_LEVEL = "velocity-level"
+    DAMPER = "damper"
 
 
 @dataclass(frozen=True)
@@ -223,8 +239,10 @@ class _MotionForceLoop:
         virtual_mass: float,
         dt: float,
         plant: FixedBaseModel,
+        null_space: tuple[NullSpaceTerm, float],
     ) -> None:
         self.setup, self.measurement = setup, measurement
+        self.null_space, self.damper_gain = null_space
         self.motion_gains, self.force_gains = motion_gains, force_gains
         robot, constraint, rows = setup.robot, setup.constraint, setup.rows
         self.reversed_model = ReversedModel(robot, rows, virtual_mass=virtual_mass)
@@ -276,8 +294,15 @@ class _MotionForceLoop:
             ).command
             self.previous_motion_torque = command.torque
         else:
+            extra = self._null_space_acceleration(state, task)
             command = rns_control(
-                state, task, self.reversed_model, a_ref, normal_acceleration=a_n, w=w
+                state,
+                task,
+                self.reversed_model,
+                a_ref,
+                normal_acceleration=a_n,
+                null_space_acceleration=extra,
+                w=w,
             )
         # the force term of every controller is J^T N f_ref, added to the motion torque tau_0
         push = task.jacobian(state).T @ task.force_wrench([1.0])
@@ -292,6 +317,14 @@ class _MotionForceLoop:
         log.rns[i] = np.linalg.norm(kernel_projector(w) @ state.v)
         log.jacobian[i] = np.linalg.norm(kernel_projector(task.jacobian(state)) @ state.v)
         log.phi[i] = constraint.phi(p)
+
+    def _null_space_acceleration(self, state: FixedBaseState, task: TaskSpace):
+        """theta_ddot_a of RNS-C [rad/s^2] (n,), or None (:class:`NullSpaceTerm`)."""
+        if self.null_space is NullSpaceTerm.VELOCITY_LEVEL:
+            return velocity_level_term(state, task, self.reversed_model)
+        if self.null_space is NullSpaceTerm.DAMPER:
+            return damper_term(state.v, self.damper_gain)
+        return None
 
     def _acceleration_reference(
         self, task: TaskSpace, state: FixedBaseState, ref: Reference, error: np.ndarray
@@ -326,6 +359,8 @@ def run_closed_loop(
     virtual_mass: float = VIRTUAL_MASS,
     force_measurement: ForceMeasurement | str = ForceMeasurement.SAME_INSTANT,
     plant: FixedBaseModel | None = None,
+    null_space: NullSpaceTerm | str = NullSpaceTerm.NONE,
+    damper_gain: float | None = None,
 ) -> ClosedLoopRun:
     """Run ``controller`` on ``scenario`` (see the module docstring for one period).
 
@@ -341,6 +376,8 @@ def run_closed_loop(
         plant: the arm the simulator moves; default the scenario's, which the controllers
             use as their model. Another model (same joints and EE frame, e.g. with a payload)
             is a model error the controllers do not know.
+        null_space: RNS-C's chapter-7 null-space term (:class:`NullSpaceTerm`).
+        damper_gain: k_d of the ``damper`` term [1/s] (> 0); None -> 1 / dt (deadbeat).
 
     Raises:
         ConfigError: bad controller, dt, duration, scenario or plant (another joint count).
@@ -357,8 +394,18 @@ def run_closed_loop(
     plant = setup.robot if plant is None else plant
     if plant.n != setup.robot.n:
         raise ConfigError(f"plant has {plant.n} joints, the controllers' model {setup.robot.n}")
+    term = NullSpaceTerm.parse(null_space)
+    gain = 1.0 / dt if damper_gain is None else positive(damper_gain, "damper_gain", "[1/s]")
     loop = _MotionForceLoop(
-        setup, controller, measurement, motion_gains, force_gains, virtual_mass, dt, plant
+        setup,
+        controller,
+        measurement,
+        motion_gains,
+        force_gains,
+        virtual_mass,
+        dt,
+        plant,
+        (term, gain),
     )
     log = _Log(steps + 1, setup.robot.n, len(loop.orientation_rows))
     started = time.perf_counter()
@@ -383,5 +430,6 @@ __all__ = [
     "ClosedLoopRun",
     "Controller",
     "ForceMeasurement",
+    "NullSpaceTerm",
     "run_closed_loop",
 ]

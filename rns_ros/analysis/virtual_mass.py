@@ -18,6 +18,7 @@ from rns_ros.control.motion_force.null_space import (
     DEFAULT_DAMPER_GAIN,
     VelocityTermForm,
     damper_term,
+    free_floating_acceleration,
     null_space_velocity,
     resolved_acceleration,
     velocity_level_term,
@@ -57,6 +58,7 @@ class Variant(Choice):
     RESOLVED = "resolved"
     DAMPER = "damper"
     VELOCITY = "velocity"
+    FREE_FLOATING = "free_floating"
 
 
 @dataclass(frozen=True)
@@ -258,6 +260,8 @@ class _Controller:
         w = model.w(q)
         if self.variant is Variant.RESOLVED:
             accel = resolved_acceleration(state, task, a_ref).joint_acceleration
+        elif self.variant is Variant.FREE_FLOATING:
+            accel = free_floating_acceleration(state, task, model, a_ref).joint_acceleration
         else:
             extra = None
             if self.variant is Variant.DAMPER:

@@ -11,6 +11,7 @@ from rns_ros.analysis.motion_force_runs import (
     QUICK_PERIOD,
     ClosedLoopRun,
     Controller,
+    NullSpaceTerm,
     run_closed_loop,
 )
 from rns_ros.control.contact_tasks import (
@@ -169,3 +170,59 @@ def test_force_and_motion_are_decoupled_on_the_wall(controller):
     run = run_closed_loop(stroke, controller, dt=2e-3, duration=0.5)
     print(f"{controller}: contact force during the stroke {np.abs(run.contact_force).max():.2e} N")
     assert np.abs(run.contact_force).max() < 1e-3
+
+
+@pytest.fixture(scope="module")
+def null_space_runs() -> dict[tuple[str, float | None], ClosedLoopRun]:
+    """RNS-C on 0.6 s of the quick wall stroke per chapter-7 null-space term (about 2 s)."""
+    scenario = WallScenario(strokes=1)
+    return {
+        (term, gain): run_closed_loop(
+            scenario,
+            Controller.RNS_C,
+            dt=QUICK_PERIOD,
+            duration=0.6,
+            null_space=term,
+            damper_gain=gain,
+        )
+        for term, gain in (
+            (NullSpaceTerm.NONE, None),
+            (NullSpaceTerm.VELOCITY_LEVEL, None),
+            (NullSpaceTerm.DAMPER, None),
+            (NullSpaceTerm.DAMPER, 1.9 / QUICK_PERIOD),
+        )
+    }
+
+
+def test_chapter7_null_space_terms_shrink_the_null_space_velocity_not_the_task(
+    null_space_runs,
+):
+    """(7.3): theta_ddot_a enters through P_hat_RNS and the oblique projector, so the task
+    motion is unchanged while ||P_hat_RNS theta_dot|| falls by an order (7.13, §7.2.2)."""
+    plain = null_space_runs[NullSpaceTerm.NONE, None]
+    for key, run in null_space_runs.items():
+        assert run.max_position_error == pytest.approx(plain.max_position_error, rel=1e-4)
+        assert run.max_force_error < 1e-6
+        if key[0] is not NullSpaceTerm.NONE:
+            assert run.null_space_velocity.max() < 0.1 * plain.null_space_velocity.max(), key
+
+
+def test_a_held_damper_is_stable_below_two_over_the_period_and_diverges_above():
+    """Held over the period, theta_ddot_a = -k_d theta_dot gives P theta_dot_(k+1) ~
+    (1 - k_d dt) P theta_dot_k: |1 - 2.5| > 1 grows from round-off until the run stops."""
+    with pytest.raises(SimulationDivergedError):
+        run_closed_loop(
+            WallScenario(strokes=1),
+            Controller.RNS_C,
+            dt=QUICK_PERIOD,
+            duration=0.6,
+            null_space=NullSpaceTerm.DAMPER,
+            damper_gain=2.5 / QUICK_PERIOD,
+        )
+
+
+def test_a_bad_null_space_term_or_damper_gain_raises():
+    with pytest.raises(ConfigError, match="null-space term"):
+        run_closed_loop(WallScenario(strokes=1), Controller.RNS_C, null_space="bogus")
+    with pytest.raises(ConfigError, match="damper_gain"):
+        run_closed_loop(WallScenario(strokes=1), Controller.RNS_C, damper_gain=-1.0)

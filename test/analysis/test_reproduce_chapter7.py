@@ -71,7 +71,12 @@ def test_fig7_1_keys(documents):
     assert rms["log_slope"] == pytest.approx(-1.0, abs=0.1)
     assert set(document["spec_v_table"]) == {"10", "100", "1000", "10000", "100000"}
     keys = {c["key"]: c for c in document["comparisons"]}
-    assert set(keys) == {"max_null_space_velocity_rad_s", "rms_delta_theta_rad", "rms_log_slope"}
+    assert set(keys) == {
+        "max_null_space_velocity_rad_s",
+        "rms_delta_theta_rad",
+        "rms_log_slope",
+        "rms_delta_theta_free_floating_rad",
+    }
     # both fall with the mass in the quick run, and the verdicts say so
     for key in ("max_null_space_velocity_rad_s", "rms_delta_theta_rad"):
         assert np.all(np.diff(keys[key]["ours"]) < 0.0)
@@ -107,3 +112,36 @@ def test_fig7_2_keys(documents):
     assert gain["thesis"] == 2770.0
     assert gain["verdict"] == "input"
     assert gain["ours"] == pytest.approx(2.77 / ch7.QUICK_STEP)
+
+
+def test_fig7_1_free_floating_variant_tends_to_the_closed_form(documents):
+    """A-4.15 variant (b), (7.4) without F_B: it leaves the arc (the closed form does not), by
+    less as m_hat grows, and its verdict follows from its own series."""
+    document = documents["fig7.1"][0]
+    free = document["rms_vs_mass_free_floating"]
+    closed = document["rms_vs_mass"]
+    assert free["masses_kg"] == closed["masses_kg"]
+    assert free["over_closed_form"] == pytest.approx(
+        np.array(free["rms_rad"]) / np.array(closed["rms_rad"])
+    )
+    tracking = np.array(free["max_tracking_error_m"])
+    assert np.all(tracking > 1e3 * free["closed_form_tracking_error_m"])
+    assert np.all(np.diff(tracking) < 0.0)
+    assert np.all(np.diff(free["rms_vs_closed_form_rad"]) < 0.0)
+    row = {c["key"]: c for c in document["comparisons"]}["rms_delta_theta_free_floating_rad"]
+    assert row["ours"] == free["rms_rad"]
+    falling = bool(np.all(np.diff(free["rms_rad"]) < 0.0))
+    assert row["verdict"] == ("qualitative" if falling else "not reproduced")
+
+
+def test_free_floating_row_fails_on_a_series_that_does_not_fall():
+    free = {
+        "rms_rad": [1e-2, 2e-2, 1e-3],
+        "log_slope": 0.0,
+        "over_closed_form": [1.0, 1.0, 1.0],
+        "rms_vs_closed_form_rad": [0.0, 0.0, 0.0],
+        "max_tracking_error_m": [0.0, 0.0, 0.0],
+        "closed_form_tracking_error_m": 0.0,
+    }
+    row = ch7._free_floating_row([1e1, 1e3, 1e5], [1.0, 1e-2, 1e-4], free)
+    assert row.verdict.value == "not reproduced"

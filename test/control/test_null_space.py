@@ -14,6 +14,7 @@ from motion_force_cases import (
 
 from rns_ros.control.motion_force.null_space import (
     damper_term,
+    free_floating_acceleration,
     null_space_velocity,
     resolved_acceleration,
     velocity_level_term,
@@ -47,6 +48,49 @@ def test_rns_tends_to_resolved_acceleration_as_one_over_virtual_mass(name):
     slope = np.polyfit(np.log10(masses), np.log10(diffs), 1)[0]
     assert -1.02 < slope < -0.98, (slope, diffs)
     assert np.all(diffs * masses < 1.03 * diffs[-1] * masses[-1])
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_free_floating_solution_tends_to_resolved_acceleration_as_one_over_virtual_mass(name):
+    """(7.4)-(7.6): without F_B the control model floats, and B's velocity ~ 1/m_hat, so the
+    Q_M_Al particular solution misses the real task kinematics by ~1/m_hat and tends to J^+."""
+    state, task, _, a_ref, _ = state_case(name, seed=7)
+    robot = CASES[name][0]
+    reference = resolved_acceleration(state, task, a_ref).joint_acceleration
+    rhs = task.selection @ a_ref - task.drift(state)
+    masses = np.array([1e3, 1e4, 1e5, 1e6])
+    diffs, misses = [], []
+    for mass in masses:
+        model = ReversedModel(robot, task.rows, virtual_mass=mass)
+        accel = free_floating_acceleration(state, task, model, a_ref).joint_acceleration
+        diffs.append(np.linalg.norm(accel - reference))
+        misses.append(np.linalg.norm(task.jacobian(state) @ accel - rhs))
+    for values in (diffs, misses):
+        slope = np.polyfit(np.log10(masses), np.log10(values), 1)[0]
+        assert -1.02 < slope < -0.98, (slope, values)
+    assert misses[0] > 1e-3 * np.linalg.norm(rhs)  # a real miss at finite m_hat, not round-off
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_free_floating_solution_keeps_every_root_row_of_the_unheld_control_model(name):
+    """M_hat_A V_dot_A + M_hat_Al theta_ddot + C_hat_A = 0 on all six root rows (no F_A, no F_B,
+    zero gravity), with the non-task root accelerations those the free rows give."""
+    state, task, rns, a_ref, _ = state_case(name, seed=3)
+    command = free_floating_acceleration(state, task, rns, a_ref)
+    dyn = rns.dynamics(state)
+    rows, free = list(rns.rows), list(rns.free_rows)
+    root, coupling, bias = dyn.mass[:6, :6], dyn.mass[:6, 6:], dyn.bias[:6]
+    root_accel = np.zeros(6)
+    root_accel[rows] = command.task_acceleration
+    if free:
+        rest = -bias[free] - root[np.ix_(free, rows)] @ command.task_acceleration
+        rest -= coupling[free] @ command.joint_acceleration
+        root_accel[free] = np.linalg.solve(root[np.ix_(free, free)], rest)
+    residual = root @ root_accel + coupling @ command.joint_acceleration + bias
+    assert np.abs(residual).max() < 1e-8 * np.abs(bias).max() + 1e-9
+    # and the minimum-norm solution: in the row space of W
+    w = rns.w(state.q)
+    assert np.allclose(kernel_projector(w) @ command.joint_acceleration, 0.0, atol=1e-9)
 
 
 def test_resolved_acceleration_is_minimum_norm():

@@ -46,6 +46,7 @@ from rns_ros.analysis.reproduce.registry import (
     register_all,
     resolution_choice,
 )
+from rns_ros.analysis.reproduce.wall_null_space import velocity_level_cause
 from rns_ros.control.contact_tasks import (
     FORCE,
     FORCE_RAMP,
@@ -454,11 +455,8 @@ def _wall_ratio_row(runs, ratios: dict[str, float]) -> Comparison:
         f"{[round(x, 3) for x in rns_left]} rad/s."
     )
     if not holds:
-        note += (
-            f" In the first stroke OS-C / RNS-C is {first:.3g}; RNS-C's null-space velocity is "
-            "not damped (chapter 7) and its peak per stroke goes "
-            f"{' -> '.join(f'{p:.3g}' for p in rns_peaks)} rad/s. Why the ratio stays below "
-            "the planar case's is open."
+        note += f" In the first stroke OS-C / RNS-C is {first:.3g}. " + velocity_level_cause(
+            runs, RATIO_THRESHOLD
         )
     return Comparison.trend(
         "peak_ratio_osc_over_rns_c",

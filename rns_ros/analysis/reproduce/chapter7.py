@@ -5,7 +5,9 @@ null-space term (§7.2, Fig. 7.4).
   R = 0.707 m). Joint velocities and null-space velocity ||P_hat_RNS theta_dot|| (and
   ||P_J theta_dot||) against time for m_hat in {10, 100, 1000} kg (Fig. 7.1), and RMS[Delta theta]
   (7.7)-(7.8) of RNS-C against the resolved-acceleration J^+ run for m_hat = 1e1 ... 1e5 kg on a
-  log axis (Fig. 7.3).
+  log axis (Fig. 7.3); variant (a) is the closed form with the constraint force F_B, variant (b)
+  the literal particular solution of (7.4) (free-floating control model, no F_B), a second
+  series.
 * ``fig7.2``: ||P_hat_RNS theta_dot|| against time at m_hat = 1e4 kg for RNS-C plus the
   velocity-level term (7.13) and RNS-C plus the damper theta_ddot_a = -k_d theta_dot,
   k_d = 2770 1/s (Fig. 7.4); the printed (momentum) form of (7.13) as a labelled extra, and a short
@@ -39,6 +41,7 @@ from rns_ros.analysis.virtual_mass import (
     Variant,
     arc_start_configuration,
     mass_sweep,
+    rms_difference,
     simulate,
 )
 from rns_ros.control.motion_force.null_space import VelocityTermForm
@@ -108,8 +111,12 @@ _CHOICES = (
     "A-4.14: the null-space velocity is ||P_hat_RNS theta_dot|| (P_hat_RNS onto ker W); "
     "||P_J theta_dot|| is logged alongside. For the J^+ run P_hat_RNS uses m_hat = 1e4 kg.",
     "A-4.15: masses 1e1 ... 1e5 kg, one per decade; theta_RNS from the closed form of "
-    "thesis_rest 4.2 (variant (a), with the constraint force F_B); the literal (7.4) variant (b) "
-    "is not computed. RMS[Delta theta] (7.7) by the trapezoidal rule over all RK4 samples.",
+    "thesis_rest 4.2 (variant (a), with the constraint force F_B) for every row but the "
+    "variant-(b) one; variant (b) is the literal (7.4) particular solution theta_ddot = "
+    "-W^+ (M_red nu_dot_ref + C_red) (free-floating control model, no F_B, C_hat_A of the "
+    "control model at the real state), with the same motion loop on the real EE and the same "
+    "RK4 integration of the real fixed arm. RMS[Delta theta] (7.7) by the trapezoidal rule over "
+    "all RK4 samples.",
 )
 
 
@@ -138,6 +145,19 @@ def _sweep(quick: bool):
     runs = {float(m): _run(Variant.RNS.value, float(m), quick) for m in masses}
     reference = _run(Variant.RESOLVED.value, 1e4, quick)
     return mass_sweep(_robot(), masses, reference=reference, runs=runs)
+
+
+@functools.cache
+def _free_floating_sweep(quick: bool) -> dict[float, ArmRun]:
+    """Variant (b) of A-4.15, the literal (7.4) particular solution, per sweep mass."""
+    masses = QUICK_SWEEP_MASSES if quick else SWEEP_MASSES
+    return {float(m): _run(Variant.FREE_FLOATING.value, float(m), quick) for m in masses}
+
+
+def _log_slope(masses, rms) -> float:
+    """Least-squares slope of log10 RMS against log10 m_hat over m_hat >= SLOPE_FROM_MASS [-]."""
+    upper = [(m, r) for m, r in zip(masses, rms, strict=True) if m >= SLOPE_FROM_MASS]
+    return float(np.polyfit(*np.log10(np.array(upper)).T, 1)[0])
 
 
 def _run_values(run: ArmRun) -> dict:
@@ -226,10 +246,8 @@ def _compute_fig7_1(quick: bool) -> Outcome:
     per_mass = _per_mass_values(sweep, runs)
     masses = [float(m) for m in sweep.masses]
     rms = [float(r) for r in sweep.rms]
-    upper = [m for m in masses if m >= SLOPE_FROM_MASS]
-    slope = float(
-        np.polyfit(np.log10(upper), np.log10([rms[masses.index(m)] for m in upper]), 1)[0]
-    )
+    slope = _log_slope(masses, rms)
+    free = _free_floating_values(sweep, _free_floating_sweep(quick))
     ratios = [rms[i] / rms[i + 1] / (masses[i + 1] / masses[i]) for i in range(len(rms) - 1)]
     nsv = [float(runs[m].null_space_rns.max()) for m in figure_masses]
     nsv_j = [float(runs[m].null_space_jacobian.max()) for m in figure_masses]
@@ -270,6 +288,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
             "drop over mass ratio between neighbours (1 = 1/m_hat): "
             f"{[round(r, 3) for r in ratios]}.",
         ),
+        _free_floating_row(masses, rms, free),
     ]
     values = {
         "figure_masses_kg": list(figure_masses),
@@ -282,6 +301,7 @@ def _compute_fig7_1(quick: bool) -> Outcome:
             "log_slope_from_kg": SLOPE_FROM_MASS,
             "drop_over_mass_ratio": ratios,
         },
+        "rms_vs_mass_free_floating": free,
         "spec_v_table": spec,
         "ours_over_spec_v": ours_over_spec,
     }
@@ -295,7 +315,49 @@ def _compute_fig7_1(quick: bool) -> Outcome:
         values,
         settings,
         (*_CHOICES, _quick_choice(quick)),
-        {"runs": runs, "sweep": sweep},
+        {"runs": runs, "sweep": sweep, "free_floating": free},
+    )
+
+
+def _free_floating_values(sweep, runs: dict[float, ArmRun]) -> dict:
+    """Variant (b) against J^+ and against variant (a), per sweep mass."""
+    masses = [float(m) for m in sweep.masses]
+    rms = [rms_difference(runs[m], sweep.reference) for m in masses]
+    return {
+        "masses_kg": masses,
+        "rms_rad": rms,
+        "log_slope": _log_slope(masses, rms),
+        "rms_vs_closed_form_rad": [
+            rms_difference(runs[m], run) for m, run in zip(masses, sweep.runs, strict=True)
+        ],
+        "over_closed_form": [float(b / a) for b, a in zip(rms, sweep.rms, strict=True)],
+        "max_tracking_error_m": [float(runs[m].tracking_error.max()) for m in masses],
+        "closed_form_tracking_error_m": max(float(run.tracking_error.max()) for run in sweep.runs),
+        "max_null_space_rns_rad_s": [float(runs[m].null_space_rns.max()) for m in masses],
+        "peak_joint_speed_rad_s": [runs[m].peak_joint_speed for m in masses],
+    }
+
+
+def _free_floating_row(masses: list, rms_closed: list, free: dict) -> Comparison:
+    """Fig. 7.3 with the thesis' own set Q_M_Al (7.4): variant (b) of A-4.15."""
+    rms, slope = free["rms_rad"], free["log_slope"]
+    return Comparison.trend(
+        "rms_delta_theta_free_floating_rad",
+        "the same claim for theta_RNS from Q_M_Al (7.4) as printed (particular solution, no "
+        "constraint force; Fig. 7.3)",
+        rms,
+        "rad",
+        holds=_decreasing(rms),
+        note=f"variant (b) of A-4.15: RMS[Delta theta] vs J^+ for m_hat = {masses} kg (criterion: "
+        f"decreasing); log slope {slope:.3f} for m_hat >= {SLOPE_FROM_MASS:g} kg (variant (a) "
+        f"{_log_slope(masses, rms_closed):.3f}); (b) over (a) "
+        f"{[round(r, 3) for r in free['over_closed_form']]}; RMS between (b) and (a) "
+        f"{[float(f'{r:.3g}') for r in free['rms_vs_closed_form_rad']]} rad. Without F_B the "
+        "acceleration misses the real task kinematics by the control model's B motion, so the "
+        "EE leaves the arc (max tracking error "
+        f"{[float(f'{e:.3g}') for e in free['max_tracking_error_m']]} m, corrected only by "
+        "the motion loop), while (a) keeps it within "
+        f"{free['closed_form_tracking_error_m']:.3g} m.",
     )
 
 
@@ -323,7 +385,11 @@ def _plot_fig7_1(outcome: Outcome, figure) -> None:
             ax.set_ylabel("null-space velocity [rad/s]")
             ax.legend(fontsize=7)
     ax = figure.add_subplot(grid[2, :])
-    ax.loglog(sweep.masses, sweep.rms, "o-", color=_RED, label="ours (RNS-C vs J+)")
+    ax.loglog(sweep.masses, sweep.rms, "o-", color=_RED, label="ours, (a) closed form with F_B")
+    free = outcome.figure_data["free_floating"]
+    ax.loglog(
+        free["masses_kg"], free["rms_rad"], "s--", color=_GREEN, label="ours, (b) (7.4), no F_B"
+    )
     spec = [SPEC_V_TABLE.get(float(m), (np.nan,))[0] for m in sweep.masses]
     ax.loglog(sweep.masses, spec, "x:", color=_GREY, label="spec [V] (T_half 2.5 s)")
     slope = outcome.values["rms_vs_mass"]["log_slope"]
@@ -331,7 +397,8 @@ def _plot_fig7_1(outcome: Outcome, figure) -> None:
         ax,
         r"virtual mass $\hat m_3$ [kg]",
         r"RMS[$\Delta\theta$] [rad]",
-        rf"Fig. 7.3: RMS[$\Delta\theta$] (7.7), log slope {slope:.3f}",
+        rf"Fig. 7.3: RMS[$\Delta\theta$] (7.7) vs J+, log slope (a) {slope:.3f}, "
+        rf"(b) {free['log_slope']:.3f}",
     )
     ax.grid(True, which="both", lw=0.3)
     ax.legend(fontsize=7)

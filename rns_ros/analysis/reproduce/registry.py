@@ -43,6 +43,7 @@ CHAPTER_MODULES = (
     "rns_ros.analysis.reproduce.chapter6",
     "rns_ros.analysis.reproduce.chapter6_remarks",
     "rns_ros.analysis.reproduce.chapter7",
+    "rns_ros.analysis.reproduce.chapter7_wall",
 )
 
 

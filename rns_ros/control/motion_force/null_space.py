@@ -1,5 +1,6 @@
-"""Chapter 7: resolved acceleration (7.2), null-space velocities (7.14), the velocity-level term
-(7.13) and the joint damper of section 7.2.2."""
+"""Chapter 7: resolved acceleration (7.2), the free-floating RNS particular solution (7.4),
+null-space velocities (7.14), the velocity-level term (7.13) and the joint damper of section
+7.2.2."""
 
 from __future__ import annotations
 
@@ -67,6 +68,54 @@ def resolved_acceleration(
     return ControlCommand(torque, accel, task_accel, wrench, "resolved/J+", sigma[-1], sigma[0])
 
 
+def free_floating_acceleration(
+    state: FixedBaseState,
+    task: TaskSpace,
+    reversed_model: ReversedModel,
+    acceleration_ref,
+    *,
+    normal_acceleration=None,
+    rcond: float = DEFAULT_RCOND,
+) -> ControlCommand:
+    """The particular solution of Q_M_Al, eq. (7.4) with theta_ddot_a = 0 (thesis_rest A-4.15
+    variant (b)): theta_ddot = -M_hat_Al^+ (M_hat_A V_dot_A + C_hat_A) [rad/s^2], (n,).
+
+    The constraint-force term M_hat_Al^+ T_hat F_B of (7.3) is left out: the control model is
+    free floating (B not held), so theta_ddot keeps the control model's root rows with no
+    external wrench, M_red V_dot_A + W theta_ddot + C_red = 0, with V_dot_A = the task rows of
+    V_dot_ref and the non-task root coordinates eliminated as in (6.24)-(6.25). It meets the REAL
+    task kinematics J theta_ddot + J_dot theta_dot = V_dot_ref only as m_hat -> inf ((7.5)-(7.6):
+    B's velocity ~ 1/m_hat); C_hat_A is the control model's at the real state
+    (:meth:`ReversedModel.dynamics`). (7.4) is written for zero gravity and G_hat_A is left out:
+    unheld, B's weight m_hat g would pull the model away at any m_hat. Then the real computed
+    torque tau = M theta_ddot + c + g. ``sigma_min``/``sigma_max`` are those of W.
+    """
+    task_accel = task.compose(acceleration_ref, normal_acceleration)
+    dyn = reversed_model.dynamics(state)
+    rows, free = list(reversed_model.rows), list(reversed_model.free_rows)
+    residual = -dyn.bias[:6]  # no F_A (no interaction), no F_B, no G_hat_A (zero gravity)
+    root, coupling = dyn.mass[:6, :6], dyn.mass[:6, 6:]
+    reduced_residual, reduced_mass, w = residual[rows], root[np.ix_(rows, rows)], coupling[rows]
+    if free:
+        solve = np.linalg.solve(
+            root[np.ix_(free, free)],
+            np.column_stack([residual[free], root[free][:, rows], coupling[free]]),
+        )
+        cross = root[np.ix_(rows, free)]
+        reduced_residual = reduced_residual - cross @ solve[:, 0]
+        reduced_mass = reduced_mass - cross @ solve[:, 1 : 1 + len(rows)]
+        w = w - cross @ solve[:, 1 + len(rows) :]
+    accel, s_min, s_max = _min_norm(w, reduced_residual - reduced_mass @ task_accel, rcond)
+    torque, wrench = computed_torque(state, task, accel, None)
+    return ControlCommand(torque, accel, task_accel, wrench, "rns/free-floating", s_min, s_max)
+
+
+def _min_norm(matrix: np.ndarray, rhs: np.ndarray, rcond: float):
+    """(x, sigma_min, sigma_max): the minimum-norm least-squares x of matrix x = rhs (SVD)."""
+    x, _, _, sigma = np.linalg.lstsq(matrix, rhs, rcond=rcond)
+    return x, float(sigma[-1]), float(sigma[0])
+
+
 class VelocityTermForm(Choice):
     """Forms of (7.13): ``momentum`` = -P Wdot^T (W W^T)^-1 M_red V_A with V_A = J theta_dot
     (the printed form); ``velocity`` = +P Wdot^T W^{+T} theta_dot (equal under the zero-momentum
@@ -117,6 +166,7 @@ __all__ = [
     "NullSpaceVelocity",
     "VelocityTermForm",
     "damper_term",
+    "free_floating_acceleration",
     "null_space_velocity",
     "resolved_acceleration",
     "velocity_level_term",

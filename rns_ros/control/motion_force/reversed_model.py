@@ -46,18 +46,23 @@ class ReversedQuantities:
     w: np.ndarray
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two 3-vectors (np.cross's axis handling dominates dynamics() otherwise)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def _cross_motion(twist: np.ndarray, motion: np.ndarray) -> np.ndarray:
     """Spatial motion cross product V x m, Pinocchio order [linear; angular]."""
     v, w = twist[:3], twist[3:]
-    return np.concatenate(
-        [np.cross(w, motion[:3]) + np.cross(v, motion[3:]), np.cross(w, motion[3:])]
-    )
+    return np.concatenate([_cross(w, motion[:3]) + _cross(v, motion[3:]), _cross(w, motion[3:])])
 
 
 def _cross_force(twist: np.ndarray, force: np.ndarray) -> np.ndarray:
     """Spatial force cross product V x* f, Pinocchio order [force; moment]."""
     v, w = twist[:3], twist[3:]
-    return np.concatenate([np.cross(w, force[:3]), np.cross(w, force[3:]) + np.cross(v, force[:3])])
+    return np.concatenate([_cross(w, force[:3]), _cross(w, force[3:]) + _cross(v, force[:3])])
 
 
 @dataclass(frozen=True)
@@ -206,7 +211,7 @@ class ReversedModel:
         velocity = np.concatenate([v_a, state.v])
         shift = np.eye(6)
         shift[:3, 3:] = _skew(p_a)
-        root_drift = np.concatenate([np.cross(v_a[:3], v_a[3:]), np.zeros(3)])
+        root_drift = np.concatenate([_cross(v_a[:3], v_a[3:]), np.zeros(3)])
         twist_a = shift @ v_a
         # body twists V_j (j = 1..n), spatial at the origin, of the hat model at the real state
         tail = np.cumsum((joint_twists * state.v)[:, ::-1], axis=1)[:, ::-1]  # sum_{i>=j}

@@ -46,7 +46,7 @@ from rns_ros.analysis.reproduce.registry import (
     register_all,
     resolution_choice,
 )
-from rns_ros.analysis.reproduce.wall_null_space import velocity_level_cause
+from rns_ros.analysis.reproduce.wall_null_space import per_stroke, velocity_level_cause
 from rns_ros.control.contact_tasks import (
     FORCE,
     FORCE_RAMP,
@@ -429,21 +429,10 @@ def _osc_peak_row(controller: Controller, peaks: dict, ratios: dict, sweep: dict
     )
 
 
-def _per_stroke(run: ClosedLoopRun) -> tuple[list[float], list[float]]:
-    """Peak joint speed within each stroke and ||P_hat_RNS theta_dot|| at its end [rad/s]."""
-    strokes = max(1, round(float(run.t[-1]) / WALL_STROKE))
-    peaks, left = [], []
-    for k in range(strokes):
-        inside = (run.t >= k * WALL_STROKE - 1e-9) & (run.t <= (k + 1) * WALL_STROKE + 1e-9)
-        peaks.append(float(run.joint_speed[inside].max()))
-        left.append(float(run.null_space_velocity[np.flatnonzero(inside)[-1]]))
-    return peaks, left
-
-
 def _wall_ratio_row(runs, ratios: dict[str, float]) -> Comparison:
     """Fig. 6.8: OS-C's joint velocities larger 'in the same way as the planar case'; ``ratios``
     = OS-C peak over RNS-C peak per OS-C variant."""
-    strokes = {c.value: _per_stroke(run) for c, run in runs.items()}
+    strokes = {c.value: per_stroke(run) for c, run in runs.items()}
     rns_peaks, rns_left = strokes.pop(Controller.RNS_C.value)
     first = min(peaks[0] for peaks, _ in strokes.values()) / rns_peaks[0]
     holds = min(ratios.values()) > RATIO_THRESHOLD

@@ -11,7 +11,7 @@ import numpy as np
 from rns_ros.control.motion_force.command import ControlCommand, computed_torque
 from rns_ros.control.motion_force.outer_loops import parse_gain
 from rns_ros.control.motion_force.projectors import DEFAULT_RCOND, kernel_projector, svd_solve
-from rns_ros.control.motion_force.reversed_model import ReversedModel
+from rns_ros.control.motion_force.reversed_model import ReversedModel, reduce_to_rows
 from rns_ros.control.motion_force.task_space import TaskSpace
 from rns_ros.core.errors import InputError
 from rns_ros.core.fixed_base import FixedBaseState
@@ -94,17 +94,7 @@ def free_floating_acceleration(
     dyn = reversed_model.dynamics(state)
     rows, free = list(reversed_model.rows), list(reversed_model.free_rows)
     residual = -dyn.bias[:6]  # no F_A (no interaction), no F_B, no G_hat_A (zero gravity)
-    root, coupling = dyn.mass[:6, :6], dyn.mass[:6, 6:]
-    reduced_residual, reduced_mass, w = residual[rows], root[np.ix_(rows, rows)], coupling[rows]
-    if free:
-        solve = np.linalg.solve(
-            root[np.ix_(free, free)],
-            np.column_stack([residual[free], root[free][:, rows], coupling[free]]),
-        )
-        cross = root[np.ix_(rows, free)]
-        reduced_residual = reduced_residual - cross @ solve[:, 0]
-        reduced_mass = reduced_mass - cross @ solve[:, 1 : 1 + len(rows)]
-        w = w - cross @ solve[:, 1 + len(rows) :]
+    reduced_residual, reduced_mass, w = reduce_to_rows(dyn.mass, residual, rows, free)
     accel, s_min, s_max = _min_norm(w, reduced_residual - reduced_mass @ task_accel, rcond)
     torque, wrench = computed_torque(state, task, accel, None)
     return ControlCommand(torque, accel, task_accel, wrench, "rns/free-floating", s_min, s_max)

@@ -275,3 +275,27 @@ __all__ = [
     "ReversedModel",
     "ReversedQuantities",
 ]
+
+
+def reduce_to_rows(
+    mass: np.ndarray, residual: np.ndarray, rows: list[int], free: list[int]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The root equations of (6.21) on the task ``rows`` once the ``free`` root rows are
+    eliminated: M_A V_dot_A + M_Al theta_ddot = residual, the free components of V_dot_A solved
+    from their own rows. Returns the reduced residual (m,), M_A on the rows (m, m) and W (m, n).
+
+    ``mass`` is the control model's M_hat (6 + n, 6 + n), ``residual`` the root rows' right-hand
+    side (6,).
+    """
+    root, coupling = mass[:6, :6], mass[:6, 6:]
+    reduced_residual, reduced_mass, w = residual[rows], root[np.ix_(rows, rows)], coupling[rows]
+    if free:
+        solve = np.linalg.solve(
+            root[np.ix_(free, free)],
+            np.column_stack([residual[free], root[free][:, rows], coupling[free]]),
+        )
+        cross = root[np.ix_(rows, free)]
+        reduced_residual = reduced_residual - cross @ solve[:, 0]
+        reduced_mass = reduced_mass - cross @ solve[:, 1 : 1 + len(rows)]
+        w = w - cross @ solve[:, 1 + len(rows) :]
+    return reduced_residual, reduced_mass, w

@@ -8,7 +8,7 @@ import numpy as np
 
 from rns_ros.control.motion_force.command import ControlCommand, computed_torque
 from rns_ros.control.motion_force.projectors import DEFAULT_RCOND, kernel_projector, svd_solve
-from rns_ros.control.motion_force.reversed_model import ReversedModel
+from rns_ros.control.motion_force.reversed_model import ReversedModel, reduce_to_rows
 from rns_ros.control.motion_force.task_space import TaskSpace
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseState
@@ -123,17 +123,8 @@ def rns_literal_step(
     m_inv = np.linalg.solve(dyn.mass, np.column_stack([jc.T, nonlinear - generalized]))
     f_b = np.linalg.solve(jc @ m_inv[:, :6], jc @ m_inv[:, 6] - dyn.constraint_drift)  # (6.22)
     residual = root_force + jc[:, :6].T @ f_b - nonlinear[:6]
+    reduced_residual, reduced_mass, w = reduce_to_rows(dyn.mass, residual, rows, free)
     root, coupling = dyn.mass[:6, :6], dyn.mass[:6, 6:]
-    reduced_residual, reduced_mass, w = residual[rows], root[np.ix_(rows, rows)], coupling[rows]
-    if free:
-        solve = np.linalg.solve(
-            root[np.ix_(free, free)],
-            np.column_stack([residual[free], root[free][:, rows], coupling[free]]),
-        )
-        cross = root[np.ix_(rows, free)]
-        reduced_residual = reduced_residual - cross @ solve[:, 0]
-        reduced_mass = reduced_mass - cross @ solve[:, 1 : 1 + len(rows)]
-        w = w - cross @ solve[:, 1 + len(rows) :]
     accel = np.linalg.lstsq(w, reduced_residual - reduced_mass @ task_accel, rcond=rcond)[0]
     root_accel = np.zeros(6)
     root_accel[rows] = task_accel

@@ -23,6 +23,7 @@ at the turning point (docs/ptp.md).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 
@@ -36,7 +37,6 @@ from rns_ros.analysis.reproduce.registry import (
     Outcome,
     Reproduction,
     Verdict,
-    number_verdict,
     register_all,
 )
 from rns_ros.analysis.reproduce.scenario_runs import (
@@ -217,9 +217,10 @@ def judged_number(
     key, thesis, ours, unit: str, tolerance: float, note: str, cause: str
 ) -> Comparison:
     """:meth:`Comparison.number` whose note gains ``cause`` when the verdict is *different*."""
-    if number_verdict(thesis, ours, tolerance) is Verdict.DIFFERENT:
-        note = f"{note}; {cause}"
-    return Comparison.number(key, thesis, ours, unit, tolerance=tolerance, note=note)
+    row = Comparison.number(key, thesis, ours, unit, tolerance=tolerance, note=note)
+    if row.verdict is Verdict.DIFFERENT:
+        row = dataclasses.replace(row, note=f"{note}; {cause}; {row.note.rsplit('; ', 1)[-1]}")
+    return row
 
 
 def deviation_rows(

@@ -169,3 +169,23 @@ def test_bad_dask_scheduler_is_one_line_and_exit_2(tmp_path, capsys, ids, addres
     assert len(err) == 1
     assert message in err[0]
     assert not (tmp_path / f"{ids[0]}.json").exists()
+
+
+def test_elbow_distance_is_zero_on_the_straight_and_folded_elbow():
+    theta4 = np.array([0.0, np.pi, -np.pi, 2 * np.pi, np.pi / 2, -0.3, np.pi + 0.2])
+    np.testing.assert_allclose(
+        chapter5.elbow_distance(theta4),
+        [0.0, 0.0, 0.0, 0.0, np.pi / 2, 0.3, 0.2],
+        atol=1e-12,
+    )
+
+
+def test_the_slice_cause_reports_where_the_large_values_are():
+    grid = np.linspace(-np.pi, np.pi, 41, endpoint=False)
+    ratio = np.ones((3, grid.size))
+    near = np.argmin(np.abs(grid - 0.1))  # close to the straight elbow
+    ratio[1, near] = 5.0
+    ratio[2, np.argmin(np.abs(grid - 1.5))] = 1.2  # a mild value far from both
+    note = chapter5._elbow_cause(grid, ratio)
+    assert f"within {chapter5.elbow_distance(grid[near]):.2f} rad" in note
+    assert "peaks at 1.20" in note

@@ -429,7 +429,8 @@ def _slice_rows(slice_grid: np.ndarray, slices: list[np.ndarray]) -> list[Compar
             peaks[0],
             "",
             holds=quiet,
-            note=_open(f"{where[0]}; qualitative when no point exceeds {LARGE_ERROR:g}", quiet),
+            note=f"{where[0]}; qualitative when no point exceeds {LARGE_ERROR:g}"
+            + ("" if quiet else _elbow_cause(slice_grid, slices[0])),
         ),
         Comparison.trend(
             "slice_b_c_ratio_max",
@@ -443,6 +444,26 @@ def _slice_rows(slice_grid: np.ndarray, slices: list[np.ndarray]) -> list[Compar
             ),
         ),
     ]
+
+
+def elbow_distance(theta4: np.ndarray) -> np.ndarray:
+    """Distance [rad] of each theta_4 to the nearest of 0 and pi (straight or folded elbow, where
+    the positioning chain loses a rank), shape of ``theta4``."""
+    return np.abs(np.angle(np.exp(2j * np.asarray(theta4)))) / 2.0
+
+
+def _elbow_cause(slice_grid: np.ndarray, c_ratio: np.ndarray) -> str:
+    """Where a slice's large C_ratio values lie relative to the elbow singularities."""
+    _, i4 = np.nonzero(c_ratio > LARGE_ERROR)
+    distance = elbow_distance(slice_grid[i4])
+    away = c_ratio[:, elbow_distance(slice_grid) > distance.max()]
+    return (
+        f"; every point above {LARGE_ERROR:g} lies within {distance.max():.2f} rad of theta_4 in "
+        f"{{0, pi}} (median {np.median(distance):.3f} rad), the straight and folded elbow where "
+        f"the positioning chain loses a rank; the rest of the slice peaks at "
+        f"{away.max() if away.size else float('nan'):.2f}: the large values are the elbow "
+        "singularities this slice crosses"
+    )
 
 
 def _fig5_3_values(summary: em.MapSummary, slices: list[np.ndarray]) -> dict:

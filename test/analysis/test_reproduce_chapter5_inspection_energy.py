@@ -54,6 +54,10 @@ def test_fig5_4_keys(documents):
     assert torque["limit_Nm"] == 0.1
     assert torque["peak_Nm"] > 0.0
     assert torque["time_above_limit_s"] >= 0.0
+    # the same condition on resized arms: the wheel part (5.11) grows with the arm's lengths
+    sensitivity = document["arm_length_sensitivity"]
+    assert set(sensitivity) == {"0.9", "1.1"}
+    assert sensitivity["0.9"][1] < ratio["c_sum"] < sensitivity["1.1"][1]
 
 
 def _ratio_verdict(ours: list[float]) -> str:

@@ -45,7 +45,12 @@ from rns_ros.analysis.reproduce.registry import (
     register_all,
     resolution_choice,
 )
-from rns_ros.analysis.reproduce.scenario_runs import default_robot, thesis_robot
+from rns_ros.analysis.reproduce.scenario_runs import (
+    ARM_SCALES,
+    default_robot,
+    resized_arm,
+    thesis_robot,
+)
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core.energy import WHEEL_INERTIA
 from rns_ros.resources import scenario_path
@@ -110,13 +115,34 @@ def _conditions(count: int) -> tuple[InspectionCondition, ...]:
 
 
 @functools.cache
-def _comparison(index: int, quick: bool) -> ConditionComparison:
-    """Both runs of condition ``index`` (0-based) of the quick or full condition list."""
+def _comparison(index: int, quick: bool, arm_scale: float = 1.0) -> ConditionComparison:
+    """Both runs of condition ``index`` (0-based) of the quick or full condition list;
+    ``arm_scale`` != 1 runs them on :func:`resized_arm`."""
     count = QUICK_CONDITIONS if quick else CONDITIONS
     rate, step = _loop(quick)
+    robot = thesis_robot() if arm_scale == 1.0 else resized_arm(arm_scale)
     # drawn within the URDF's position limits (poses the arm can take), run without joint
     # limits as the thesis simulates
-    return compare(thesis_robot(), _conditions(count)[index], rate=rate, simulation_step=step)
+    return compare(robot, _conditions(count)[index], rate=rate, simulation_step=step)
+
+
+def _length_text(quick: bool) -> str:
+    """How much condition 1's ratios move on resized arms (labelled runs), against the gap to
+    the thesis' 10^3."""
+    ours = np.array(_ratio_pair(_comparison(0, quick).ratio))
+    resized = {
+        scale: np.array(_ratio_pair(_comparison(0, quick, scale).ratio)) for scale in ARM_SCALES
+    }
+    moved = ", ".join(f"[{r[0]:.3g}, {r[1]:.3g}] at {scale:g}x" for scale, r in resized.items())
+    swing = max(float(np.abs(r / ours - 1.0).max()) for r in resized.values())
+    gap = float(np.abs(THESIS_RATIO / ours - 1.0).min())
+    text = (
+        f"with the upper arm and forearm resized (labelled runs, arm_length_sensitivity) "
+        f"[C_max, C_sum] is {moved}: up to {swing:.0%} against a gap of at least {gap:.0%}"
+    )
+    if swing < gap:
+        text += ", so the link lengths alone do not explain it"
+    return text
 
 
 def _completed(run: EnergyRun) -> bool:
@@ -255,8 +281,8 @@ def _compute_fig5_4(quick: bool) -> Outcome:
             f"times reduction ... in each cost function', one significant figure); "
             f"{_split_text(comparison)}",
             f"{_times_thesis(ratio)}. What the run shows is the split above; the wheel part "
-            "Lambda_r (eq. 5.11) is set by our arm's masses and lengths over I_r, and the thesis "
-            "prints no arm parameters, so the cause of the difference is open",
+            "Lambda_r (eq. 5.11) is set by our arm's masses and lengths over I_r (0.11 kg m^2, "
+            f"printed); {_length_text(quick)}; the cause of the difference is open",
         ),
         _torque_row(torque),
         Comparison.input(
@@ -270,6 +296,9 @@ def _compute_fig5_4(quick: bool) -> Outcome:
         ),
     ]
     values = _fig5_4_values(rns_values, conv_values, ratio, torque)
+    values["arm_length_sensitivity"] = {
+        str(scale): _ratio_pair(_comparison(0, quick, scale).ratio) for scale in ARM_SCALES
+    }
     condition = comparison.condition
     settings = {
         **_settings(quick, 1),

@@ -15,9 +15,11 @@ T = blkdiag(R^T, R^T, E_n), so M = T^T M_body T and L_B = blkdiag(R, R) L_body: 
 What the iDynTree side is given, besides the URDF text: the controlled joints (in our theta
 order), the positions of the held joints (from the YAML's ``held_joints``, default 0, a <mimic>
 joint by its leader's rule; iDynTree lumps them at those positions), and the satellite body when
-the YAML has ``base`` or the URDF root (with its fixed links) has no mass (the thesis satellite
-then, docs: mass 2550 kg, moments 6200 3540 7090 kg m^2, arm root at (-0.79, -0.29, 1.0) m), added
-as a link whose frame is the base frame {B}.
+the YAML has ``base``, or the URDF root (with its fixed links) has no mass, or the root is a
+massless ``world`` link (the thesis satellite then: 2550 kg, principal moments 6200 3540 7090
+kg m^2, arm root at (-0.79, -0.29, 1.0) m), added as a new root link whose frame is the base frame
+{B}, carrying the URDF root link at the mount pose (a ``world`` root stays, as a massless link on
+the satellite: the same bodies at the same places as replacing it).
 """
 
 from __future__ import annotations
@@ -99,11 +101,14 @@ def _add_satellite(root: ET.Element, base: dict) -> None:
     ET.SubElement(mount, "origin", xyz=" ".join(map(repr, xyz)), rpy=" ".join(map(repr, rpy)))
 
 
-def _root_is_massless(root: ET.Element) -> bool:
-    """The URDF root link and every link joined to it by fixed joints carry no mass."""
+def _needs_satellite(root: ET.Element) -> bool:
+    """The URDF root link and every link joined to it by fixed joints carry no mass, or the root
+    is a massless ``world`` link (a fixed-base description: the satellite replaces the world)."""
     links = {link.get("name"): link for link in root.iter("link")}
     children = {joint.find("child").get("link"): joint for joint in root.iter("joint")}
-    cluster = [name for name in links if name not in children]
+    cluster = [_root_link(root)]
+    if cluster == ["world"] and _mass(links["world"]) == 0.0:
+        return True
     for name in cluster:  # grows while iterating: the links fixed to the cluster
         cluster += [
             child
@@ -140,7 +145,7 @@ def _description(path: Path, robot: FreeFloatingModel) -> Description:
     root = ET.fromstring((path.parent / config["urdf"]).read_text())  # the text we loaded
     controlled = tuple(robot.joint_names)
     held = _held_positions(root, controlled, config.get("held_joints") or {})
-    if "base" in config or _root_is_massless(root):
+    if "base" in config or _needs_satellite(root):
         _add_satellite(root, config.get("base") or DEFAULT_SATELLITE)
     return Description(
         xml=ET.tostring(root, encoding="unicode"),

@@ -22,6 +22,7 @@ CONSOLE_SCRIPTS = [
     "rns_param = rns_ros.apps.param:param_main",
     "rns_topic = rns_ros.apps.topic:topic_main",
     "rns_reproduce = rns_ros.apps.reproduce:main",
+    "rns_model = rns_ros.apps.model_check:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

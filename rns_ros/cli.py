@@ -39,6 +39,7 @@ EXECUTABLES = frozenset(
         "rns_param",
         "rns_topic",
         "rns_reproduce",
+        "rns_model",
     }
 )
 

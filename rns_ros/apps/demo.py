@@ -6,6 +6,13 @@ against ``conventional``; :mod:`rns_ros.runs.inspection`), the point-to-point ta
 :mod:`rns_ros.runs.ptp`) or a motion/force scenario (``--scenario wall_contact``: RNS-C against
 OS-C; :mod:`rns_ros.runs.contact`). The table of the recorded figures
 (:mod:`rns_ros.runs.report`) is printed; ``--summary PATH`` writes it as JSON.
+
+``--model FILE`` (inspection scenarios) runs every node on another robot model YAML
+(docs/own_arm.md): each node gets ``model_config``, the operator's frames are the model's. A
+scenario's ``initial_joint_positions_deg`` are used when they give one angle per controlled joint
+of the model and lie within its joint limits; otherwise (a scenario written for another arm) the
+run starts from the model's ``initial_joint_positions`` (zeros without them) and a note says so
+(:func:`rns_ros.runs.inspection.start_configuration`).
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
+from rns_ros.analysis.arm_feasibility import arm_feasibility
 from rns_ros.cli import (
     add_domain_id_argument,
     one_line,
@@ -26,7 +34,7 @@ from rns_ros.cli import (
     run_main,
     split_ros_args,
 )
-from rns_ros.core import RnsError
+from rns_ros.core import RnsError, load_model
 from rns_ros.resources import default_model_config, scenario_path
 from rns_ros.runs.clock import clock_text
 from rns_ros.runs.contact import (
@@ -44,6 +52,7 @@ from rns_ros.runs.inspection import (
     MIN_SIM_STEP,
     check_scenarios,
     run_method,
+    start_configuration,
 )
 from rns_ros.runs.ptp import PTP_METHODS, PTP_SCENARIOS, PtpScenario, run_ptp_method
 from rns_ros.runs.recorded import PartialRecordingError
@@ -96,6 +105,15 @@ def _parser() -> argparse.ArgumentParser:
         f"{','.join(DEFAULT_METHODS)}); point-to-point: from {list(PTP_METHODS)} (default all); "
         f"motion/force: from {list(CONTACT_METHODS)} (default "
         f"{','.join(DEFAULT_CONTACT_METHODS)})",
+    )
+    parser.add_argument(
+        "--model",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="inspection scenarios: robot model YAML for every node (default: the package's "
+        "config/model.yaml); a scenario without angles for its joints starts from the model's "
+        "initial_joint_positions (docs/own_arm.md)",
     )
     parser.add_argument("--mode", choices=("kinematic", "dynamic"), default="kinematic")
     parser.add_argument("--rate", type=float, default=100.0, help="controller rate [Hz]")
@@ -187,6 +205,13 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
             )
     if args.runs > 1 and (args.scenario in PTP_SCENARIOS or is_contact_scenario(args.scenario)):
         parser.error("--runs is for the inspection scenarios")
+    if args.model is not None and (
+        args.scenario in PTP_SCENARIOS or is_contact_scenario(args.scenario)
+    ):
+        parser.error(
+            "--model is for the inspection scenarios (the point-to-point and motion/force "
+            "scenarios are written for the thesis' arms)"
+        )
     # output paths before the runs: a summary or a recording that cannot be written is a
     # usage error now, not a traceback after the task
     if args.summary is not None and (problem := output_file_problem(args.summary)):
@@ -214,12 +239,19 @@ def _main_inspection(args: argparse.Namespace) -> int:
     try:
         scenario_file = scenario_path(args.scenario)
         (scenario,) = check_scenarios([scenario_file])
+        args.model = (args.model or default_model_config()).resolve()
+        robot = load_model(args.model)
+        args.initial_theta, note = start_configuration(scenario, robot)
     except RnsError as exc:
         print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return 2
     print(f"scenario: {scenario_file} ({scenario.description})")
+    if note:
+        print(f"note: {note}")
+    for warning in arm_feasibility(robot, args.initial_theta).warnings:
+        print(f"warning (rns_model check): {warning}")
     print(
-        f"model: {default_model_config()}; {args.mode} simulation, controller at "
+        f"model: {args.model}; {args.mode} simulation, controller at "
         f"{args.rate:g} Hz, {clock_text(args)}, "
         f"ROS domain {args.domain_id} (localhost only)\n",
         flush=True,

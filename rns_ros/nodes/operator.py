@@ -3,14 +3,15 @@
 Part I scenario files (no ``kind`` key, :mod:`rns_ros.control.scenario`): publishes
 geometry_msgs/TwistStamped on ``cmd_twist`` at ``rate``: the scenario's angular velocity
 omega(t) = angle * s_dot(t) * axis in the scenario's frame (``header.frame_id`` = ``world_frame``,
-``base_frame`` or ``camera_frame``), then zeros for ``zero_duration``, then nothing (a controller
-then stops on its own timeout). Time is the node clock (sim time with ``use_sim_time``); the
-profile starts once ``cmd_twist`` has a subscriber (``wait_for_subscriber``) plus ``start_delay``.
-With ``use_sim_time`` the samples come at the period instants /clock passes
-(:class:`~rns_ros.nodes.clock_ticks.ClockTicks`), one each, not from an rclpy timer; with ``lead``
-each goes out that long before its instant, stamped with the instant, for a controller that
-serves twists at their stamps (rns_controller's ``await_commands``; zeros from the start
-condition until the profile starts).
+``base_frame`` or ``camera_frame``; the last two, left empty, are the base link and camera frame
+of ``model_config``'s model, loaded only for a scenario in those frames), then zeros for
+``zero_duration``, then nothing (a controller then stops on its own timeout). Time is the node
+clock (sim time with ``use_sim_time``); the profile starts once ``cmd_twist`` has a subscriber
+(``wait_for_subscriber``) plus ``start_delay``. With ``use_sim_time`` the samples come at the
+period instants /clock passes (:class:`~rns_ros.nodes.clock_ticks.ClockTicks`), one each, not
+from an rclpy timer; with ``lead`` each goes out that long before its instant, stamped with the
+instant, for a controller that serves twists at their stamps (rns_controller's
+``await_commands``; zeros from the start condition until the profile starts).
 
 Part II scenario files (``kind: motion_force``, :mod:`rns_ros.control.contact_scenarios`,
 docs/part2_ros.md): at ``rate`` (500 Hz suggested: the force controller runs at 1 kHz) BOTH
@@ -53,6 +54,7 @@ from rns_ros.control.contact_scenarios import (
     load_operator_scenario,
     operator_sample,
 )
+from rns_ros.control.controller import TwistFrame
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
 from rns_ros.nodes import operator_parameters
@@ -92,7 +94,7 @@ class OperatorNode(Node):
             scenario_path(params["scenario"])
         )
         self.motion_force = isinstance(self.scenario, MotionForceScenario)
-        if self.motion_force:
+        if self.motion_force or self.scenario.frame is TwistFrame.WORLD:
             self._frame_id = params["world_frame"]
         else:
             self._frame_id = twist_frame_names(params)[self.scenario.frame]

@@ -5,6 +5,7 @@ from __future__ import annotations
 from rns_ros.nodes.parameters import (
     BASE_FRAME,
     CAMERA_FRAME,
+    MODEL_CONFIG,
     WORLD_FRAME,
     ParameterSpec,
     specs_by_name,
@@ -81,6 +82,7 @@ PARAMETERS = (
         0.0,
         1.0,
     ),
+    MODEL_CONFIG,
     WORLD_FRAME,
     BASE_FRAME,
     CAMERA_FRAME,

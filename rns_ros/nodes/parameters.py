@@ -142,18 +142,47 @@ CLOCK_TIMEOUT = ParameterSpec(
     60.0,
     read_only=False,
 )
-#: frame_id of twists in the base and camera frames (nodes that send or read TwistStamped).
-BASE_FRAME = ParameterSpec("base_frame", "base_link", "frame_id of base-frame twists")
-CAMERA_FRAME = ParameterSpec("camera_frame", "camera", "frame_id of camera-frame twists")
+#: frame_id of twists in the base and camera frames (nodes that send TwistStamped); empty: the
+#: frames of ``model_config``'s model (its base link and camera frame).
+BASE_FRAME = ParameterSpec(
+    "base_frame", "", "frame_id of base-frame twists; empty: the base link of model_config"
+)
+CAMERA_FRAME = ParameterSpec(
+    "camera_frame", "", "frame_id of camera-frame twists; empty: the camera frame of model_config"
+)
 
 
-def twist_frame_names(params: Mapping[str, Any]) -> dict[TwistFrame, str]:
-    """frame_id of each twist frame from the world_frame, base_frame and camera_frame values."""
-    return {
+def twist_frame_names(
+    params: Mapping[str, Any], model_frames: Callable[[], tuple[str, str]] | None = None
+) -> dict[TwistFrame, str]:
+    """frame_id of each twist frame from the world_frame, base_frame and camera_frame values.
+
+    An empty base_frame or camera_frame is the model's (``model_frames()``: (base link, camera
+    frame), called only then; default :func:`model_frame_names` of ``params["model_config"]``).
+    """
+    names = {
         TwistFrame.WORLD: params["world_frame"],
         TwistFrame.BASE: params["base_frame"],
         TwistFrame.CAMERA: params["camera_frame"],
     }
+    if not names[TwistFrame.BASE] or not names[TwistFrame.CAMERA]:
+        base, camera = (model_frames or (lambda: model_frame_names(params["model_config"])))()
+        names[TwistFrame.BASE] = names[TwistFrame.BASE] or base
+        names[TwistFrame.CAMERA] = names[TwistFrame.CAMERA] or camera
+    return names
+
+
+def model_frame_names(model_config: str) -> tuple[str, str]:
+    """(base link, camera frame) of the model YAML ``model_config`` ('' = the default model).
+
+    Raises:
+        ConfigError, ModelError: the model does not load (one line naming the problem).
+    """
+    from rns_ros.core import load_model
+    from rns_ros.resources import default_model_config
+
+    robot = load_model(model_config or default_model_config())
+    return robot.base_link, robot.model.frames[robot.camera_frame_id].name
 
 
 def velocity_joint_order(joints: Sequence[str], model_joints: Sequence[str]) -> np.ndarray:

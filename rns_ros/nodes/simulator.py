@@ -26,7 +26,7 @@ from rclpy.utilities import remove_ros_args
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
-from rns_ros.core import FreeFloatingModel, load_model_config
+from rns_ros.core import FreeFloatingModel, load_model, load_model_config
 from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.nodes import contact_simulator_parameters, simulator_parameters
 from rns_ros.nodes.contact_simulator import ContactSimulatorNode
@@ -105,8 +105,9 @@ class SimulatorNode(Node):
 
     def _start(self) -> None:
         params = declare_parameters(self, PARAMETERS)
-        urdf_path, spec = load_model_config(params["model_config"] or default_model_config())
-        self.robot = FreeFloatingModel.from_urdf(urdf_path, spec)
+        model_config = params["model_config"] or default_model_config()
+        # as every node loads it (rns_controller's load_model): the same joints, held joints, base
+        self.robot = load_model(model_config)
         self.simulator = _free_floating_simulator(self.robot, params)
         self._wheels = params["reaction_wheels"]
         self._publish_every = max(1, round(1.0 / (params["publish_rate"] * params["step_size"])))
@@ -145,7 +146,10 @@ class SimulatorNode(Node):
         # starts later still receives the model.
         description_qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self._description_pub = self.create_publisher(String, "robot_description", description_qos)
-        self._description_pub.publish(String(data=urdf_path.read_text()))
+        description = getattr(self.robot, "urdf_xml", None)
+        if description is None:  # a loader without it: the URDF file the model YAML names
+            description = load_model_config(model_config)[0].read_text()
+        self._description_pub.publish(String(data=description))
         self.create_service(Trigger, "~/reset", self._on_reset)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)

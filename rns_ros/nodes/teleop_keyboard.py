@@ -5,7 +5,9 @@ owns the terminal and the ROS side.
 
 Publishes:
     cmd_twist   geometry_msgs/TwistStamped, best effort depth 1 (as rns_operator): while a key is
-                held, the command at ``rate``; after release or the stop key, zeros at ``rate``
+                held, the command at ``rate`` (``header.frame_id``: ``world_frame``, ``base_frame``
+                or ``camera_frame``; the latter two, left empty, the base link and camera frame
+                of ``model_config``'s model); after release or the stop key, zeros at ``rate``
                 for ``zero_duration``; then nothing until the next key (the controller idles on
                 its own timeout). A few zeros are also sent on quit, Ctrl-C, SIGTERM and when the
                 terminal goes away (SIGHUP, end of file or EIO on stdin). In force mode (key m)

@@ -7,6 +7,7 @@ from rns_ros.control.controller import TwistFrame
 from rns_ros.nodes.parameters import (
     BASE_FRAME,
     CAMERA_FRAME,
+    MODEL_CONFIG,
     WORLD_FRAME,
     ParameterSpec,
     choices_of,
@@ -69,6 +70,7 @@ PARAMETERS = (
         0.0,
         60.0,
     ),
+    MODEL_CONFIG,
     WORLD_FRAME,
     BASE_FRAME,
     CAMERA_FRAME,

@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +27,7 @@ from std_msgs.msg import Float64MultiArray
 
 from rns_ros.analysis.recorded_run import RunFigures, run_figures
 from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
-from rns_ros.core import RnsError, load_model
+from rns_ros.core import FreeFloatingModel, RnsError, load_model
 from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
 from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller_status import TWISTS_RECEIVED
@@ -107,6 +107,40 @@ def check_scenarios(files: list[Path]) -> list[Scenario]:
     return scenarios
 
 
+def start_configuration(scenario: Scenario, robot: FreeFloatingModel) -> tuple[np.ndarray, str]:
+    """The joint angles [rad] (n,) a run of ``scenario`` on ``robot`` starts from, and a note
+    ('' when none is due).
+
+    The scenario's ``initial_joint_positions_deg`` when they give one angle per controlled joint
+    and lie within the joint limits; otherwise the scenario was written for another arm, and the
+    run starts from the model's ``initial_joint_positions`` (zeros when the model YAML has none),
+    which the note says.
+    """
+    theta = scenario.initial_theta
+    own = np.asarray(getattr(robot, "initial_theta", np.zeros(robot.n)), dtype=float)
+    if theta.shape != (robot.n,):
+        why = (
+            f"gives {theta.size} initial angles, the model has {robot.n} controlled joints "
+            f"{list(robot.joint_names)}"
+        )
+    elif np.any(theta < robot.lower_limits) or np.any(theta > robot.upper_limits):
+        outside = [
+            name
+            for name, value, low, high in zip(
+                robot.joint_names, theta, robot.lower_limits, robot.upper_limits, strict=True
+            )
+            if not low <= value <= high
+        ]
+        why = f"puts joints {outside} outside their limits"
+    else:
+        return theta, ""
+    angles = ", ".join(f"{value:.4g}" for value in np.rad2deg(own))
+    return own, (
+        f"scenario {scenario.name!r} {why}: starting from the model's initial_joint_positions "
+        f"[{angles}] deg"
+    )
+
+
 def run_method(
     method: str,
     args: argparse.Namespace,
@@ -125,7 +159,10 @@ def run_method(
         RnsError: a node did not start, or the run did not finish in time.
     """
     scenario = load_scenario(scenario_file)
-    robot = load_model(default_model_config())
+    model_config = str(getattr(args, "model", None) or default_model_config())
+    robot = load_model(model_config)
+    theta, _ = start_configuration(scenario, robot)
+    scenario = replace(scenario, initial_theta=theta)
     sim_time = lockstep(args)
     wheels = method.endswith(WHEELS_SUFFIX)
     ros_args = list(args.ros_args[1:]) if args.ros_args else []
@@ -143,10 +180,17 @@ def run_method(
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status", raw=True),
         }
         recording, logger = start_logger(
-            processes, method, args, sim_time=sim_time, ros_args=ros_args
+            processes, method, args, model_config, sim_time=sim_time, ros_args=ros_args
         )
         listeners = _start_nodes(
-            processes, method, args, scenario, scenario_file, logger is not None, ros_args
+            processes,
+            method,
+            args,
+            scenario,
+            scenario_file,
+            logger is not None,
+            ros_args,
+            model_config,
         )
         # the task only once the robot runs and this process and the logger record it (a
         # recorder matched late would miss the start of the task): the operator counts this
@@ -223,15 +267,20 @@ def _start_nodes(
     scenario_file: Path,
     logger: bool,
     ros_args: list[str],
+    model_config: str,
 ) -> list[str]:
     """Start rns_controller, rns_operator, (with wheels) rns_attitude_control and rns_simulator
-    for ``scenario`` (read from ``scenario_file``); return the nodes whose subscriptions the task
-    waits for (``logger``: one is running)."""
+    for ``scenario`` (read from ``scenario_file``; the simulator starts from its
+    ``initial_theta``), each on the robot of ``model_config``; return the nodes whose
+    subscriptions the task waits for (``logger``: one is running)."""
     sim_time = lockstep(args)
     timing = {"use_sim_time": True} if sim_time else {}
+    model = {"model_config": model_config}
     wheels = method.endswith(WHEELS_SUFFIX)
     processes.start(
-        "rns_controller", _controller_parameters(method, args, scenario), ros_args=ros_args
+        "rns_controller",
+        {**_controller_parameters(method, args, scenario), **model},
+        ros_args=ros_args,
     )
     # the operator imports while the others do (started after the robot ran, its start-up
     # competed for the cores with a lockstep run stepping the idle robot as fast as it can:
@@ -258,11 +307,14 @@ def _start_nodes(
             # longer starts the profile while the controller still misses it
             "min_subscribers": len(listeners) + 1,
             **operator_timing,
+            **model,  # the operator's base and camera frame ids
         },
         ros_args=ros_args,
     )
     if wheels:
-        processes.start("rns_attitude_control", {"rate": args.rate, **timing}, ros_args=ros_args)
+        processes.start(
+            "rns_attitude_control", {"rate": args.rate, **timing, **model}, ros_args=ros_args
+        )
     processes.start(
         "rns_simulator",
         {
@@ -275,6 +327,7 @@ def _start_nodes(
             # figures do not depend on how fast this machine is
             "lockstep_period": 1.0 / args.rate if sim_time else 0.0,
             "reaction_wheels": wheels,
+            **model,
         },
         ros_args=ros_args,
     )

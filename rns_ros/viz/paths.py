@@ -20,6 +20,10 @@ WORLD = "world"
 WORLD_FRAME_ID = "tf#/world"
 #: Prefix under which the URDF loader logs the model: ``ROBOT/<urdf robot name>/...``.
 ROBOT = "world/robot"
+#: Simple shapes of the links without a resolvable visual: ``ROBOT_SHAPES/<link>``.
+ROBOT_SHAPES = f"{ROBOT}/shapes"
+#: Static transform from the model's base frame to the URDF's root link (a base the URDF lacks).
+ROBOT_MOUNT = f"{ROBOT}/mount"
 BASE_POSE = "world/robot/base_pose"
 JOINTS = "world/robot/joints"
 CAMERA = "world/camera"

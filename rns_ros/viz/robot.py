@@ -18,13 +18,25 @@ is taken as one path part (``world/robot`` becomes ``world\/robot``), so the mod
 
 The camera's optical axis (+z of the camera frame) is drawn from Pinocchio forward kinematics as an
 independent check: it must leave the black camera box the URDF frame tree draws.
+
+Any arm is drawn (:mod:`rns_ros.viz.robot_shapes`): the loader gets a copy of the URDF with the
+meshes that resolve on this machine (``package://`` through the ament index) made absolute and
+the others left out, and every link left without a visual gets its ellipsoid of equivalent
+inertia and its skeleton under ``world/robot/shapes/<link>``, so the 3D view is never empty.
+Held joints (not driven, :attr:`FreeFloatingModel.held_joints`) are posed once, statically, at
+their held positions. A base body that is not a link of the URDF (the satellite of a model YAML's
+``base``) is drawn as its ellipsoid of equivalent inertia, the URDF's root placed on it where the
+model mounts it.
 """
 
 from __future__ import annotations
 
+import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import rerun as rr
 import rerun.urdf as rru
 
@@ -32,6 +44,11 @@ from rns_ros.core.errors import ModelError
 from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.viz import paths
+from rns_ros.viz.robot_shapes import (
+    LinkShape,
+    equivalent_ellipsoid,
+    resolve_description,
+)
 
 #: Length of the camera pointing arrow [m].
 CAMERA_ARROW_LENGTH = 0.6
@@ -39,6 +56,8 @@ CAMERA_ARROW_LENGTH = 0.6
 CAMERA_AXES_LENGTH = 0.25
 CAMERA_COLOR = (250, 200, 40)
 _MOVING_JOINTS = ("revolute", "continuous", "prismatic")
+SHAPE_COLOR = (150, 160, 175)
+SKELETON_COLOR = (90, 90, 100)
 
 
 class RobotView:
@@ -58,11 +77,22 @@ class RobotView:
 
     def __init__(self, robot: FreeFloatingModel | FixedBaseModel, urdf_path: str | Path) -> None:
         self.robot = robot
-        self.urdf_path = Path(urdf_path)
+        self.source_path = Path(urdf_path)
+        try:
+            self.description = resolve_description(
+                self.source_path.read_text(), self.source_path.parent
+            )
+        except (OSError, ET.ParseError) as exc:
+            raise ModelError(f"cannot read the URDF {self.source_path}: {exc}") from exc
+        # the loader reads a file: the resolved copy lives as long as this view
+        self._folder = tempfile.TemporaryDirectory(prefix="rns_ros_urdf_")
+        #: The URDF rerun's loader reads (meshes resolved, see the module docstring).
+        self.urdf_path = Path(self._folder.name) / self.source_path.name
+        self.urdf_path.write_text(self.description.xml)
         try:
             self.tree = rru.UrdfTree.from_file_path(self.urdf_path)
         except Exception as exc:  # rerun raises plain exceptions from its Rust parser
-            raise ModelError(f"rerun cannot read the URDF {self.urdf_path}: {exc}") from exc
+            raise ModelError(f"rerun cannot read the URDF {self.source_path}: {exc}") from exc
         moving = {j.name: j for j in self.tree.joints() if j.joint_type in _MOVING_JOINTS}
         missing = [name for name in robot.joint_names if name not in moving]
         if missing:
@@ -72,7 +102,16 @@ class RobotView:
             )
         #: (URDF joint, entity path) in theta order.
         self.joints = [(moving[name], paths.joint_transform(name)) for name in robot.joint_names]
-        self.base_link = self.tree.root_link().name
+        held = getattr(robot, "held_joints", {}) or {}
+        #: (URDF joint, entity path, held position [rad or m]) of the joints not driven.
+        self.held = [
+            (moving[name], paths.joint_transform(name), float(value))
+            for name, value in held.items()
+            if name in moving
+        ]
+        #: The URDF's root link; the base pose is logged for the model's base frame.
+        self.root_link = self.tree.root_link().name
+        self.base_link = getattr(robot, "base_link", self.root_link)
         camera = getattr(robot, "camera_frame_id", None)
         #: Link of the camera frame; None for a fixed-base arm.
         self.camera_link = None if camera is None else robot.model.frames[camera].name
@@ -87,7 +126,7 @@ class RobotView:
         prefix = f"{paths.ROBOT}/"
         result = {}
         for joint in [None, *self.tree.joints()]:
-            link = self.base_link if joint is None else joint.child_link
+            link = self.root_link if joint is None else joint.child_link
             # Paths from a prefix-less tree start at "/<urdf name>/...".
             result[link] = [
                 prefix + p.lstrip("/") for p in self.tree.get_visual_geometry_paths(link)
@@ -99,6 +138,7 @@ class RobotView:
         (free-floating robots only)."""
         rec.log("/", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         rec.log_file_from_path(self.urdf_path, entity_path_prefix=paths.ROBOT, static=True)
+        self.log_shapes(rec)
         if self.camera_link is None:
             return
         rec.log(
@@ -118,6 +158,67 @@ class RobotView:
             rr.LineStrips3D.from_fields(colors=[CAMERA_COLOR], radii=[0.004]),
             static=True,
         )
+
+    def shapes(self) -> list[LinkShape]:
+        """The simple shapes drawn: the URDF's bare links, and a base body the URDF lacks."""
+        shapes = list(self.description.shapes)
+        if self.base_link != self.root_link and isinstance(self.robot, FreeFloatingModel):
+            body = self.robot.model.inertias[1]  # the free-flyer's body: the satellite
+            half_sizes, axes = equivalent_ellipsoid(body.mass, body.inertia)
+            quaternion = np.array(pin.Quaternion(axes).normalized().coeffs())
+            shapes.append(LinkShape(self.base_link, np.array(body.lever), half_sizes, quaternion))
+        return shapes
+
+    def log_shapes(self, rec: rr.RecordingStream) -> None:
+        """The simple shapes (static), the mount of the URDF's root on a base body it lacks and
+        the held joints at their positions."""
+        for shape in self.shapes():
+            entity = f"{paths.ROBOT_SHAPES}/{shape.link}"
+            if shape.center is not None:
+                rec.log(
+                    entity,
+                    rr.CoordinateFrame(shape.link),
+                    rr.Ellipsoids3D(
+                        centers=[shape.center],
+                        half_sizes=[shape.half_sizes],
+                        quaternions=[rr.Quaternion(xyzw=shape.quaternion_xyzw)],
+                        colors=[SHAPE_COLOR],
+                        fill_mode="solid",
+                    ),
+                    static=True,
+                )
+            if len(shape.segments):
+                rec.log(
+                    f"{entity}/skeleton",
+                    rr.CoordinateFrame(shape.link),
+                    rr.LineStrips3D(shape.segments, colors=[SKELETON_COLOR], radii=[0.01]),
+                    static=True,
+                )
+        mount = self.mount()
+        if mount is not None:
+            rec.log(
+                paths.ROBOT_MOUNT,
+                rr.Transform3D(
+                    translation=mount.translation,
+                    mat3x3=mount.rotation,
+                    parent_frame=self.base_link,
+                    child_frame=self.root_link,
+                ),
+                static=True,
+            )
+        for joint, path, value in self.held:
+            rec.log(path, joint.compute_transform(value, clamp=False), static=True)
+
+    def mount(self) -> pin.SE3 | None:
+        """Placement of the URDF's root link in the model's base frame, when the two differ
+        (a base body added by the model YAML); else None."""
+        if self.base_link == self.root_link or not isinstance(self.robot, FreeFloatingModel):
+            return None
+        model = self.robot.model
+        if not model.existFrame(self.root_link):
+            return None
+        frame = model.frames[model.getFrameId(self.root_link)]
+        return frame.placement if frame.parentJoint == 1 else None
 
     def log_fixed_base(self, rec: rr.RecordingStream) -> None:
         """A fixed-base arm: its base link at the world origin, static (world -> base link)."""

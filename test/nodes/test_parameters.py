@@ -11,6 +11,7 @@ from rns_ros.nodes.parameters import (
     choices_of,
     from_parameters,
     markdown_table,
+    model_frame_names,
     twist_frame_names,
 )
 
@@ -40,6 +41,28 @@ def test_twist_frame_names_map_every_frame():
     params = {"world_frame": "w", "base_frame": "b", "camera_frame": "c"}
     names = twist_frame_names(params)
     assert names == {TwistFrame.WORLD: "w", TwistFrame.BASE: "b", TwistFrame.CAMERA: "c"}
+
+
+def test_empty_twist_frames_come_from_the_model(tmp_path):
+    def not_loaded():
+        raise AssertionError("the model is loaded only for an empty frame")
+
+    params = {"world_frame": "w", "base_frame": "b", "camera_frame": "c", "model_config": ""}
+    assert twist_frame_names(params, not_loaded)[TwistFrame.CAMERA] == "c"
+    empty = {**params, "base_frame": "", "camera_frame": ""}
+    # the default arm's frames, read from its URDF (root link, camera link)
+    assert twist_frame_names(empty)[TwistFrame.BASE] == "base_link"
+    assert twist_frame_names(empty)[TwistFrame.CAMERA] == "camera"
+    # another model: a camera frame named in its YAML
+    from rns_ros.core.config import load_model_config
+    from rns_ros.resources import default_model_config
+
+    urdf, _ = load_model_config(default_model_config())
+    model = tmp_path / "tool.yaml"
+    model.write_text(f"urdf: {urdf}\ncamera_frame: wrist\nwrist_frame: null\n")
+    names = twist_frame_names({**empty, "model_config": str(model), "base_frame": "sat"})
+    assert names == {TwistFrame.WORLD: "w", TwistFrame.BASE: "sat", TwistFrame.CAMERA: "wrist"}
+    assert model_frame_names(str(model)) == ("base_link", "wrist")
 
 
 def test_the_table_has_one_row_per_parameter_with_its_limits():

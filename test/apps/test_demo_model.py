@@ -1,0 +1,145 @@
+"""rns_demo --model: every node on another arm, and the start configuration a scenario gives it.
+
+The other arm here is the default arm with joint_7 welded (6 controlled joints, no wrist frame):
+the smallest change that makes a scenario written for the default arm's 7 joints unusable.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from rns_testing import SHORT_ROLL_SCENARIO
+
+from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.apps import demo
+from rns_ros.apps.demo import main
+from rns_ros.control.scenario import load_scenario
+from rns_ros.core import load_model
+from rns_ros.core.config import load_model_config
+from rns_ros.resources import default_model_config
+from rns_ros.runs.inspection import DemoRow, start_configuration
+from rns_ros.viz.readback import recording_summary
+
+# this file's own domain (the DDS run below), apart from the other demo tests'
+DOMAIN = str(int(os.environ.get("ROS_DOMAIN_ID", "43")) + 1)
+#: the thesis start without joint 7 (away from the 6-joint arm's singularities)
+SIX_ANGLES_DEG = [-90.0, -30.0, 0.0, -70.0, 180.0, -30.0]
+
+
+def _six_joint_model(folder: Path) -> Path:
+    urdf, _ = load_model_config(default_model_config())
+    text = urdf.read_text()
+    welded = text.replace(
+        '<joint name="joint_7" type="revolute">', '<joint name="joint_7" type="fixed">'
+    )
+    assert welded != text
+    (folder / "arm6.urdf").write_text(welded)
+    model = folder / "arm6.yaml"
+    model.write_text("urdf: arm6.urdf\ncamera_frame: camera\nwrist_frame: null\n")
+    return model
+
+
+def _scenario(folder: Path, degrees: list[float], name: str = "short.yaml") -> Path:
+    path = folder / name
+    path.write_text(yaml.safe_dump({**SHORT_ROLL_SCENARIO, "initial_joint_positions_deg": degrees}))
+    return path
+
+
+def test_a_scenario_for_the_arm_gives_the_start(tmp_path):
+    robot = load_model(_six_joint_model(tmp_path))
+    scenario = load_scenario(_scenario(tmp_path, SIX_ANGLES_DEG))
+    theta, note = start_configuration(scenario, robot)
+    np.testing.assert_array_equal(theta, np.deg2rad(SIX_ANGLES_DEG))
+    assert note == ""
+
+
+def test_a_scenario_for_another_arm_starts_from_the_models_configuration(tmp_path):
+    robot = load_model(_six_joint_model(tmp_path))
+    scenario = load_scenario(
+        _scenario(tmp_path, SHORT_ROLL_SCENARIO["initial_joint_positions_deg"])
+    )
+    theta, note = start_configuration(scenario, robot)
+    np.testing.assert_array_equal(theta, getattr(robot, "initial_theta", np.zeros(6)))
+    assert "gives 7 initial angles, the model has 6 controlled joints" in note
+
+
+def test_angles_outside_the_joint_limits_are_another_arms(tmp_path, robot):
+    degrees = [0.0] * robot.n
+    joint = 1
+    degrees[joint] = float(np.rad2deg(robot.upper_limits[joint])) + 1.0
+    theta, note = start_configuration(load_scenario(_scenario(tmp_path, degrees)), robot)
+    assert f"puts joints ['{robot.joint_names[joint]}'] outside their limits" in note
+    assert np.all(theta >= robot.lower_limits)
+    assert np.all(theta <= robot.upper_limits)
+
+
+def test_demo_passes_the_model_and_prints_the_note(tmp_path, monkeypatch, capsys):
+    model = _six_joint_model(tmp_path)
+    seen = []
+
+    def fake_run(method, args, _file):
+        seen.append((args.model, args.initial_theta))
+        return DemoRow(method, _figures(), 1.0, None)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    scenario = _scenario(tmp_path, SHORT_ROLL_SCENARIO["initial_joint_positions_deg"])
+    argv = ["--no-record", "--methods", "dls", "--scenario", str(scenario), "--model", str(model)]
+    assert main([*argv, "--domain-id", DOMAIN]) == 0
+    out = capsys.readouterr().out
+    assert "note: scenario 'short_observation' gives 7 initial angles" in out
+    assert f"model: {model.resolve()}" in out
+    assert seen[0][0] == model.resolve()
+    assert seen[0][1].shape == (6,)
+
+
+def test_demo_rejects_a_missing_model_in_one_line(capsys):
+    assert main(["--no-record", "--model", "no_such_model.yaml", "--domain-id", DOMAIN]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "model config not found" in err[0]
+
+
+def test_model_is_an_inspection_option(capsys):
+    with pytest.raises(SystemExit) as exit_info:  # a usage error, as every other option's
+        main(["--scenario", "ptp_three_phase", "--model", "x.yaml"])
+    assert exit_info.value.code == 2
+    assert "--model is for the inspection scenarios" in capsys.readouterr().err
+
+
+def _figures():
+    from rns_ros.analysis.recorded_run import RunFigures
+
+    return RunFigures(
+        max_base_deviation_deg=1e-4,
+        final_camera_error_deg=0.05,
+        rms_tracking_error=1e-3,
+        max_wrist_drift_m=0.1,
+        max_joint_speed=0.3,
+        angular_momentum_drift=1e-13,
+        samples=400,
+    )
+
+
+def test_demo_runs_a_six_joint_arm_reactionless_over_dds(tmp_path):
+    """Simulator, controller, operator and logger all on the 6-joint model: the camera turns
+    30 deg while the base stays as still as the in-process closed loop keeps it."""
+    model = _six_joint_model(tmp_path)
+    scenario = _scenario(tmp_path, SIX_ANGLES_DEG)
+    summary = tmp_path / "summary.json"
+    argv = ["--scenario", str(scenario), "--model", str(model), "--methods", "dls"]
+    argv += ["--summary", str(summary), "--output", str(tmp_path / "rec"), "--domain-id", DOMAIN]
+    assert main(argv) == 0
+    (row,) = json.loads(summary.read_text())
+    core = run_scenario(load_model(model), load_scenario(scenario))
+    assert core.max_base_deviation_deg < 1e-5
+    assert row["max_base_deviation_deg"] < 5e-3  # DDS sample latency, as the default arm's
+    assert row["final_camera_error_deg"] < 1.0
+    assert row["angular_momentum_drift"] < 1e-9
+    counts = recording_summary(row["recording"])
+    assert any(path.endswith("joint_6") and rows > 0 for path, rows in counts.items())
+    assert not any(path.endswith("joint_7") and rows > 0 for path, rows in counts.items())

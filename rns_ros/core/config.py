@@ -1,16 +1,37 @@
-"""Model configuration files (``config/model.yaml``): which URDF, and which frames/joints play the
-thesis roles. Unknown keys and wrong types raise :class:`ConfigError` naming the key."""
+"""Model configuration files (``config/model.yaml``): which URDF, which frames/joints play the
+thesis roles, which joints are held, the satellite body and the initial joint angles. Unknown
+keys and wrong types raise :class:`ConfigError` naming the key.
+
+Keys (all but ``urdf`` optional): ``urdf`` (path relative to the YAML file), ``camera_frame``,
+``wrist_frame`` (null: no wrist term), ``positioning_joints``, ``wrist_joints``,
+``controlled_joints`` (list), ``held_joints`` ({name: position [rad or m]}),
+``initial_joint_positions`` ({name: angle [rad]}), ``base`` ({mass [kg], inertia: 3 principal
+moments or 6 values ixx ixy ixz iyy iyz izz [kg m^2], mount_xyz [m], mount_rpy [rad]}).
+"""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import yaml
 
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.model import FreeFloatingModel, ModelSpec
+from rns_ros.core.urdf_prep import BaseBody
 
-_KEYS = {"urdf", "camera_frame", "wrist_frame", "positioning_joints", "wrist_joints"}
+_KEYS = {
+    "urdf",
+    "camera_frame",
+    "wrist_frame",
+    "positioning_joints",
+    "wrist_joints",
+    "controlled_joints",
+    "held_joints",
+    "initial_joint_positions",
+    "base",
+}
+_BASE_KEYS = {"mass", "inertia", "mount_xyz", "mount_rpy"}
 
 
 def read_yaml_mapping(path: str | Path, keys: set[str] | None, what: str) -> tuple[Path, dict]:
@@ -45,7 +66,8 @@ def check_keys(mapping: dict, keys: set[str], where: str) -> None:
 def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
     """Read a model YAML file; returns (absolute URDF path, :class:`ModelSpec`).
 
-    A relative ``urdf`` path is taken relative to the YAML file's folder.
+    A relative ``urdf`` path is taken relative to the YAML file's folder. An absent
+    ``positioning_joints`` / ``wrist_joints`` means the default split (ModelSpec: None).
     """
     path, content = read_yaml_mapping(path, _KEYS, "model config")
     if not isinstance(content.get("urdf"), str):
@@ -53,15 +75,18 @@ def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
     for key in ("camera_frame", "wrist_frame"):
         if key in content and content[key] is not None and not isinstance(content[key], str):
             raise ConfigError(f"{path}: '{key}' must be a frame name, got {content[key]!r}")
-    joints = {}
-    for key in ("positioning_joints", "wrist_joints"):
-        value = content.get(key, [])
-        if not isinstance(value, list) or not all(isinstance(name, str) for name in value):
-            raise ConfigError(f"{path}: '{key}' must be a list of joint names, got {value!r}")
-        joints[key] = tuple(value)
+    joints = {
+        key: _names(content[key], f"{path}: '{key}'") if key in content else None
+        for key in ("positioning_joints", "wrist_joints", "controlled_joints")
+    }
     spec = ModelSpec(
         camera_frame=content.get("camera_frame", "camera"),
         wrist_frame=content.get("wrist_frame", "wrist"),
+        held_joints=_positions(content.get("held_joints", {}), f"{path}: 'held_joints'"),
+        initial_joint_positions=_positions(
+            content.get("initial_joint_positions", {}), f"{path}: 'initial_joint_positions'"
+        ),
+        base=None if content.get("base") is None else _base(content["base"], f"{path}: 'base'"),
         **joints,
     )
     return (path.parent / content["urdf"]).resolve(), spec
@@ -71,3 +96,49 @@ def load_model(path: str | Path) -> FreeFloatingModel:
     """Load the :class:`FreeFloatingModel` described by a model YAML file."""
     urdf, spec = load_model_config(path)
     return FreeFloatingModel.from_urdf(urdf, spec)
+
+
+def _names(value, where: str) -> tuple[str, ...]:
+    if not isinstance(value, list) or not all(isinstance(name, str) for name in value):
+        raise ConfigError(f"{where} must be a list of joint names, got {value!r}")
+    return tuple(value)
+
+
+def _number(value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ConfigError(f"{where} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _numbers(value, sizes: tuple[int, ...], where: str) -> tuple[float, ...]:
+    if not isinstance(value, list) or len(value) not in sizes:
+        raise ConfigError(f"{where} must be a list of {' or '.join(map(str, sizes))} numbers")
+    return tuple(_number(item, where) for item in value)
+
+
+def _positions(value, where: str) -> dict[str, float]:
+    if not isinstance(value, dict) or not all(isinstance(name, str) for name in value):
+        raise ConfigError(f"{where} must be a mapping joint name: position, got {value!r}")
+    return {name: _number(position, f"{where} '{name}'") for name, position in value.items()}
+
+
+def _base(value, where: str) -> BaseBody:
+    """The satellite body of the ``base`` key (:class:`BaseBody`)."""
+    if not isinstance(value, dict):
+        raise ConfigError(f"{where} must be a mapping with keys {sorted(_BASE_KEYS)}")
+    check_keys(value, _BASE_KEYS, where)
+    for key in ("mass", "inertia"):
+        if key not in value:
+            raise ConfigError(f"{where}: '{key}' is required")
+    moments = _numbers(value["inertia"], (3, 6), f"{where} 'inertia'")
+    if len(moments) == 3:
+        xx, yy, zz = moments
+        xy = xz = yz = 0.0
+    else:
+        xx, xy, xz, yy, yz, zz = moments
+    return BaseBody(
+        mass=_number(value["mass"], f"{where} 'mass'"),
+        inertia=((xx, xy, xz), (xy, yy, yz), (xz, yz, zz)),
+        mount_xyz=_numbers(value.get("mount_xyz", [0.0] * 3), (3,), f"{where} 'mount_xyz'"),
+        mount_rpy=_numbers(value.get("mount_rpy", [0.0] * 3), (3,), f"{where} 'mount_rpy'"),
+    )

@@ -22,7 +22,8 @@ import pinocchio as pin
 
 from rns_ros.core.config import read_yaml_mapping
 from rns_ros.core.errors import ConfigError, ModelError
-from rns_ros.core.model import check_moving_bodies, check_one_dof_joints, check_urdf_inertials
+from rns_ros.core.model import check_moving_bodies, check_one_dof_joints
+from rns_ros.core.urdf_prep import check_urdf_inertials
 from rns_ros.core.validation import as_vector
 
 #: Standard gravity [m/s^2], along -z of world when ``gravity`` is on.

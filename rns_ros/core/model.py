@@ -1,15 +1,18 @@
 """Free-floating space robot model: one Pinocchio model with a free-flyer root, zero gravity.
 
-The URDF root link is the satellite base; its frame is the base frame {B} of the thesis (chapter 2).
-Every actuated joint of the file becomes an arm joint (theta, in Pinocchio's joint order). The
-end-effector (``camera``) and wrist-point (``wrist``) frames, and the positioning / wrist subchains
-of thesis section 4.1.2, are named in configuration, never hard-coded.
+The root body is the satellite base; its frame is the base frame {B} of the thesis (chapter 2).
+It is the URDF's root link, or the satellite of the model YAML's ``base`` (the thesis satellite
+when the URDF's root has no mass), see :mod:`rns_ros.core.urdf_prep`. The *controlled* joints
+are the arm joints theta (Pinocchio's joint order); the others are held at fixed positions, their
+mass merged into the body that carries them (:mod:`rns_ros.core.joint_selection`). The
+end-effector (``camera``) and wrist-point (``wrist``) frames, and the positioning / wrist
+subchains of thesis section 4.1.2, are named in configuration, never hard-coded.
 """
 
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,33 +20,56 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.errors import InputError, ModelError
+from rns_ros.core.joint_selection import (
+    LIMIT_SLACK,
+    ONE_DOF_JOINTS,
+    REVOLUTE_JOINTS,
+    frame_id,
+    lock_joints,
+    select_joints,
+)
+from rns_ros.core.urdf_prep import (
+    BaseBody,
+    check_inertia_matrix,
+    check_urdf_inertials,
+    prepare_urdf,
+)
 from rns_ros.core.validation import as_vector
 
-#: Joint kinds (Pinocchio short names) that have one position and one velocity coordinate.
-_ONE_DOF_JOINTS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
-_ONE_DOF_JOINTS += ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
-
-#: Relative tolerance of the triangle inequality on principal moments (I1 + I2 >= I3): URDFs
-#: exported from CAD round their moments, and a thin disk (I, I, 2I) sits exactly on the bound.
-TRIANGLE_RTOL = 1e-4
-_INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+#: Number of wrist joints of the default subchain split (thesis section 4.1.2: a 3-joint wrist).
+DEFAULT_WRIST_JOINTS = 3
 
 
 @dataclass(frozen=True)
 class ModelSpec:
-    """What rns_ros needs to know about an arm beyond its URDF.
+    """What rns_ros needs to know about an arm beyond its URDF (the model YAML).
 
     Attributes:
         camera_frame: end-effector frame whose angular velocity is commanded (eq. 4.5).
         wrist_frame: frame whose origin is the wrist point p_w of eq. (4.5), or None.
-        positioning_joints: joint names of the positioning subchain P (section 4.1.2), may be empty.
-        wrist_joints: joint names of the wrist subchain W (section 4.1.2), may be empty.
+        positioning_joints: joint names of the positioning subchain P (section 4.1.2); () for
+            no subchains; None for the default: the controlled joints not in the wrist.
+        wrist_joints: joint names of the wrist subchain W (section 4.1.2); () for no
+            subchains; None for the default: the last :data:`DEFAULT_WRIST_JOINTS` controlled
+            joints (or those not in ``positioning_joints``). Both None with fewer than 4
+            controlled joints: no subchains.
+        controlled_joints: joint names theta is made of, or None for every revolute joint of
+            the chain from the root to ``camera_frame``.
+        held_joints: positions [rad or m] of joints not controlled (others at 0, a ``<mimic>``
+            joint at its leader's rule).
+        initial_joint_positions: initial angles [rad] of controlled joints (others 0).
+        base: the satellite body, or None (the URDF root, or the thesis satellite when the
+            URDF root has no mass).
     """
 
     camera_frame: str = "camera"
     wrist_frame: str | None = "wrist"
-    positioning_joints: tuple[str, ...] = ()
-    wrist_joints: tuple[str, ...] = ()
+    positioning_joints: tuple[str, ...] | None = ()
+    wrist_joints: tuple[str, ...] | None = ()
+    controlled_joints: tuple[str, ...] | None = None
+    held_joints: Mapping[str, float] = field(default_factory=dict)
+    initial_joint_positions: Mapping[str, float] = field(default_factory=dict)
+    base: BaseBody | None = None
 
 
 @dataclass(frozen=True)
@@ -58,19 +84,46 @@ class FreeFloatingModel:
     """A Pinocchio free-flyer model of a satellite base carrying a serial arm.
 
     Attributes:
-        model: the ``pin.Model`` (nq = 7 + n, nv = 6 + n), gravity zero.
+        model: the ``pin.Model`` (nq = 7 + n, nv = 6 + n), gravity zero, held joints locked.
         data: one ``pin.Data`` reused by :class:`rns_ros.core.state.FreeFloatingState`.
-        joint_names: arm joint names in theta order, length n.
-        n: number of arm joints.
-        base_link: name of the URDF root link (the satellite base frame {B}).
+        joint_names: controlled joint names in theta order, length n.
+        n: number of controlled joints.
+        held_joints: held joint name -> locked position [rad or m] (empty when none).
+        initial_theta: initial joint angles [rad] from ``initial_joint_positions``, shape (n,).
+        base_link: name of the root link (the satellite base frame {B}).
         camera_frame_id, wrist_frame_id: Pinocchio frame ids (wrist may be None).
         subchains: :class:`Subchains` or None when the spec names none.
-        velocity_limits: [rad/s] (or [m/s]) per joint from the URDF, shape (n,).
-        lower_limits, upper_limits: joint position limits [rad], shape (n,).
+        velocity_limits: [rad/s] (or [m/s]) per joint from the URDF, shape (n,); +inf where
+            the URDF gives none.
+        lower_limits, upper_limits: joint position limits [rad], shape (n,); -inf / +inf for a
+            continuous joint.
+        base_mass: mass of the root body [kg] (satellite plus the links fixed to it).
         total_mass: m_C of eq. (2.9) [kg].
+        urdf_xml: the URDF text as loaded (the arm's, before the satellite is added).
+        source_path: the URDF file, or None when built from text.
     """
 
-    def __init__(self, model: pin.Model, spec: ModelSpec, *, name: str = "robot") -> None:
+    def __init__(
+        self,
+        model: pin.Model,
+        spec: ModelSpec,
+        *,
+        name: str = "robot",
+        held_joints: Mapping[str, float] | None = None,
+        urdf_xml: str = "",
+        source_path: Path | None = None,
+        held_rules: Mapping[str, str] | None = None,
+        notes: tuple[str, ...] = (),
+    ) -> None:
+        """Wrap a built free-flyer ``model`` (held joints already locked).
+
+        Args:
+            held_joints: locked joint name -> position [rad or m].
+            urdf_xml, source_path: the URDF as loaded (attributes of the same names).
+            held_rules: held joint name -> its position with unit and origin, for
+                :meth:`describe`.
+            notes: changes made to the URDF on loading, one line each, for :meth:`describe`.
+        """
         self.name = name
         self.spec = spec
         self.model = model
@@ -79,12 +132,18 @@ class FreeFloatingModel:
         self._check_bodies()
         self.n = model.nv - 6
         self.joint_names: tuple[str, ...] = tuple(model.names[2:])
+        self.held_joints: dict[str, float] = dict(held_joints or {})
+        self.urdf_xml = urdf_xml
+        self.source_path = source_path
+        self._held_rules = dict(held_rules or {})
+        self._notes = tuple(notes)
         self.camera_frame_id = self._frame_id(spec.camera_frame, "camera_frame")
         self.wrist_frame_id = (
             None if spec.wrist_frame is None else self._frame_id(spec.wrist_frame, "wrist_frame")
         )
         self.subchains = self._subchains(spec)
-        self.velocity_limits = np.array(model.velocityLimit[6:], dtype=float)
+        velocity = np.array(model.velocityLimit[6:], dtype=float)
+        self.velocity_limits = np.where(velocity > 0.0, velocity, np.inf)  # 0: none given
         self.lower_limits = np.array(model.lowerPositionLimit[7:], dtype=float)
         self.upper_limits = np.array(model.upperPositionLimit[7:], dtype=float)
         self.base_link = next(
@@ -92,9 +151,11 @@ class FreeFloatingModel:
             for frame in model.frames
             if frame.parentJoint == 1 and frame.type == pin.FrameType.BODY
         )
+        self.base_mass = float(model.inertias[1].mass)
         self.total_mass = float(sum(inertia.mass for inertia in model.inertias))
         if not self.total_mass > 0.0:
             raise ModelError(f"{name}: total mass must be > 0 kg, got {self.total_mass}")
+        self.initial_theta = self._initial_theta(spec.initial_joint_positions)
         self.data = model.createData()
 
     # construction ---------------------------------------------------------------------------
@@ -108,35 +169,63 @@ class FreeFloatingModel:
         path = Path(path)
         if not path.is_file():
             raise ModelError(f"URDF file not found: {path}")
-        return cls.from_urdf_string(path.read_text(), spec, name=path.stem)
+        return cls.from_urdf_string(path.read_text(), spec, name=path.stem, source_path=path)
 
     @classmethod
     def from_urdf_string(
-        cls, xml: str, spec: ModelSpec | None = None, *, name: str = "robot"
+        cls,
+        xml: str,
+        spec: ModelSpec | None = None,
+        *,
+        name: str = "robot",
+        source_path: Path | None = None,
     ) -> FreeFloatingModel:
         """Build the model from URDF text (see :meth:`from_urdf`).
 
         Every link's ``<inertial>`` is checked as written (:func:`check_urdf_inertials`) before
         Pinocchio reads the file: its parser turns an unreadable number into zero without failing.
+        Continuous joints become revolute joints without position limits and the satellite is
+        added (:func:`rns_ros.core.urdf_prep.prepare_urdf`); joints not controlled are locked
+        (:mod:`rns_ros.core.joint_selection`).
         """
+        spec = spec or ModelSpec()
         check_urdf_inertials(xml, name)
+        prepared = prepare_urdf(xml, spec.base, name)
         try:
-            model = pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
+            full = pin.buildModelFromXML(prepared.xml, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
             raise ModelError(f"{name}: URDF could not be parsed: {exc}") from exc
-        return cls(model, spec or ModelSpec(), name=name)
+        _check_arm_joints(full, name)
+        for joint in prepared.continuous_joints:
+            index = full.joints[full.getJointId(joint)].idx_q
+            full.lowerPositionLimit[index], full.upperPositionLimit[index] = -np.inf, np.inf
+        selection = select_joints(
+            full,
+            spec.camera_frame,
+            spec.controlled_joints,
+            spec.held_joints,
+            prepared.mimic,
+            name,
+        )
+        held = {}
+        for joint, position in selection.held.items():
+            kind = full.joints[full.getJointId(joint)].shortname()
+            unit = "rad" if kind in REVOLUTE_JOINTS else "m"
+            held[joint] = f"{position:.6g} {unit} ({selection.rules[joint]})"
+        return cls(
+            lock_joints(full, selection.held),
+            spec,
+            name=name,
+            held_joints=selection.held,
+            urdf_xml=xml,
+            source_path=source_path,
+            held_rules=held,
+            notes=prepared.notes,
+        )
 
     # validation ------------------------------------------------------------------------------
     def _check_joints(self) -> None:
-        model = self.model
-        if model.njoints < 3 or model.joints[1].shortname() != "JointModelFreeFlyer":
-            raise ModelError(f"{self.name}: expected a free-flyer root and at least one arm joint")
-        check_one_dof_joints(
-            model,
-            self.name,
-            2,
-            "rns_ros supports revolute and prismatic joints (continuous joints: give them limits)",
-        )
+        _check_arm_joints(self.model, self.name)
 
     def _check_bodies(self) -> None:
         """Every moving body must be physical (:func:`check_moving_bodies`): a free-flyer's mass
@@ -144,27 +233,30 @@ class FreeFloatingModel:
         check_moving_bodies(self.model, self.name)
 
     def _frame_id(self, frame: str, what: str) -> int:
-        if not self.model.existFrame(frame):
-            names = sorted({f.name for f in self.model.frames} - {"universe", "root_joint"})
-            raise ModelError(
-                f"{self.name}: {what} '{frame}' is not a frame of the URDF; have {names}"
-            )
-        return self.model.getFrameId(frame)
+        return frame_id(self.model, frame, what, self.name)
 
     def _subchains(self, spec: ModelSpec) -> Subchains | None:
-        if not spec.positioning_joints and not spec.wrist_joints:
+        positioning, wrist = spec.positioning_joints, spec.wrist_joints
+        if positioning is None and wrist is None and self.n <= DEFAULT_WRIST_JOINTS:
+            return None
+        if wrist is None:
+            wrist = (
+                self.joint_names[-DEFAULT_WRIST_JOINTS:]
+                if positioning is None
+                else tuple(joint for joint in self.joint_names if joint not in positioning)
+            )
+        if positioning is None:
+            positioning = tuple(joint for joint in self.joint_names if joint not in wrist)
+        if not positioning and not wrist:
             return None
         indices = []
-        for label, names in (
-            ("positioning", spec.positioning_joints),
-            ("wrist", spec.wrist_joints),
-        ):
+        for label, names in (("positioning", positioning), ("wrist", wrist)):
             if not names:
                 raise ModelError(f"{self.name}: {label}_joints is empty; give both subchains")
             unknown = [joint for joint in names if joint not in self.joint_names]
             if unknown:
                 raise ModelError(
-                    f"{self.name}: {label}_joints {unknown} are not joints of the URDF; "
+                    f"{self.name}: {label}_joints {unknown} are not controlled joints; "
                     f"valid names: {list(self.joint_names)}"
                 )
             indices.append(np.array([self.joint_names.index(joint) for joint in names]))
@@ -175,6 +267,44 @@ class FreeFloatingModel:
                 f"{self.name}: subchains must cover all {self.n} joints {list(self.joint_names)}"
             )
         return Subchains(positioning=indices[0], wrist=indices[1])
+
+    def _initial_theta(self, positions: Mapping[str, float]) -> np.ndarray:
+        theta = np.zeros(self.n)
+        for joint, value in positions.items():
+            if joint not in self.joint_names:
+                hint = "; set held joints in held_joints" if joint in self.held_joints else ""
+                raise ModelError(
+                    f"{self.name}: initial_joint_positions names '{joint}', not a controlled "
+                    f"joint {list(self.joint_names)}{hint}"
+                )
+            index = self.joint_names.index(joint)
+            low, high = self.lower_limits[index], self.upper_limits[index]
+            if not (math.isfinite(value) and low - LIMIT_SLACK <= value <= high + LIMIT_SLACK):
+                raise ModelError(
+                    f"{self.name}: initial_joint_positions '{joint}' = {value} rad is outside "
+                    f"its limits [{low:.6g}, {high:.6g}] rad"
+                )
+            theta[index] = value
+        theta.setflags(write=False)
+        return theta
+
+    # summary ---------------------------------------------------------------------------------
+    def describe(self) -> list[str]:
+        """The start-up summary, one line each: controlled and held joints, the base and the
+        total mass [kg], then every change made to the URDF on loading."""
+        held = ", ".join(
+            f"{joint} = {self._held_rules.get(joint, f'{value:.6g}')}"
+            for joint, value in self.held_joints.items()
+        )
+        arm = self.total_mass - self.base_mass
+        return [
+            f"{self.name}: {self.n} controlled joints {list(self.joint_names)}",
+            f"held joints (locked, mass counted): {held or 'none'}",
+            f"base '{self.base_link}': {self.base_mass:.6g} kg (with the links fixed to it)",
+            f"total mass {self.total_mass:.6g} kg (arm {arm:.6g} kg, base/arm "
+            f"{self.base_mass / arm if arm > 0 else math.inf:.4g})",
+            *self._notes,
+        ]
 
     # configurations --------------------------------------------------------------------------
     def configuration(
@@ -219,7 +349,7 @@ class FreeFloatingModel:
 
 def check_one_dof_joints(model: pin.Model, name: str, first: int, supported: str) -> None:
     """Every joint from index ``first`` on must have one position and one velocity coordinate
-    (revolute or prismatic, :data:`_ONE_DOF_JOINTS`).
+    (revolute or prismatic, :data:`~rns_ros.core.joint_selection.ONE_DOF_JOINTS`).
 
     Raises:
         ModelError: naming the first other joint, its kind and ``supported`` (what the caller
@@ -227,7 +357,7 @@ def check_one_dof_joints(model: pin.Model, name: str, first: int, supported: str
     """
     for index in range(first, model.njoints):
         kind = model.joints[index].shortname()
-        if kind not in _ONE_DOF_JOINTS:
+        if kind not in ONE_DOF_JOINTS:
             raise ModelError(f"{name}: joint '{model.names[index]}' is {kind}; {supported}")
 
 
@@ -251,80 +381,13 @@ def check_moving_bodies(model: pin.Model, name: str) -> None:
                 f"{name}: {where} has mass {body.mass} kg; must be finite and > 0 "
                 "(a moving link needs an <inertial>)"
             )
-        _check_inertia_matrix(np.array(body.inertia), f"{name}: {where}")
+        check_inertia_matrix(np.array(body.inertia), f"{name}: {where}")
 
 
-# URDF inertial checks ---------------------------------------------------------------------------
-def check_urdf_inertials(xml: str, name: str = "robot") -> None:
-    """Check every ``<link>``'s ``<inertial>`` as the URDF text writes it.
-
-    Links without ``<inertial>`` (frames such as ``camera``) are accepted. For the others: mass
-    [kg] finite and > 0; the six moments ``ixx ixy ixz iyy iyz izz`` [kg m^2] present and finite;
-    the inertia matrix positive definite; its principal moments obey the triangle inequality
-    I1 + I2 >= I3 (relative tolerance :data:`TRIANGLE_RTOL`).
-
-    Raises:
-        ModelError: one line naming the link and the bad value; or the text is not XML.
-    """
-    try:
-        root = ET.fromstring(xml.encode())
-    except ET.ParseError as exc:
-        raise ModelError(f"{name}: URDF could not be parsed: {exc}") from None
-    for link in root.iter("link"):
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        where = f"{name}: link '{link.get('name')}'"
-        mass = _number(inertial.find("mass"), "value", f"{where} <mass>")
-        if not mass > 0.0:
-            raise ModelError(f"{where}: mass must be finite and > 0 kg, got {mass}")
-        element = inertial.find("inertia")
-        values = {key: _number(element, key, f"{where} <inertia>") for key in _INERTIA_KEYS}
-        matrix = np.array(
-            [
-                [values["ixx"], values["ixy"], values["ixz"]],
-                [values["ixy"], values["iyy"], values["iyz"]],
-                [values["ixz"], values["iyz"], values["izz"]],
-            ]
-        )
-        _check_inertia_matrix(matrix, where)
-
-
-def _number(element: ET.Element | None, key: str, where: str) -> float:
-    """The finite float in attribute ``key`` of ``element``, else ModelError naming it."""
-    if element is None:
-        raise ModelError(f"{where} is missing")
-    text = element.get(key)
-    if text is None:
-        raise ModelError(f"{where}: attribute {key} is missing")
-    try:
-        value = float(text)
-    except ValueError:
-        raise ModelError(f"{where}: {key}={text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ModelError(f"{where}: {key}={text!r} must be finite")
-    return value
-
-
-def _check_inertia_matrix(matrix: np.ndarray, where: str) -> None:
-    """Rotational inertia [kg m^2] (3, 3): finite, symmetric, positive definite, triangle."""
-    if not np.all(np.isfinite(matrix)):
-        raise ModelError(f"{where}: inertia must be finite, got {matrix.tolist()}")
-    if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=0.0):
-        raise ModelError(f"{where}: inertia must be symmetric, got {matrix.tolist()}")
-    moments = np.linalg.eigvalsh(matrix)  # ascending
-    if not moments[0] > 0.0:
-        raise ModelError(
-            f"{where}: inertia must be positive definite, got principal moments "
-            f"{_fmt(moments)} kg m^2 from {_fmt(matrix)}"
-        )
-    if moments[0] + moments[1] < moments[2] * (1.0 - TRIANGLE_RTOL):
-        raise ModelError(
-            f"{where}: principal moments {_fmt(moments)} kg m^2 break the triangle inequality "
-            f"I1 + I2 >= I3 ({moments[0] + moments[1]:.6g} < {moments[2]:.6g}); no rigid body "
-            "has them"
-        )
-
-
-def _fmt(values: np.ndarray) -> str:
-    return np.array2string(np.asarray(values), precision=6, separator=", ").replace("\n", "")
+def _check_arm_joints(model: pin.Model, name: str) -> None:
+    """A free-flyer root joint, then at least one arm joint, each revolute or prismatic."""
+    if model.njoints < 3 or model.joints[1].shortname() != "JointModelFreeFlyer":
+        raise ModelError(f"{name}: expected a free-flyer root and at least one arm joint")
+    check_one_dof_joints(
+        model, name, 2, "rns_ros supports revolute, continuous, prismatic and fixed joints"
+    )

@@ -501,8 +501,12 @@ class FreeFloatingSimulator:
         load = np.max(np.abs(bias) / self.effort_limits)
         if load <= BIAS_SHARE:
             return self.velocity_limits
-        speed = np.max(np.abs(theta_dot) / self.velocity_limits)  # fraction of the limits
-        return self.velocity_limits * (speed * np.sqrt(BIAS_SHARE / load))
+        limits = self.velocity_limits
+        speed = np.max(np.abs(theta_dot) / limits)  # fraction of the limits
+        cap = np.full_like(limits, np.inf)  # an unlimited joint stays unlimited (not inf * 0)
+        bounded = np.isfinite(limits)
+        cap[bounded] = limits[bounded] * (speed * np.sqrt(BIAS_SHARE / load))
+        return cap
 
     def _acceleration(
         self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, fraction: float = 0.0

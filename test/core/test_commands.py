@@ -83,3 +83,20 @@ def test_a_bad_partial_goal_is_rejected_with_its_reason(names, positions, messag
 def test_long_name_lists_are_cut_in_messages():
     assert listed(["a", "b"]) == "['a', 'b']"
     assert listed([str(k) for k in range(25)]).endswith("'9'] and 15 more")
+
+
+def test_absent_bounds_accept_any_finite_command():
+    """+-inf limits (a continuous joint, or no velocity limit in the URDF) never reject."""
+    from rns_ros.core.commands import check_reference_positions, check_velocity_limits
+
+    limits = np.array([np.inf, 1.0, np.inf])
+    check_velocity_limits(np.array([1e6, 1.0, -1e6]), limits, JOINTS)
+    with pytest.raises(InputError, match=r"1\.5 rad/s on b exceeds its limit 1"):
+        check_velocity_limits(np.array([1e6, 1.5, 0.0]), limits, JOINTS)
+    lower, upper = np.array([-np.inf, -1.0, -np.inf]), np.array([np.inf, 1.0, np.inf])
+    current = np.array([100.0, 0.0, -100.0])
+    check_reference_positions(np.array([100.1, 0.1, -100.1]), current, lower, upper, 0.2, JOINTS)
+    with pytest.raises(InputError, match=r"position 1.5 rad on b is outside its limits \[-1, 1\]"):
+        check_reference_positions(np.array([100.1, 1.5, -100.1]), current, lower, upper, 1, JOINTS)
+    goal = partial_joint_goal(["c"], [-1e3], GOAL_MODEL, current, lower, upper)
+    assert goal.tolist() == [100.0, 0.0, -1e3]

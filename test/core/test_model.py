@@ -149,17 +149,41 @@ def test_subchains_must_partition_the_arm():
         FreeFloatingModel.from_urdf(urdf, spec)
 
 
-def test_continuous_joint_is_rejected():
-    xml = (
+def _one_joint_urdf(kind: str) -> str:
+    return (
         "<robot name='c'><link name='base'><inertial><mass value='10'/><inertia ixx='1' iyy='1'"
         " izz='1' ixy='0' ixz='0' iyz='0'/></inertial></link><link name='l'><inertial><mass"
         " value='1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' ixz='0' iyz='0'/></inertial></link>"
-        "<joint name='spin' type='continuous'><parent link='base'/><child link='l'/>"
-        "<axis xyz='0 0 1'/></joint><link name='camera'/><joint name='cam' type='fixed'>"
-        "<parent link='l'/><child link='camera'/></joint></robot>"
+        f"<joint name='spin' type='{kind}'><parent link='base'/><child link='l'/>"
+        "<axis xyz='0 0 1'/><limit effort='5' velocity='2'/></joint><link name='camera'/>"
+        "<joint name='cam' type='fixed'><parent link='l'/><child link='camera'/></joint></robot>"
     )
-    with pytest.raises(ModelError, match=r"joint 'spin' is .*; rns_ros supports revolute and"):
-        FreeFloatingModel.from_urdf_string(xml, ModelSpec(wrist_frame=None))
+
+
+def test_continuous_joint_is_an_unbounded_revolute_joint():
+    """One position coordinate (not Pinocchio's (cos, sin) pair), no position limits whatever the
+    <limit> tag says, its velocity limit kept; the root link has mass: no satellite added."""
+    robot = FreeFloatingModel.from_urdf_string(
+        _one_joint_urdf("continuous"), ModelSpec(wrist_frame=None)
+    )
+    assert robot.n == 1
+    assert robot.model.nq == 8
+    assert robot.joint_names == ("spin",)
+    assert robot.lower_limits.tolist() == [-np.inf]
+    assert robot.upper_limits.tolist() == [np.inf]
+    assert robot.velocity_limits.tolist() == [2.0]
+    assert robot.base_link == "base"
+    # the angle is an angle: 2 pi further is the same placement of the camera
+    poses = []
+    for angle in (0.3, 0.3 + 2 * np.pi):
+        pin.framesForwardKinematics(robot.model, robot.data, robot.configuration([angle]))
+        poses.append(robot.data.oMf[robot.camera_frame_id].homogeneous.copy())
+    np.testing.assert_allclose(poses[0], poses[1], atol=1e-12)
+
+
+def test_floating_arm_joint_is_rejected():
+    with pytest.raises(ModelError, match=r"joint 'spin' is .*; rns_ros supports revolute"):
+        FreeFloatingModel.from_urdf_string(_one_joint_urdf("floating"), ModelSpec(wrist_frame=None))
 
 
 def test_configuration_validates_inputs(robot):

@@ -326,3 +326,22 @@ def test_an_undamped_servo_is_rejected(robot):
     gains = ServoGains(np.full(7, 100.0), np.zeros(7), np.zeros(7))
     with pytest.raises(ConfigError, match="damping must be > 0 wherever stiffness > 0"):
         _simulator(robot, "dynamic", gains=gains)
+
+
+def test_the_speed_cap_keeps_unlimited_joints_unlimited():
+    """Under a large velocity-product load the cap lowers the finite speed limits uniformly; a
+    joint without a limit (+inf) stays unlimited, never inf * 0 = NaN."""
+    from pathlib import Path
+
+    from rns_ros.core.config import load_model
+    from rns_ros.sim.free_floating import BIAS_SHARE
+
+    robot = load_model(Path(__file__).resolve().parents[1] / "data/arms/cont6/model.yaml")
+    sim = FreeFloatingSimulator(robot, mode="dynamic")
+    bias = 4.0 * BIAS_SHARE * sim.effort_limits  # load 4 x the share: speeds halved
+    sim.velocity_limits = np.array([np.inf, np.inf, np.inf, 0.8, 0.8, 0.8])
+    theta_dot = np.array([5.0, 0.0, 0.0, 0.4, 0.0, 0.0])  # the bounded joints at half speed
+    cap = sim._speed_cap(theta_dot, bias)
+    np.testing.assert_allclose(cap, [np.inf, np.inf, np.inf, 0.2, 0.2, 0.2], rtol=1e-15)
+    sim.velocity_limits = np.full(robot.n, np.inf)
+    assert np.all(sim._speed_cap(theta_dot, bias) == np.inf)

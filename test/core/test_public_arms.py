@@ -385,5 +385,4 @@ def test_the_default_arm_is_built_exactly_as_pinocchio_reads_its_urdf():
         assert np.array_equal(getattr(model, limits), getattr(reference, limits))
     assert robot.held_joints == {}
     assert robot.base_link == "base_link"
-    assert not robot.initial_theta.any()
     assert robot.urdf_xml == urdf.read_text()

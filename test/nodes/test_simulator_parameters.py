@@ -27,3 +27,16 @@ def test_on_set_check_rejects_what_a_spec_refuses_and_passes_the_rest():
     assert "'mode' must be one of" in bad.reason
     good = [Parameter("real_time_factor", value=0.0), Parameter("use_sim_time", value=True)]
     assert free_floating.check_parameter_changes(specs, good).successful
+
+
+def test_the_default_start_is_the_default_models_initial_configuration():
+    """config/model.yaml's initial_joint_positions (what rns_model check looks at) and the
+    simulator's default start are the same pose, the thesis' satellite observation."""
+    import numpy as np
+
+    from rns_ros.core import load_model
+    from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
+    from rns_ros.resources import default_model_config
+
+    robot = load_model(default_model_config())
+    np.testing.assert_array_equal(robot.initial_theta, SATELLITE_OBSERVATION_RAD)

@@ -46,18 +46,17 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.attitude import AttitudeControlLaw, AttitudeGains
-from rns_ros.core import FreeFloatingState, load_model
+from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import attitude_control_parameters
 from rns_ros.nodes.cdr import odometry_fields
 from rns_ros.nodes.input_clock import InputClock
-from rns_ros.nodes.parameters import declare_parameters
+from rns_ros.nodes.parameters import declare_parameters, load_node_model
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import status_text
-from rns_ros.resources import default_model_config
 from rns_ros.sim.reaction_wheels import WHEEL_NAMES
 
 
@@ -81,7 +80,7 @@ class AttitudeControlNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(attitude_control_parameters.NODE_NAME, **node_kwargs)
         params = declare_parameters(self, attitude_control_parameters.PARAMETERS)
-        self.robot = load_model(params["model_config"] or default_model_config())
+        self.robot = load_node_model(self, params["model_config"])
         self.gains = AttitudeGains(
             natural_frequency=params["natural_frequency"],
             damping_ratio=params["damping_ratio"],

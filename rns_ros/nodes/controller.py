@@ -67,7 +67,7 @@ from rns_ros.control.teleop import (
     validate_twist,
 )
 from rns_ros.control.ticks import AwaitedTicks, ServedTick, TickInstants, next_tick_in
-from rns_ros.core import FreeFloatingState, load_model
+from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import match_named_command
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes import controller_parameters
@@ -97,10 +97,9 @@ from rns_ros.nodes.controller_status import (
     step_values,
 )
 from rns_ros.nodes.input_clock import InputClock, awaited_commands
-from rns_ros.nodes.parameters import declare_parameters
+from rns_ros.nodes.parameters import declare_parameters, load_node_model
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
-from rns_ros.resources import default_model_config
 
 #: Measured and integrated angles further apart than this [rad] restart the reference.
 RESYNC_TOLERANCE = 0.2
@@ -128,7 +127,7 @@ class ControllerNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         self._params = params = declare_parameters(self, PARAMETERS)
-        self.robot = load_model(params["model_config"] or default_model_config())
+        self.robot = load_node_model(self, params["model_config"])
         self._period = 1.0 / params["rate"]
         self.controller = ReactionlessController(self.robot, controller_settings(params))
         self._frames = twist_frame_ids(

@@ -334,3 +334,16 @@ def markdown_table(specs: Sequence[ParameterSpec]) -> str:
         )
         lines.append("| " + " | ".join(_cell(cell) for cell in row) + " |")
     return "\n".join(lines)
+
+
+def load_node_model(node: Node, model_config: str):
+    """The node's robot model (``model_config``, or the package's default when empty), with
+    its start-up summary logged once: controlled and held joints, masses, what loading changed
+    (:meth:`rns_ros.core.FreeFloatingModel.describe`)."""
+    from rns_ros.core import load_model
+    from rns_ros.resources import default_model_config
+
+    robot = load_model(model_config or default_model_config())
+    for line in robot.describe():
+        node.get_logger().info(line)
+    return robot

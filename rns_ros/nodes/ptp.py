@@ -52,18 +52,22 @@ from trajectory_msgs.msg import JointTrajectory
 from rns_ros.control.ptp import PtpMethod, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment
 from rns_ros.control.ptp_planner import plan_ptp
-from rns_ros.core import FreeFloatingState, load_model
+from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import match_named_command, partial_joint_goal
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import ptp_parameters
 from rns_ros.nodes.cdr import odometry_fields
 from rns_ros.nodes.input_clock import InputClock
-from rns_ros.nodes.parameters import declare_parameters, from_parameters, velocity_joint_order
+from rns_ros.nodes.parameters import (
+    declare_parameters,
+    from_parameters,
+    load_node_model,
+    velocity_joint_order,
+)
 from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import CommanderWatch, level_rank, node_names, status_text
-from rns_ros.resources import default_model_config
 
 #: A goal whose JointState name list is exactly this runs the full reactionless deployment.
 DEPLOY_GOAL = ["deploy"]
@@ -105,7 +109,7 @@ class PtpNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(ptp_parameters.NODE_NAME, **node_kwargs)
         self._params = params = declare_parameters(self, ptp_parameters.PARAMETERS)
-        self.robot = load_model(params["model_config"] or default_model_config())
+        self.robot = load_node_model(self, params["model_config"])
         self.method = PtpMethod.parse(params["method"])
         self.settings = from_parameters(PtpSettings, params)
         self._period = 1.0 / params["rate"]

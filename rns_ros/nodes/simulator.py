@@ -26,12 +26,12 @@ from rclpy.utilities import remove_ros_args
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
-from rns_ros.core import FreeFloatingModel, load_model, load_model_config
+from rns_ros.core import FreeFloatingModel
 from rns_ros.core.errors import ConfigError, SimulationDivergedError
 from rns_ros.nodes import contact_simulator_parameters, simulator_parameters
 from rns_ros.nodes.contact_simulator import ContactSimulatorNode
 from rns_ros.nodes.lockstep import CALLBACK_POLL, LOCKSTEP_PATIENCE, LockstepPacer
-from rns_ros.nodes.parameters import declare_parameters
+from rns_ros.nodes.parameters import declare_parameters, load_node_model
 from rns_ros.nodes.runner import ROS_STARTUP_ERRORS, parameter_help, run_node, stop_worker
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator_commands import CommandIntake, RunState
@@ -44,7 +44,6 @@ from rns_ros.nodes.simulator_parameters import (
     check_parameter_changes,
 )
 from rns_ros.nodes.simulator_publishing import StatePublisher, WheelSnapshot
-from rns_ros.resources import default_model_config
 from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.sim.reaction_wheels import ReactionWheels
 
@@ -105,9 +104,8 @@ class SimulatorNode(Node):
 
     def _start(self) -> None:
         params = declare_parameters(self, PARAMETERS)
-        model_config = params["model_config"] or default_model_config()
-        # as every node loads it (rns_controller's load_model): the same joints, held joints, base
-        self.robot = load_model(model_config)
+        # as every node loads it: the same joints, held joints, base
+        self.robot = load_node_model(self, params["model_config"])
         self.simulator = _free_floating_simulator(self.robot, params)
         self._wheels = params["reaction_wheels"]
         self._publish_every = max(1, round(1.0 / (params["publish_rate"] * params["step_size"])))
@@ -146,10 +144,7 @@ class SimulatorNode(Node):
         # starts later still receives the model.
         description_qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self._description_pub = self.create_publisher(String, "robot_description", description_qos)
-        description = getattr(self.robot, "urdf_xml", None)
-        if description is None:  # a loader without it: the URDF file the model YAML names
-            description = load_model_config(model_config)[0].read_text()
-        self._description_pub.publish(String(data=description))
+        self._description_pub.publish(String(data=self.robot.urdf_xml))
         self.create_service(Trigger, "~/reset", self._on_reset)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)

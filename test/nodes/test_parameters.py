@@ -83,3 +83,27 @@ def test_the_table_has_one_row_per_parameter_with_its_limits():
     assert lines[5] == "| `frame` | string | `''` |  |  | yes | Frame |"
     assert lines[6] == "| `on` | bool | `true` |  |  | yes | On |"
     assert lines[7] == "| `names` | string[] | `[x, y]` |  |  | yes | Names |"
+
+
+def test_a_node_logs_the_models_start_up_summary():
+    """Every node that loads the model says which joints it drives, which it holds and what
+    loading changed (the gripper arm: held fingers, the thesis satellite)."""
+    from pathlib import Path
+
+    from rns_ros.nodes.parameters import load_node_model
+
+    lines = []
+
+    class _Logger:
+        def info(self, text):
+            lines.append(text)
+
+    class _Node:
+        def get_logger(self):
+            return _Logger()
+
+    model = Path(__file__).parents[1] / "data" / "arms" / "gripper7" / "model.yaml"
+    robot = load_node_model(_Node(), str(model))
+    assert lines == robot.describe()
+    assert any("g7_finger_joint1 = 0.02" in line for line in lines)
+    assert any("thesis satellite" in line for line in lines)

@@ -18,6 +18,7 @@ CONSOLE_SCRIPTS = [
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",
     "rns_operator = rns_ros.nodes.operator:main",
     "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",
+    "rns_teleop_spacemouse = rns_ros.nodes.teleop_spacemouse:main",
     "rns_observer = rns_ros.apps.observer:main",
     "rns_param = rns_ros.apps.param:param_main",
     "rns_topic = rns_ros.apps.topic:topic_main",

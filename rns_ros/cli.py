@@ -35,6 +35,7 @@ EXECUTABLES = frozenset(
         "rns_rerun_logger",
         "rns_operator",
         "rns_teleop_keyboard",
+        "rns_teleop_spacemouse",
         "rns_observer",
         "rns_param",
         "rns_topic",

@@ -33,6 +33,7 @@ PARAMETER_MODULES = (
     "rns_ros.nodes.operator_parameters",
     "rns_ros.nodes.rerun_logger_parameters",
     "rns_ros.nodes.teleop_keyboard_parameters",
+    "rns_ros.nodes.teleop_spacemouse_parameters",
 )
 BEGIN = "<!-- parameters: begin -->"
 END = "<!-- parameters: end -->"

@@ -43,6 +43,9 @@ class ControllerState(StrEnum):
     INVALID_COMMAND = "INVALID_COMMAND"  # [ERROR] the newest command was rejected
     STALE_STATE = "STALE_STATE"  # [ERROR] joint_states / base_odom too old: zero velocity
     CONFLICTING_STATE = "CONFLICTING_STATE"  # [ERROR] several joint_states sources: zero
+    PAUSED = "PAUSED"  # [OK] held by ~/pause: exactly zero velocity, commands ignored
+    GOAL_ACTIVE = "GOAL_ACTIVE"  # [OK] turning the camera to an orientation goal
+    GOAL_REACHED = "GOAL_REACHED"  # [OK] the orientation goal was reached: zero command
 
 
 @dataclass(frozen=True)

@@ -34,6 +34,8 @@ Publishes (joint commands only once a joint state has arrived):
                       scale, unachieved twist, predicted coupling momentum (telemetry)
     /diagnostics      diagnostic_msgs/DiagnosticArray at 1 Hz (wall clock): the newest status,
                       hardware_id = robot name (what diagnostic_updater users aggregate)
+``~/pause`` (std_srvs/SetBool) and the camera orientation goal (``~/camera_goal``, reached goals
+on ``~/camera_goal_reached``): :mod:`rns_ros.nodes.controller_requests`.
 """
 
 from __future__ import annotations
@@ -87,6 +89,7 @@ from rns_ros.nodes.controller_parameters import (
     command_gate,
     controller_settings,
 )
+from rns_ros.nodes.controller_requests import OperatorRequests, goal_settings
 from rns_ros.nodes.controller_status import (
     DIAGNOSTICS_PERIOD,
     TWISTS_RECEIVED,
@@ -134,6 +137,9 @@ class ControllerNode(Node):
             self.robot, params["world_frame"], params["default_twist_frame"]
         )
         self._gate = command_gate(params, self._frames)
+        self._requests = OperatorRequests(
+            self, params["world_frame"], goal_settings(params), self._gate.reject
+        )
         # the newest measured state: joint angles [rad] and rates [rad/s] (n,), their stamp
         # [ns]; the base pose in world (identity until base_odom)
         self._theta: np.ndarray | None = None
@@ -302,6 +308,7 @@ class ControllerNode(Node):
                 throttle_duration_sec=1.0,
             )
         self._gate.accept(command)
+        self._requests.twist_taken(command)
         if self._immediate and self._changes_output(command):
             now = time.monotonic()
             if now - self._instants.last_wall >= MIN_TICK_INTERVAL:
@@ -432,9 +439,15 @@ class ControllerNode(Node):
         if fault is not None:
             self._hold_still(*fault, at=tick)
             return
+        if self._requests.paused:
+            self._hold_still(ControllerState.PAUSED, "~/pause: resume with false", at=tick)
+            return
         self._note_state_gap(now)
         theta, hold = self._plan(tick)
         state = self._sampled_state(theta)
+        goal = self._requests.goal_command(state.camera.rotation, now)
+        if goal is not None:
+            self._gate.accept(goal)
         gate = self._gate.update(now, self._period)
         if self._stopped or gate.stopped:
             self.controller.resync(state)  # restart the reference where the arm is
@@ -454,10 +467,17 @@ class ControllerNode(Node):
             )
             return
         self._publish_output(step.reference_positions, velocities, tick, self._lead)
-        self._reporter.report(
+        reported, detail = self._requests.state(
             self._controller_state(step, gate, state, self._period if hold is None else hold),
             gate.detail,
-            lambda: step_values(self.controller.settings.method.value, step, gate),
+        )
+        self._reporter.report(
+            reported,
+            detail,
+            lambda: {
+                **step_values(self.controller.settings.method.value, step, gate),
+                **self._requests.values(),
+            },
         )
 
     def _sampled_state(self, theta: np.ndarray) -> FreeFloatingState:
@@ -524,7 +544,7 @@ class ControllerNode(Node):
         tick restarts the reference at the measured angles and ramps the command up. ``at``:
         the tick's instant [ns] (its output is stamped ``output_lead`` later, as a tick's is);
         None: now."""
-        if self._reporter.last_state is not state:
+        if self._reporter.last_state is not state and state is not ControllerState.PAUSED:
             self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
         self._limit_stop.end()
         self._gate.stop()
@@ -622,6 +642,7 @@ class ControllerNode(Node):
         self.controller.configure(settings)
         self._gate.timeout, self._gate.deceleration = gate.timeout, gate.deceleration
         self._gate.acceleration = gate.acceleration
+        self._requests.goal.settings = goal_settings(self._params)
         self._input_clock.set_clock_timeout(self._params["clock_timeout"])
 
     def _configured(self, parameters) -> tuple[dict, ControllerSettings, CommandGate]:
@@ -637,6 +658,7 @@ class ControllerNode(Node):
         for parameter in parameters:
             if parameter.name in SPECS:
                 SPECS[parameter.name].check(parameter.value)
+        goal_settings(updated)  # raises on an invalid goal setting
         return updated, controller_settings(updated), command_gate(updated, self._frames)
 
     def destroy_node(self) -> None:

@@ -21,6 +21,7 @@ DEFAULTS = (
     ("rns_ros.nodes.operator_parameters", "operator.yaml"),
     ("rns_ros.nodes.rerun_logger_parameters", "rerun_logger.yaml"),
     ("rns_ros.nodes.teleop_keyboard_parameters", "teleop_keyboard.yaml"),
+    ("rns_ros.nodes.teleop_spacemouse_parameters", "teleop_spacemouse.yaml"),
 )
 #: (module with the node's PARAMETERS, a config file that overrides some of them).
 OVERLAYS = (("rns_ros.nodes.force_controller_parameters", "force_controller_arc.yaml"),)

@@ -533,19 +533,26 @@ def clock_template() -> SerializedTemplate:
     return SerializedTemplate(Clock(), {}, lambda msg, values: None, stamp)
 
 
-def joint_trajectory_template(names: Sequence[str]) -> SerializedTemplate:
-    """trajectory_msgs/JointTrajectory of ``names`` with one point acting at once
-    (time_from_start 0): slots ``positions`` and ``velocities``, each (len(names),)."""
+def joint_trajectory_template(names: Sequence[str], horizon: float) -> SerializedTemplate:
+    """trajectory_msgs/JointTrajectory of ``names`` shaped as
+    :func:`rns_ros.nodes.robot_io.streamed_trajectory`: point 0 at time_from_start 0 (slots
+    ``positions``, ``velocities``), point 1 at ``horizon`` [s] (slot ``end_positions``, no
+    velocities); each slot (len(names),)."""
     n = len(names)
     message = JointTrajectory(joint_names=list(names))
-    message.points = [JointTrajectoryPoint()]
+    sec, nanosec = divmod(round(horizon * 1e9), 1_000_000_000)
+    message.points = [JointTrajectoryPoint(), JointTrajectoryPoint()]
+    message.points[1].time_from_start.sec = int(sec)
+    message.points[1].time_from_start.nanosec = int(nanosec)
 
     def fill(msg, values) -> None:
-        point = msg.points[0]
-        point.positions = [float(x) for x in values["positions"]]
-        point.velocities = [float(x) for x in values["velocities"]]
+        start, end = msg.points
+        start.positions = [float(x) for x in values["positions"]]
+        start.velocities = [float(x) for x in values["velocities"]]
+        end.positions = [float(x) for x in values["end_positions"]]
 
-    return SerializedTemplate(message, {"positions": n, "velocities": n}, fill, _header_stamp)
+    sizes = {"positions": n, "velocities": n, "end_positions": n}
+    return SerializedTemplate(message, sizes, fill, _header_stamp)
 
 
 __all__ = [

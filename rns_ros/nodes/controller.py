@@ -23,12 +23,15 @@ Subscribes:
     base_odom     nav_msgs/Odometry (base pose in world; identity until the first message, then
                   watched like joint_states)
 Publishes (joint commands only once a joint state has arrived):
-    joint_references  trajectory_msgs/JointTrajectory, one point: positions = integrated
-                      reference at the start of the period, velocities = held theta_dot
-                      (``output_interface: trajectory``), or
+    joint_references  trajectory_msgs/JointTrajectory (``output_interface: trajectory``), stamped
+                      when it applies: point 0 = integrated reference at the start of the period
+                      and the held theta_dot, point 1 two periods on, at rest (what a stock
+                      joint_trajectory_controller executes: docs/ros2_control.md), or
     joint_velocities  std_msgs/Float64MultiArray, theta_dot [rad/s] in the order of the ``joints``
                       parameter (``output_interface: velocity``; the ros2_control
-                      forward_command_controller convention: remap to <controller>/commands)
+                      forward_command_controller convention: remap to <controller>/commands), or
+    joint_positions   std_msgs/Float64MultiArray, the reference at the end of the period [rad] in
+                      that order (``output_interface: position``, JointGroupPositionController)
     ~/status          diagnostic_msgs/DiagnosticArray every period from start-up while it has a
                       subscriber: state, sigma_min, the three determinants, lambda^2, speed
                       scale, unachieved twist, predicted coupling momentum (telemetry)
@@ -174,6 +177,7 @@ class ControllerNode(Node):
             params["output_interface"],
             self.robot.joint_names,
             params["joints"],
+            self._period,
             keep=2 * MAX_PREDICTION_AGE,
         )
         self._output = self._joint_output.publisher  # destroy_node waits for its acks

@@ -1,5 +1,5 @@
-"""The joint command output of rns_controller: JointTrajectory on joint_references or
-Float64MultiArray on joint_velocities, and the record of recent outputs for the prediction."""
+"""The joint command output of rns_controller (:class:`rns_ros.nodes.robot_io.JointCommand` on
+the ``output_interface`` chosen) and the record of recent outputs for the prediction."""
 
 from __future__ import annotations
 
@@ -10,8 +10,6 @@ import numpy as np
 from builtin_interfaces.msg import Time as TimeMsg
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from std_msgs.msg import Float64MultiArray
-from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.prediction import PublishedOutput
 from rns_ros.nodes.cdr import (
@@ -20,8 +18,7 @@ from rns_ros.nodes.cdr import (
     joint_trajectory_template,
     split_stamp,
 )
-from rns_ros.nodes.parameters import velocity_joint_order
-from rns_ros.nodes.robot_io import joint_command
+from rns_ros.nodes.robot_io import JointCommand, hold_end_positions
 
 
 class JointOutput:
@@ -29,11 +26,10 @@ class JointOutput:
 
     Args:
         node: the controller node.
-        interface: ``trajectory`` (JointTrajectory on joint_references, one point: positions
-            and velocities) or ``velocity`` (Float64MultiArray of velocities on
-            joint_velocities, in the order of ``joints``).
+        interface: ``trajectory``, ``velocity`` or ``position`` (:class:`JointCommand`).
         joint_names: the model's joints, in model order.
-        joints: the ``joints`` parameter (velocity interface only).
+        joints: the ``joints`` parameter (order of the Float64MultiArray interfaces).
+        period: the control period T [s].
         keep: outputs newer than this [s] before the newest stay in :attr:`recent`.
     """
 
@@ -43,23 +39,21 @@ class JointOutput:
         interface: str,
         joint_names: Sequence[str],
         joints: Sequence[str],
+        period: float,
         keep: float,
     ) -> None:
-        self._joint_names, self._keep = list(joint_names), keep
-        qos = QoSProfile(depth=1)
-        self._velocity_order = None  # JointTrajectory output
+        self._keep = keep
+        self.command = JointCommand(interface, joint_names, joints, period)
+        self.publisher = node.create_publisher(
+            self.command.message_type, self.command.topic, QoSProfile(depth=1)
+        )
         self._template: SerializedTemplate | None = None
         if interface == "trajectory":
-            self.publisher = node.create_publisher(JointTrajectory, "joint_references", qos)
             try:
                 # pre-serialized: converting the message costs more than publishing it
-                self._template = joint_trajectory_template(self._joint_names)
+                self._template = joint_trajectory_template(joint_names, self.command.horizon)
             except TemplateError as exc:
                 node.get_logger().warn(f"{exc}: publishing JointTrajectory messages")
-        else:
-            # ros2_control convention: data[p[i]] is model joint i (see velocity_joint_order)
-            self._velocity_order = velocity_joint_order(joints, self._joint_names)
-            self.publisher = node.create_publisher(Float64MultiArray, "joint_velocities", qos)
         #: what was published recently (node clock), for the prediction
         self.recent: deque[PublishedOutput] = deque()
 
@@ -74,17 +68,14 @@ class JointOutput:
         self.recent.append(PublishedOutput(seconds, velocities))
         while self.recent and self.recent[0].time < seconds - self._keep:
             self.recent.popleft()
-        if self._template is not None:
-            values = {"positions": positions, "velocities": velocities}
-            self.publisher.publish(self._template.serialize(values, split_stamp(stamp_ns)))
-            return
         sec, nanosec = split_stamp(stamp_ns)
-        self.publisher.publish(
-            joint_command(
-                TimeMsg(sec=sec, nanosec=nanosec),
-                self._joint_names,
-                positions,
-                velocities,
-                self._velocity_order,
-            )
-        )
+        if self._template is not None:
+            values = {
+                "positions": positions,
+                "velocities": velocities,
+                "end_positions": hold_end_positions(positions, velocities, self.command.horizon),
+            }
+            self.publisher.publish(self._template.serialize(values, (sec, nanosec)))
+            return
+        stamp = TimeMsg(sec=sec, nanosec=nanosec)
+        self.publisher.publish(self.command.message(stamp, positions, velocities))

@@ -118,18 +118,17 @@ WORLD_FRAME = ParameterSpec("world_frame", "world", "Frame id of the inertial fr
 OUTPUT_INTERFACE = ParameterSpec(
     "output_interface",
     "trajectory",
-    "trajectory: JointTrajectory on joint_references; velocity: Float64MultiArray on "
-    "joint_velocities (order: joints)",
-    choices=("trajectory", "velocity"),
+    "JointTrajectory on joint_references, or Float64MultiArray on joint_velocities / "
+    "joint_positions (docs/ros2_control.md)",
+    choices=("trajectory", "velocity", "position"),
 )
-#: Joint order of Float64MultiArray velocity commands, as ros2_control's forward_command_controller
-#: takes it from its ``joints`` parameter. The default is the default model's joints in URDF order;
-#: another model needs its own list (checked against the model when the velocity interface is used).
+#: Joint order of Float64MultiArray commands, as ros2_control's forward_command_controller takes
+#: it from its ``joints`` parameter. The default is the default model's joints in URDF order;
+#: another model needs its own list (checked against the model when an array interface is used).
 JOINTS = ParameterSpec(
     "joints",
     [f"joint_{i}" for i in range(1, 8)],
-    "Joint order of Float64MultiArray velocities (velocity interface): a permutation of the "
-    "model's joints",
+    "Joint order of Float64MultiArray commands: a permutation of the model's joints",
 )
 #: Under use_sim_time, the wall-clock check that /clock moves (rns_ros.nodes.input_clock): the
 #: nodes that command the robot stop it when their simulated clock stands still this long.

@@ -19,10 +19,16 @@ Subscribes:
     base_odom     nav_msgs/Odometry (base pose, for the predicted coupling momentum; watched like
                   joint_states once it has arrived)
 Publishes (only while a plan plays, plus one zero-velocity message at each stop):
-    joint_references  trajectory_msgs/JointTrajectory, one point: positions = plan at the tick,
-                      velocities = plan rate at mid-period (``output_interface: trajectory``), or
+    joint_references  trajectory_msgs/JointTrajectory (``output_interface: trajectory``), with
+                      ``plan_output: tick`` one per period, stamped at the tick: point 0 = plan at
+                      the tick and its rate at mid-period, point 1 two periods on, at rest
+                      (rns_controller's shape); with ``plan_output: whole`` the whole plan once
+                      when it starts (samples every ``plan_sample_period`` at most, phase ends
+                      included, the last at rest), then per-period messages only to cancel; or
     joint_velocities  std_msgs/Float64MultiArray in the order of ``joints``
-                      (``output_interface: velocity``)
+                      (``output_interface: velocity``), or
+    joint_positions   std_msgs/Float64MultiArray, the plan at the end of the period, in that order
+                      (``output_interface: position``)
     ~/status          diagnostic_msgs/DiagnosticArray every period: state, method, phase,
                       progress, predicted coupling momentum, folds reached, plan notes
     /diagnostics      the newest status at 1 Hz (wall clock)
@@ -45,27 +51,26 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
-from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.ptp import PtpMethod, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment
 from rns_ros.control.ptp_planner import plan_ptp
+from rns_ros.control.ptp_sampling import sample_plan
 from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import match_named_command, partial_joint_goal
-from rns_ros.core.errors import InputError, RnsError
+from rns_ros.core.errors import ConfigError, InputError, RnsError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import ptp_parameters
 from rns_ros.nodes.cdr import odometry_fields
 from rns_ros.nodes.input_clock import InputClock
-from rns_ros.nodes.parameters import (
-    declare_parameters,
-    from_parameters,
-    load_node_model,
-    velocity_joint_order,
+from rns_ros.nodes.parameters import declare_parameters, from_parameters, load_node_model
+from rns_ros.nodes.robot_io import (
+    JointCommand,
+    base_pose,
+    measured_state_problem,
+    plan_trajectory,
 )
-from rns_ros.nodes.robot_io import base_pose, joint_command, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
 from rns_ros.nodes.status import CommanderWatch, level_rank, node_names, status_text
 
@@ -156,17 +161,18 @@ class PtpNode(Node):
         self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
         self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
         self._state_topic = self.resolve_topic_name("joint_states")
-        trajectory = params["output_interface"] == "trajectory"
-        self._velocity_order = None  # JointTrajectory output
-        if trajectory:
-            self._output = self.create_publisher(
-                JointTrajectory, "joint_references", QoSProfile(depth=1)
+        self._command = JointCommand(
+            params["output_interface"], self.robot.joint_names, params["joints"], self._period
+        )
+        self._whole = params["plan_output"] == "whole"
+        if self._whole and params["output_interface"] != "trajectory":
+            raise ConfigError(
+                "plan_output 'whole' sends one JointTrajectory: it needs output_interface "
+                f"'trajectory', not {params['output_interface']!r}"
             )
-        else:
-            self._velocity_order = velocity_joint_order(params["joints"], self.robot.joint_names)
-            self._output = self.create_publisher(
-                Float64MultiArray, "joint_velocities", QoSProfile(depth=1)
-            )
+        self._output = self.create_publisher(
+            self._command.message_type, self._command.topic, QoSProfile(depth=1)
+        )
         self._output_topic = self._output.topic_name
         self._commander_watch = CommanderWatch(
             self,
@@ -458,6 +464,8 @@ class PtpNode(Node):
         for note in result.notes:
             self.get_logger().info(f"plan: {note}")
         self.get_logger().info(f"moving: {self._detail}")
+        if self._whole:
+            self._publish_plan(result)
 
     def _play(self, elapsed: float) -> None:
         plan, period = self.plan, self._period
@@ -466,7 +474,9 @@ class PtpNode(Node):
         self._s = min(self._s + self._rate * elapsed, plan.duration)
         if self._s >= plan.duration or self._rate <= 0.0:
             reference = plan.sample(self._s)
-            self._publish_output(reference.theta, np.zeros(self.robot.n))
+            if not self._whole or self._mode is PtpState.CANCELLING:
+                # a whole plan ends at rest on its own; a cancelled one on this message
+                self._publish_output(reference.theta, np.zeros(self.robot.n))
             if self._rate <= 0.0:
                 self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
                 self.get_logger().info(self._detail)
@@ -493,6 +503,10 @@ class PtpNode(Node):
             self._mode, self._detail = PtpState.INVALID_GOAL, "the plan gave a non-finite sample"
             self.get_logger().error(self._detail)
             return
+        if self._whole and self._mode is PtpState.MOVING:
+            self._velocities = velocities  # the controller plays the plan sent at its start
+            return
+        # per period (and with a whole plan, to cancel: the first replaces the plan)
         self._publish_output(positions, velocities)
 
     def _fault(self, now: float) -> tuple[PtpState, str] | None:
@@ -514,11 +528,25 @@ class PtpNode(Node):
     def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
         self._velocities = velocities
         stamp = self.get_clock().now().to_msg()
+        self._output.publish(self._command.message(stamp, positions, velocities))
+
+    def _publish_plan(self, plan) -> None:
+        """plan_output whole: ``plan`` as one JointTrajectory stamped now (the playback clock
+        starts at this tick), sampled by :func:`sample_plan`."""
+        samples = sample_plan(plan, self._params["plan_sample_period"])
+        if not (np.isfinite(samples.theta).all() and np.isfinite(samples.theta_dot).all()):
+            self._abandon()
+            self._mode, self._detail = PtpState.INVALID_GOAL, "the plan gave a non-finite sample"
+            self.get_logger().error(self._detail)
+            return
+        self._velocities = samples.theta_dot[0]
+        stamp = self.get_clock().now().to_msg()
         self._output.publish(
-            joint_command(
-                stamp, self.robot.joint_names, positions, velocities, self._velocity_order
+            plan_trajectory(
+                stamp, self.robot.joint_names, samples.t, samples.theta, samples.theta_dot
             )
         )
+        self.get_logger().info(f"plan sent whole: {samples.t.size} points")
 
     # --- status ---------------------------------------------------------------------------------
     def _values(self, state: PtpState) -> dict:

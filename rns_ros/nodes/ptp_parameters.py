@@ -90,6 +90,22 @@ PARAMETERS = (
         0.01,
         1000.0,
     ),
+    ParameterSpec(
+        "plan_output",
+        "tick",
+        "tick: one JointTrajectory per period; whole: the plan as one JointTrajectory at its start "
+        "(trajectory interface)",
+        choices=("tick", "whole"),
+    ),
+    ParameterSpec(
+        "plan_sample_period",
+        0.25,
+        "plan_output whole: longest interval between samples (equal within a phase, its ends "
+        "included)",
+        "[s]",
+        0.01,
+        10.0,
+    ),
     OUTPUT_INTERFACE,
     JOINTS,
     WORLD_FRAME,

@@ -1,6 +1,6 @@
 """Robot-side messages shared by the nodes that command the joints (rns_controller, rns_ptp):
-the base pose from ``base_odom``, the joint command in the ros2_control-compatible contract, and
-the check of the measured state (stale or from two sources)."""
+the base pose from ``base_odom``, the joint command in a shape stock ros2_control controllers
+execute (docs/ros2_control.md), and the check of the measured state (stale or from two sources)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,12 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from builtin_interfaces.msg import Duration as DurationMsg
 from builtin_interfaces.msg import Time as TimeMsg
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from rns_ros.nodes.parameters import velocity_joint_order
 
 
 def base_pose(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -25,36 +28,125 @@ def base_pose(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     return None
 
 
-def joint_command(
-    stamp: TimeMsg,
-    joint_names: Sequence[str],
-    positions,
-    velocities,
-    velocity_order: np.ndarray | None,
-) -> JointTrajectory | Float64MultiArray:
-    """The joint output of rns_controller and rns_ptp.
+#: The output interfaces: JointTrajectory (joint_trajectory_controller and rns_simulator),
+#: Float64MultiArray of velocities (JointGroupVelocityController) or of positions
+#: (JointGroupPositionController), each on its topic.
+OUTPUT_TOPICS = {
+    "trajectory": "joint_references",
+    "velocity": "joint_velocities",
+    "position": "joint_positions",
+}
+#: A streamed JointTrajectory ends this many output periods after its stamp: the next one
+#: replaces it one period later, so one more period of latency (or clock offset between our
+#: node and the controller) passes before joint_trajectory_controller refuses it as ending in
+#: the past, and the arm comes to rest this long after the last one.
+TRAJECTORY_HORIZON_PERIODS = 2.0
+
+
+def trajectory_horizon(period: float) -> float:
+    """time_from_start [s] of a streamed JointTrajectory's last point for the output ``period``
+    [s]."""
+    return TRAJECTORY_HORIZON_PERIODS * period
+
+
+def hold_end_positions(positions, velocities, horizon: float) -> np.ndarray:
+    """theta + horizon theta_dot [rad] (n,): where the held command ``velocities`` [rad/s] takes
+    ``positions`` [rad] in ``horizon`` [s]."""
+    return np.asarray(positions, dtype=float) + horizon * np.asarray(velocities, dtype=float)
+
+
+def duration_msg(seconds: float) -> DurationMsg:
+    """builtin_interfaces/Duration of ``seconds`` [s] >= 0 (nanoseconds rounded)."""
+    sec, nanosec = divmod(round(seconds * 1e9), 1_000_000_000)
+    return DurationMsg(sec=int(sec), nanosec=int(nanosec))
+
+
+def streamed_trajectory(
+    stamp: TimeMsg, joint_names: Sequence[str], positions, velocities, horizon: float
+) -> JointTrajectory:
+    """The streamed JointTrajectory of one output period, stamped ``stamp`` (the instant its
+    first point applies).
+
+    Point 0 (time_from_start 0): ``positions`` [rad] and ``velocities`` [rad/s] (n,), the held
+    command; rns_simulator reads this point. Point 1 (time_from_start ``horizon`` [s]):
+    positions + horizon velocities, no velocities: joint_trajectory_controller interpolates
+    linearly between the two (at exactly ``velocities``) and the trajectory ends at rest, as its
+    default ``allow_nonzero_velocity_at_trajectory_end: false`` requires.
+    """
+    msg = JointTrajectory()
+    msg.header.stamp = stamp
+    msg.joint_names = list(joint_names)
+    msg.points = [
+        JointTrajectoryPoint(
+            positions=np.asarray(positions, dtype=float).tolist(),
+            velocities=np.asarray(velocities, dtype=float).tolist(),
+        ),
+        JointTrajectoryPoint(
+            positions=hold_end_positions(positions, velocities, horizon).tolist(),
+            time_from_start=duration_msg(horizon),
+        ),
+    ]
+    return msg
+
+
+def plan_trajectory(
+    stamp: TimeMsg, joint_names: Sequence[str], times, positions, velocities
+) -> JointTrajectory:
+    """A whole plan as one JointTrajectory stamped ``stamp`` (when its first point applies):
+    point k at time_from_start ``times[k]`` [s] (k,) with ``positions[k]`` [rad] and
+    ``velocities[k]`` [rad/s] (k, n); the caller's last velocities are zero (at rest)."""
+    msg = JointTrajectory()
+    msg.header.stamp = stamp
+    msg.joint_names = list(joint_names)
+    msg.points = [
+        JointTrajectoryPoint(
+            positions=np.asarray(theta, dtype=float).tolist(),
+            velocities=np.asarray(theta_dot, dtype=float).tolist(),
+            time_from_start=duration_msg(float(t)),
+        )
+        for t, theta, theta_dot in zip(times, positions, velocities, strict=True)
+    ]
+    return msg
+
+
+class JointCommand:
+    """The joint output of rns_controller and rns_ptp on one ``output_interface``.
 
     Args:
-        positions, velocities: model joint order [rad], [rad/s], shape (n,).
-        velocity_order: None for a JointTrajectory (one point, named joints); else the index
-            array p of :func:`rns_ros.nodes.parameters.velocity_joint_order` for a
-            Float64MultiArray of velocities in the ``joints`` parameter's order.
+        interface: ``trajectory`` (:func:`streamed_trajectory` on joint_references),
+            ``velocity`` (Float64MultiArray of theta_dot [rad/s] on joint_velocities) or
+            ``position`` (Float64MultiArray of theta + T theta_dot [rad], the end of the held
+            period, on joint_positions); the arrays in the order of ``joints``.
+        joint_names: the model's joints, in model order.
+        joints: the ``joints`` parameter (Float64MultiArray order), a permutation of them.
+        period: the output period T [s].
     """
-    velocities = np.asarray(velocities, dtype=float)
-    if velocity_order is None:
-        msg = JointTrajectory()
-        msg.header.stamp = stamp
-        msg.joint_names = list(joint_names)
-        msg.points = [
-            JointTrajectoryPoint(
-                positions=np.asarray(positions, dtype=float).tolist(),
-                velocities=velocities.tolist(),
-            )
-        ]
-        return msg
-    data = np.empty(velocities.size)
-    data[velocity_order] = velocities
-    return Float64MultiArray(data=data.tolist())
+
+    def __init__(
+        self, interface: str, joint_names: Sequence[str], joints: Sequence[str], period: float
+    ) -> None:
+        self.interface = interface
+        self.topic = OUTPUT_TOPICS[interface]
+        self.message_type = JointTrajectory if interface == "trajectory" else Float64MultiArray
+        self.joint_names = list(joint_names)
+        self.period = period
+        self.horizon = trajectory_horizon(period)
+        # data[order[i]] is model joint i (ros2_control's forward_command_controller order)
+        self.order = (
+            None if interface == "trajectory" else velocity_joint_order(joints, joint_names)
+        )
+
+    def message(self, stamp: TimeMsg, positions, velocities) -> JointTrajectory | Float64MultiArray:
+        """The command for ``positions`` [rad] and ``velocities`` [rad/s] (n, model order) held
+        from ``stamp`` on (Float64MultiArray has no stamp)."""
+        if self.order is None:
+            return streamed_trajectory(stamp, self.joint_names, positions, velocities, self.horizon)
+        values = np.asarray(velocities, dtype=float)
+        if self.interface == "position":
+            values = hold_end_positions(positions, velocities, self.period)
+        data = np.empty(values.size)
+        data[self.order] = values
+        return Float64MultiArray(data=data.tolist())
 
 
 def measured_state_problem(

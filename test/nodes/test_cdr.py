@@ -90,21 +90,27 @@ def test_odometry_and_wrench_templates_read_back(data, frame, child, stamp):
 
 @settings(max_examples=40, deadline=None)
 @given(data=st.data(), names=NAMES, stamp=STAMPS)
-def test_trajectory_template_reads_back_as_one_point_acting_at_once(data, names, stamp):
+def test_trajectory_template_reads_back_as_the_streamed_trajectory(data, names, stamp):
     n = len(names)
     positions, velocities = _values(data.draw, n), _values(data.draw, n)
-    template = joint_trajectory_template(names)
+    end = _values(data.draw, n)
+    template = joint_trajectory_template(names, 0.02)
     msg = deserialize_message(
-        template.serialize({"positions": positions, "velocities": velocities}, stamp),
+        template.serialize(
+            {"positions": positions, "velocities": velocities, "end_positions": end}, stamp
+        ),
         JointTrajectory,
     )
     assert list(msg.joint_names) == names
-    assert len(msg.points) == 1
-    point = msg.points[0]
-    assert np.array_equal(point.positions, positions)
-    assert np.array_equal(point.velocities, velocities)
-    assert len(point.accelerations) == 0
-    assert (point.time_from_start.sec, point.time_from_start.nanosec) == (0, 0)
+    assert len(msg.points) == 2
+    first, last = msg.points
+    assert np.array_equal(first.positions, positions)
+    assert np.array_equal(first.velocities, velocities)
+    assert len(first.accelerations) == 0
+    assert (first.time_from_start.sec, first.time_from_start.nanosec) == (0, 0)
+    assert np.array_equal(last.positions, end)
+    assert len(last.velocities) == len(last.accelerations) == 0
+    assert (last.time_from_start.sec, last.time_from_start.nanosec) == (0, 20_000_000)
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == stamp
 
 

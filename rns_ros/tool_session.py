@@ -6,8 +6,8 @@ operating the rns_ros nodes needs, built only on rclpy and the installed message
 join the ROS domain of the environment like ``ros2`` does (``ROS_DOMAIN_ID``,
 ``ROS_AUTOMATIC_DISCOVERY_RANGE``, ``RMW_IMPLEMENTATION``). Exit codes: 0 on success and after
 Ctrl-C; 1 when the node, parameter, topic or service is not found within ``--timeout`` (one
-line on stderr) or ``set`` is refused (``Setting parameter failed: <the node's reason>`` on stdout, as
-ros2 prints it); 2 for bad usage or a ROS environment rcl rejects (one line on stderr).
+line on stderr) or ``set`` is refused (``Setting parameter failed: <the node's reason>`` on
+stdout, as ros2 prints it); 2 for bad usage or a ROS environment rcl rejects (one line on stderr).
 
 Only the standard library is imported at module level: rclpy loads inside :func:`run_tool` after
 its Ctrl-C handler is in place, so an early Ctrl-C is a quiet exit.

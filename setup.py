@@ -22,6 +22,7 @@ CONSOLE_SCRIPTS = [
     "rns_observer = rns_ros.apps.observer:main",
     "rns_param = rns_ros.apps.param:param_main",
     "rns_topic = rns_ros.apps.topic:topic_main",
+    "rns_service = rns_ros.apps.service:service_main",
     "rns_reproduce = rns_ros.apps.reproduce:main",
     "rns_model = rns_ros.apps.model_check:main",
 ]

@@ -39,6 +39,7 @@ EXECUTABLES = frozenset(
         "rns_observer",
         "rns_param",
         "rns_topic",
+        "rns_service",
         "rns_reproduce",
         "rns_model",
     }

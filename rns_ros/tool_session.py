@@ -1,13 +1,13 @@
-"""What ``rns_param`` and ``rns_topic`` share: a private ROS session and the exit-code contract.
+"""What ``rns_param``, ``rns_topic`` and ``rns_service`` share: a private ROS session, exit codes.
 
-ros2cli is not on PyPI, so whoever installed rns_ros from wheels has no ``ros2`` command; the two
-console scripts (:mod:`rns_ros.apps.param`, :mod:`rns_ros.apps.topic`) cover what operating the
-rns_ros nodes needs, built only on rclpy and the installed message packages. They join the ROS
-domain of the environment like ``ros2`` does (``ROS_DOMAIN_ID``,
+ros2cli is not on PyPI, so whoever installed rns_ros from wheels has no ``ros2`` command; the
+console scripts (:mod:`rns_ros.apps.param`, :mod:`.topic`, :mod:`.service`) cover what
+operating the rns_ros nodes needs, built only on rclpy and the installed message packages. They
+join the ROS domain of the environment like ``ros2`` does (``ROS_DOMAIN_ID``,
 ``ROS_AUTOMATIC_DISCOVERY_RANGE``, ``RMW_IMPLEMENTATION``). Exit codes: 0 on success and after
-Ctrl-C; 1 when the node, parameter or topic is not found within ``--timeout`` (one line on
-stderr) or ``set`` is refused (``Setting parameter failed: <the node's reason>`` on stdout, as
-ros2 prints it); 2 for bad usage or a ROS environment rcl rejects (one line on stderr).
+Ctrl-C; 1 when the node, parameter, topic or service is not found within ``--timeout`` (one
+line on stderr) or ``set`` is refused (``Setting parameter failed: <the node's reason>`` on
+stdout, as ros2 prints it); 2 for bad usage or a ROS environment rcl rejects (one line on stderr).
 
 Only the standard library is imported at module level: rclpy loads inside :func:`run_tool` after
 its Ctrl-C handler is in place, so an early Ctrl-C is a quiet exit.

@@ -1,9 +1,9 @@
 """The package's rooms: imports point down only, no import circles, no ROS below nodes/.
 
 Rooms (docs/architecture.md): core < control, sim < analysis < viz and the libraries (cli,
-resources, harness, keyboard, tool_session) < nodes < runs < apps (the programs). A module may
-import its own room and the rooms listed for it; control and sim are side by side and do not
-import each other.
+resources, harness, keyboard, tool_session, ros_messages) < nodes < runs < apps (the programs).
+A module may import its own room and the rooms listed for it; control and sim are side by side
+and do not import each other.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ ALLOWED = {
     "keyboard": {"core", "control"},
     "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard"},
     "tool_session": {"core", "cli", "resources"},
+    "ros_messages": {"core", "cli", "resources", "tool_session"},
     "runs": {"core", "control", "sim", "analysis", "viz", "cli", "resources", "harness", "nodes"},
 }
 #: the programs may import every room; test/apps/test_apps_apart.py keeps them apart

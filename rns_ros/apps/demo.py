@@ -317,6 +317,9 @@ def _report(args, rows, table: str, problems: list[str], epilogue: str, summary:
     recordings = [row.recording for row in rows if row.recording]
     if recordings:
         print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
+    mcaps = [row.mcap for row in rows if row.mcap]
+    if mcaps:
+        print("MCAP recordings (ros2 bag, Foxglove, PlotJuggler): " + ", ".join(mcaps))
     if args.summary:
         try:
             args.summary.write_text(json.dumps(summary, indent=2) + "\n")

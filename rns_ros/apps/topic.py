@@ -5,6 +5,7 @@
     rns_topic list                        topic names with their types
     rns_topic echo TOPIC [--once] [--count N]
     rns_topic hz TOPIC [--window N]
+    rns_topic pub TOPIC TYPE ['YAML'] [--once | --times N] [--rate HZ]
 
 Domain, exit codes and Ctrl-C: :mod:`rns_ros.tool_session`.
 """
@@ -12,7 +13,6 @@ Domain, exit codes and Ctrl-C: :mod:`rns_ros.tool_session`.
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import sys
 import time
@@ -20,6 +20,14 @@ from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
+from rns_ros.ros_messages import (  # noqa: F401  (message_to_dict: part of this module's API)
+    TRUNCATE_LENGTH,
+    import_interface,
+    message_from_fields,
+    message_to_dict,
+    message_to_yaml,
+    parse_fields,
+)
 from rns_ros.tool_session import (
     DEFAULT_SPIN_TIME,
     ToolError,
@@ -31,66 +39,13 @@ from rns_ros.tool_session import (
     tool_parser,
 )
 
-#: ``rns_topic echo`` shortens longer strings and arrays, as ``ros2 topic echo`` does.
-TRUNCATE_LENGTH = 128
 #: ``rns_topic hz`` default window: arrival intervals the statistics are taken over.
 DEFAULT_WINDOW = 10000
-
-
-def message_to_dict(msg: Any, truncate: int | None = TRUNCATE_LENGTH) -> Any:
-    """A ROS message as plain dicts / lists / scalars (field order kept) for YAML output.
-
-    Strings and sequences longer than ``truncate`` end in ``'...'`` (None: full length), as
-    ``ros2 topic echo`` prints them; a ``byte`` field is its integer value.
-    """
-    if hasattr(msg, "get_fields_and_field_types"):
-        return {
-            field: message_to_dict(getattr(msg, field), truncate)
-            for field in msg.get_fields_and_field_types()
-        }
-    if isinstance(msg, bytes):  # `byte` fields (length 1) and byte sequences
-        msg = list(msg)
-        if len(msg) == 1:
-            return msg[0]
-    if hasattr(msg, "tolist"):  # numpy arrays (fixed size), array.array (sequences), numpy scalars
-        msg = msg.tolist()
-    if isinstance(msg, list | tuple):
-        items = [message_to_dict(item, truncate) for item in msg]
-        if truncate is not None and len(items) > truncate:
-            items = [*items[:truncate], "..."]
-        return items
-    if isinstance(msg, str) and truncate is not None and len(msg) > truncate:
-        return msg[:truncate] + "..."
-    return msg
-
-
-def message_to_yaml(msg: Any, truncate: int | None = TRUNCATE_LENGTH) -> str:
-    """``msg`` as the block YAML ``ros2 topic echo`` prints (without the ``---`` separator)."""
-    import yaml
-
-    return yaml.safe_dump(
-        message_to_dict(msg, truncate),
-        sort_keys=False,
-        default_flow_style=False,
-        allow_unicode=True,
-        width=1 << 30,  # no line folding
-    )
-
-
-def import_message(type_name: str):
-    """The message class of ``'pkg/msg/Type'`` (as the graph names it), or ToolError."""
-    parts = type_name.split("/")
-    if len(parts) != 3 or not all(parts):
-        raise ToolError(f"cannot interpret the message type {type_name!r}")
-    package, kind, name = parts
-    try:
-        cls = getattr(importlib.import_module(f"{package}.{kind}"), name)
-    except (ImportError, AttributeError):
-        raise ToolError(
-            f"message type {type_name} is not installed in this Python (its package "
-            f"{package} is not among the PyPI wheels)"
-        ) from None
-    return cls
+#: ``rns_topic pub`` default rate [Hz] (ros2 topic pub's).
+DEFAULT_PUB_RATE = 1.0
+#: Seconds ``rns_topic pub`` stays after its last message of ``--once`` / ``--times`` (ros2's
+#: ``--keep-alive``), once every matched subscription acknowledged it.
+DEFAULT_KEEP_ALIVE = 0.1
 
 
 def _topic_type(session: ToolSession, topic: str, timeout: float) -> tuple[str, Any]:
@@ -109,7 +64,7 @@ def _topic_type(session: ToolSession, topic: str, timeout: float) -> tuple[str, 
         )
     if len(types) > 1:
         raise ToolError(f"topic {topic} has more than one type: {', '.join(types)}")
-    return topic, import_message(types[0])
+    return topic, import_interface(types[0])
 
 
 def _subscription_qos(session: ToolSession, topic: str):
@@ -142,7 +97,8 @@ def _topic_parser() -> argparse.ArgumentParser:
         "rns_topic",
         "List, print and time ROS 2 topics, like `ros2 topic` (which is not on PyPI). Joins the "
         "domain of ROS_DOMAIN_ID / ROS_AUTOMATIC_DISCOVERY_RANGE.",
-        "exit codes: 0 ok or Ctrl-C; 1 topic not found or its type not installed; 2 bad usage",
+        "exit codes: 0 ok or Ctrl-C; 1 topic not found, its type not installed or (pub) no "
+        "subscription matched; 2 bad usage or a message that does not fit its type",
         "wait this long for TOPIC (list: any node) to appear",
     )
     listing = commands.add_parser(
@@ -189,7 +145,73 @@ def _topic_parser() -> argparse.ArgumentParser:
         metavar="SEC",
         help="exit after SEC seconds (default: run until Ctrl-C)",
     )
+    _add_pub_parser(commands, common)
     return parser
+
+
+def positive_rate(text: str) -> float:
+    """argparse type: a finite rate > 0 [Hz]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a rate > 0 Hz, got {text!r}")
+    return value
+
+
+def _add_pub_parser(commands, common: argparse.ArgumentParser) -> None:
+    pub = commands.add_parser(
+        "pub",
+        parents=[common],
+        help="publish a message given as YAML",
+        description="Publish TYPE on TOPIC, filled from the YAML mapping of its fields, like "
+        "`ros2 topic pub` (e.g. rns_topic pub --once /ptp_goal sensor_msgs/msg/JointState "
+        "'{name: [joint_1], position: [0.5]}'). A Time field takes `now`, a Header `auto`. "
+        "--once / --times first wait up to --timeout for a subscription to match.",
+    )
+    pub.add_argument("topic", metavar="TOPIC")
+    pub.add_argument("type", metavar="TYPE", help="message type, e.g. std_msgs/msg/Bool")
+    pub.add_argument(
+        "values", metavar="YAML", nargs="?", default="{}", help="the fields (default '{}')"
+    )
+    count = pub.add_mutually_exclusive_group()
+    count.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
+    count.add_argument(
+        "-t", "--times", type=positive_int, metavar="N", help="publish N messages and exit"
+    )
+    pub.add_argument(
+        "-r",
+        "--rate",
+        type=positive_rate,
+        default=DEFAULT_PUB_RATE,
+        metavar="HZ",
+        help=f"publishing rate (default {DEFAULT_PUB_RATE:g})",
+    )
+    pub.add_argument(
+        "-p", "--print", type=positive_int, default=1, metavar="N", help="print every N-th message"
+    )
+    pub.add_argument(
+        "-w",
+        "--wait-matching-subscriptions",
+        type=int,
+        default=None,
+        metavar="N",
+        help="subscriptions to wait for before publishing (default 1 with --once / --times, "
+        "else 0)",
+    )
+    pub.add_argument(
+        "--keep-alive",
+        type=seconds,
+        default=DEFAULT_KEEP_ALIVE,
+        metavar="SEC",
+        help=f"stay this long after the last message (default {DEFAULT_KEEP_ALIVE:g})",
+    )
+    pub.add_argument("--qos-depth", type=positive_int, default=10, metavar="N")
+    pub.add_argument("--qos-reliability", choices=("reliable", "best_effort"), default="reliable")
+    pub.add_argument(
+        "--qos-durability", choices=("volatile", "transient_local"), default="volatile"
+    )
 
 
 def _topic_list(args, session: ToolSession) -> int:
@@ -280,9 +302,89 @@ def _topic_hz(args, session: ToolSession) -> int:
     return 0
 
 
+def _type_name(msg_type: type) -> str:
+    """``'pkg/msg/Type'`` of a message class, as the graph names it."""
+    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
+
+
+def _check_graph_type(session: ToolSession, topic: str, msg_type: type) -> None:
+    """ToolError if the other publishers and subscriptions of ``topic`` all have another type
+    (DDS would never match them with ours)."""
+    me = session.node.get_name()
+    endpoints = [
+        *session.node.get_publishers_info_by_topic(topic),
+        *session.node.get_subscriptions_info_by_topic(topic),
+    ]
+    types = sorted({e.topic_type for e in endpoints if e.node_name != me})
+    if types and _type_name(msg_type) not in types:
+        raise ToolError(f"topic {topic} has type {', '.join(types)}, not {_type_name(msg_type)}")
+
+
+def _topic_pub(args, session: ToolSession) -> int:
+    from rclpy.duration import Duration
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    msg_type = import_interface(args.type, "msg")
+    values = parse_fields(args.values)
+
+    def message():
+        return message_from_fields(
+            values, msg_type, lambda: session.node.get_clock().now().to_msg()
+        )
+
+    message()  # a message that does not fit its type is a usage error before any waiting
+    topic = absolute_name(args.topic)
+    limit = 1 if args.once else args.times
+    wait = args.wait_matching_subscriptions
+    if wait is None:
+        wait = 1 if limit is not None else 0
+    qos = QoSProfile(
+        depth=args.qos_depth,
+        reliability=ReliabilityPolicy.RELIABLE
+        if args.qos_reliability == "reliable"
+        else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL
+        if args.qos_durability == "transient_local"
+        else DurabilityPolicy.VOLATILE,
+    )
+    publisher = session.node.create_publisher(msg_type, topic, qos)
+
+    def matched() -> bool:
+        _check_graph_type(session, topic, msg_type)
+        return publisher.get_subscription_count() >= wait
+
+    if wait > 0 and not session.spin_until(matched, args.timeout):
+        raise ToolError(
+            f"{publisher.get_subscription_count()} of {wait} subscription(s) to {topic} matched "
+            f"within {args.timeout:g} s (is the subscribing node running? check ROS_DOMAIN_ID "
+            "and ROS_AUTOMATIC_DISCOVERY_RANGE)"
+        )
+    _check_graph_type(session, topic, msg_type)
+    print("publisher: beginning loop", flush=True)
+    start, published = time.monotonic(), 0
+    while limit is None or published < limit:
+        due = start + published / args.rate
+        session.spin_until(lambda due=due: time.monotonic() >= due, None)
+        msg = message()
+        publisher.publish(msg)
+        published += 1
+        if published % args.print == 0:
+            print(f"publishing #{published}: {msg!r}\n", flush=True)
+    # a reliable publisher leaves once every matched subscription has the messages
+    deadline = time.monotonic() + args.timeout
+    while not publisher.wait_for_all_acked(Duration(nanoseconds=50_000_000)):
+        if time.monotonic() >= deadline:
+            raise ToolError(
+                f"the messages to {topic} were not acknowledged within {args.timeout:g} s"
+            )
+        session.spin_for(0.0)  # reads the Ctrl-C flag
+    session.spin_for(args.keep_alive)
+    return 0
+
+
 def topic_main(argv: Sequence[str] | None = None) -> int:
-    """``rns_topic list|echo|hz [TOPIC]``; returns the exit code."""
-    commands = {"list": _topic_list, "echo": _topic_echo, "hz": _topic_hz}
+    """``rns_topic list|echo|hz|pub [TOPIC] [TYPE YAML]``; returns the exit code."""
+    commands = {"list": _topic_list, "echo": _topic_echo, "hz": _topic_hz, "pub": _topic_pub}
     return run_tool(
         "rns_topic", _topic_parser(), argv, lambda args, s: commands[args.command](args, s)
     )

@@ -47,6 +47,7 @@ from rns_ros.core.contact_geometry import ArcConstraint
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
 from rns_ros.runs.logger import start_logger
+from rns_ros.runs.mcap_recording import record_mcap
 from rns_ros.runs.recorded import latest_status_values
 
 #: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
@@ -118,6 +119,7 @@ class ContactDemoRow:
     final_state: str
     wall_time_s: float
     recording: str | None
+    mcap: str | None = None
 
     def checked_figures(self) -> dict[str, float]:
         """Every figure that must be finite, by name: the recorded run's and the loop's."""
@@ -189,7 +191,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         setpoints = stack.record(WrenchStamped, "force_setpoint")
         # the operator starts once the controller and this process subscribe to both of its
         # topics (OPERATOR_SUBSCRIBERS): its first force setpoint is the task's start
-        stack.record(TwistStamped, "cmd_twist", raw=True)
+        twists = stack.record(TwistStamped, "cmd_twist", raw=True)
         recording, _ = start_logger(
             processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
         )
@@ -227,6 +229,12 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 f"{label}: the scenario did not finish within {budget:.0f} s (controller state "
                 f"{values.get('state')}){processes.exit_report()}"
             )
+        mcap = record_mcap(
+            args,
+            f"{scenario.name}_{method}",
+            [joints, errors, status, setpoints, twists],
+            stack.probe().resolve_topic_name,
+        )
     _check_states(label, states, values)
     figures = _figures(label, errors, joints, setpoints, scenario)
     return ContactDemoRow(
@@ -240,6 +248,7 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         final_state=values.get("state", "unknown"),
         wall_time_s=wall,
         recording=recording,
+        mcap=mcap,
     )
 
 

@@ -34,6 +34,7 @@ from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import start_logger
+from rns_ros.runs.mcap_recording import record_mcap
 from rns_ros.runs.recorded import (
     EnergyFigures,
     PartialRecordingError,
@@ -71,6 +72,7 @@ class DemoRow:
     energy: EnergyFigures | None = None
     task_wall_s: float | None = None
     task_sim_s: float | None = None
+    mcap: str | None = None
 
     @property
     def real_time_factor(self) -> float | None:
@@ -214,6 +216,12 @@ def run_method(
                 f"the operator's profile started at {task:.3f} s"
             )
         _check_complete(data, method, sim_time)
+        mcap = record_mcap(
+            args,
+            method,
+            [*streams.values(), *([awaited] if awaited is not None else [])],
+            stack.probe().resolve_topic_name,
+        )
         energy = energy_figures(
             streams["energy"], streams["attitude"] if wheels else None, until=end
         )
@@ -233,6 +241,7 @@ def run_method(
         energy,
         task_wall_s=task_wall,
         task_sim_s=end - task,
+        mcap=mcap,
     )
 
 

@@ -35,6 +35,7 @@ from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import add_logger
+from rns_ros.runs.mcap_recording import record_mcap
 
 #: rns_ptp methods in Table 4.2 order, with the thesis' labels.
 PTP_METHODS = {
@@ -98,6 +99,7 @@ class PtpDemoRow:
     max_joint_speed: float
     wall_time_s: float
     recording: str | None
+    mcap: str | None = None
 
     def checked_figures(self) -> dict[str, float]:
         """Every figure that must be finite, by name (no camera error: 0)."""
@@ -168,6 +170,7 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
         target = ptp.plan.details.get("camera_target") if ptp.plan is not None else None
         stack.spin_for(SETTLE)
         robot = ptp.robot
+        mcap = record_mcap(args, method, [joints, odom, status], stack.probe().resolve_topic_name)
     deviation, error, speed = _figures(joints, odom, np.array(scenario.goal))
     camera_error = (
         None if target is None else _camera_error(robot, joints, odom, np.asarray(target))
@@ -183,6 +186,7 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
         max_joint_speed=speed,
         wall_time_s=time.perf_counter() - start,
         recording=recording,
+        mcap=mcap,
     )
 
 

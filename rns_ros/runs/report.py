@@ -194,7 +194,7 @@ def inspection_summary(runs: list[list[DemoRow]]) -> list[dict]:
     return [
         {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
         | {"task_wall_s": row.task_wall_s, "task_sim_s": row.task_sim_s}
-        | {"recording": row.recording}
+        | {"recording": row.recording, "mcap": row.mcap}
         | {"energy": None if row.energy is None else asdict(row.energy)}
         | (
             {
@@ -222,6 +222,7 @@ def contact_summary(rows: list[ContactDemoRow]) -> list[dict]:
             "final_state": row.final_state,
             "wall_time_s": row.wall_time_s,
             "recording": row.recording,
+            "mcap": row.mcap,
         }
         for row in rows
     ]

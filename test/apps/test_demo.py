@@ -84,6 +84,28 @@ def test_demo_recordings_load_back_with_the_documented_entities(demo_run):
         assert any(path.startswith(paths.JOINTS) for path in counts)
 
 
+def test_demo_mcap_recordings_hold_the_recorded_topics(demo_run):
+    """Next to each .rrd, an MCAP of the topics the figures come from; every robot state of the
+    figures' window is in it, and it decodes with the ROS 2 decoder."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    _, rows = demo_run
+    for method, row in rows.items():
+        assert row["mcap"].endswith(f"{method}.mcap")
+        with open(row["mcap"], "rb") as stream:
+            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            summary = reader.get_summary()
+            topics = {c.id: c.topic for c in summary.channels.values()}
+            counts = {topics[i]: n for i, n in summary.statistics.channel_message_counts.items()}
+            assert {"/joint_states", "/base_odom", "/momentum", "/cmd_twist"} <= set(counts)
+            assert counts["/joint_states"] >= row["samples"]
+            _, _, _, odom = next(reader.iter_decoded_messages(topics=["/base_odom"]))
+            quaternion = odom.pose.pose.orientation
+            norm = quaternion.x**2 + quaternion.y**2 + quaternion.z**2 + quaternion.w**2
+            assert norm == pytest.approx(1.0, abs=1e-9)
+
+
 @pytest.mark.parametrize("clock", [["--wall-clock"], ["--real-time-factor", "5"]])
 def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, clock):
     """The joint servo tracks the reference positions, so they must follow what the plant was

@@ -357,7 +357,7 @@ def _environ() -> dict[str, str]:
     return {**os.environ, **ENV}
 
 
-@pytest.mark.parametrize("name", ["rns_param", "rns_topic"])
+@pytest.mark.parametrize("name", ["rns_param", "rns_topic", "rns_service"])
 def test_installed_scripts_answer_help_and_reject_bad_usage(name):
     script = _installed(name)
     result = subprocess.run(

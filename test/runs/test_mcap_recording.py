@@ -1,0 +1,158 @@
+"""rns_ros.runs.mcap_recording: a run's topics as MCAP (ROS 2 profile, CDR) read back with the
+mcap library and decoded by mcap-ros2-support from the schemas we wrote, as Foxglove and
+PlotJuggler decode them; the schemas are the installed .msg definitions."""
+
+from __future__ import annotations
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.serialization import serialize_message
+from sensor_msgs.msg import JointState
+
+from rns_ros.harness import TopicLog
+from rns_ros.runs.mcap_recording import (
+    SEPARATOR,
+    msg_dependencies,
+    msg_file,
+    write_mcap,
+)
+
+
+def _log(topic: str, messages: list, raw: bool = False) -> TopicLog:
+    """A log as Harness.record fills it (``raw``: the serialized bytes, deserialized on read)."""
+    log = TopicLog(topic, type(messages[0]) if raw else None)
+    for msg in messages:
+        if raw:
+            log._append_raw(serialize_message(msg))
+        else:
+            log._append(msg)
+    return log
+
+
+def _joint_state(k: int) -> JointState:
+    msg = JointState(name=["joint_1", "joint_2"], position=[0.1 * k, -0.2], velocity=[k, 0.0])
+    msg.header.stamp.sec, msg.header.stamp.nanosec = k, 5
+    return msg
+
+
+@pytest.fixture
+def recording(tmp_path):
+    odom = Odometry(child_frame_id="base_link")
+    odom.pose.pose.orientation.z, odom.pose.pose.orientation.w = 0.6, 0.8
+    status = DiagnosticArray(
+        status=[DiagnosticStatus(name="rns_ptp", values=[KeyValue(key="state", value="MOVING")])]
+    )
+    twist = TwistStamped()
+    twist.twist.angular.z = -0.1
+    logs = [
+        _log("joint_states", [_joint_state(k) for k in range(3)], raw=True),
+        _log("base_odom", [odom, odom]),
+        _log("rns_ptp/status", [status]),
+        _log("cmd_twist", [twist] * 4, raw=True),
+        TopicLog("nothing_arrived"),
+    ]
+    path = tmp_path / "run.mcap"
+    counts = write_mcap(path, logs, lambda name: "/" + name)
+    return path, counts
+
+
+def _read(path):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    stream = open(path, "rb")  # noqa: SIM115  (closed by the caller's fixture teardown)
+    return stream, make_reader(stream, decoder_factories=[DecoderFactory()])
+
+
+def test_topics_and_counts_read_back(recording):
+    path, counts = recording
+    stream, reader = _read(path)
+    with stream:
+        summary = reader.get_summary()
+        header = reader.get_header()
+    assert header.profile == "ros2"
+    topics = {c.id: c.topic for c in summary.channels.values()}
+    written = {topics[cid]: n for cid, n in summary.statistics.channel_message_counts.items()}
+    expected = {"/joint_states": 3, "/base_odom": 2, "/rns_ptp/status": 1, "/cmd_twist": 4}
+    assert written == expected == counts  # an empty log gets no channel
+    assert {c.message_encoding for c in summary.channels.values()} == {"cdr"}
+    assert {s.encoding for s in summary.schemas.values()} == {"ros2msg"}
+    assert {s.name for s in summary.schemas.values()} == {
+        "sensor_msgs/msg/JointState",
+        "nav_msgs/msg/Odometry",
+        "diagnostic_msgs/msg/DiagnosticArray",
+        "geometry_msgs/msg/TwistStamped",
+    }
+
+
+def test_one_decoded_message_per_type_has_the_values_sent(recording):
+    path, _ = recording
+    stream, reader = _read(path)
+    first = {}
+    with stream:
+        for _schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
+            first.setdefault(channel.topic, (message, decoded))
+    _, joints = first["/joint_states"]
+    assert list(joints.name) == ["joint_1", "joint_2"]
+    assert list(joints.position) == [0.0, -0.2]
+    assert (joints.header.stamp.sec, joints.header.stamp.nanosec) == (0, 5)
+    _, odom = first["/base_odom"]
+    assert (odom.child_frame_id, odom.pose.pose.orientation.z) == ("base_link", 0.6)
+    assert len(odom.pose.covariance) == 36
+    _, status = first["/rns_ptp/status"]
+    assert (status.status[0].values[0].key, status.status[0].values[0].value) == ("state", "MOVING")
+    _, twist = first["/cmd_twist"]
+    assert twist.twist.angular.z == -0.1
+    times = [first[topic][0].log_time for topic in first]
+    assert all(t > 1.6e18 for t in times)  # wall clock [ns], after 2020
+
+
+def _closure(msg_type) -> set[str]:
+    """Every message type ``msg_type`` uses, from the generated class (not the .msg text)."""
+    from rosidl_parser.definition import AbstractNestedType, NamespacedType
+
+    found = set()
+    for slot in msg_type.SLOT_TYPES:
+        inner = slot.value_type if isinstance(slot, AbstractNestedType) else slot
+        if isinstance(inner, NamespacedType):
+            module = __import__(".".join(inner.namespaces), fromlist=[inner.name])
+            found.add(f"{inner.namespaces[0]}/{inner.name}")
+            found |= _closure(getattr(module, inner.name))
+    return found
+
+
+@pytest.mark.parametrize("msg_type", [JointState, Odometry, DiagnosticArray, TwistStamped])
+def test_the_schema_is_the_ros2_msg_definition(recording, msg_type):
+    """rosbag2's complete definition: the type's .msg text first, then each type it uses once,
+    after a line of 80 '=' and 'MSG: pkg/Type', with that type's .msg text."""
+    path, _ = recording
+    stream, reader = _read(path)
+    with stream:
+        schemas = {s.name: s.data.decode() for s in reader.get_summary().schemas.values()}
+    name = f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
+    text = schemas[name]
+    parts = text.split(f"\n{SEPARATOR}\nMSG: ")
+    assert parts[0] == msg_file(name).read_text()
+    dependencies = {}
+    for part in parts[1:]:
+        dependency, body = part.split("\n", 1)
+        assert dependency not in dependencies
+        dependencies[dependency] = body
+    assert set(dependencies) == _closure(msg_type)
+    for dependency, body in dependencies.items():
+        assert msg_file(dependency).read_text() == body
+
+
+def test_msg_dependencies_skip_comments_constants_and_primitives():
+    text = (
+        "# std_msgs/Header in a comment\n"
+        "uint8 OK=0\n"
+        "string<=10 short_name\n"
+        "Header header  # same package\n"
+        "geometry_msgs/Point[] points\n"
+        "geometry_msgs/Point[3] corners\n"
+        "float64[<=4] values\n"
+    )
+    assert msg_dependencies(text, "std_msgs") == ["geometry_msgs/Point", "std_msgs/Header"]

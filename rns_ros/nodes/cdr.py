@@ -64,10 +64,16 @@ def deserialize_or_reject(data: bytes, message_type: type):
 Filler = Callable[[object, Mapping[str, np.ndarray]], None]
 
 
-def _markers(slot: int, size: int) -> np.ndarray:
+def _markers(slot: int, size: int, family: int = 0) -> np.ndarray:
     """``size`` float64 values no other slot (nor a small integer or a name) serializes to:
-    tiny negative numbers with full mantissas (no runs of zero bytes to match across fields)."""
-    return np.array([-(np.pi + slot * 64 + i) * 2.0**-1000 for i in range(size)])
+    tiny negative numbers with full mantissas (no runs of zero bytes to match across fields).
+    ``family`` 0 or 1: two disjoint sets, to tell a slot from stale padding bytes."""
+    base = np.pi if family == 0 else np.e
+    return np.array([-(base + slot * 64 + i) * 2.0**-1000 for i in range(size)])
+
+
+#: A second stamp marker, for the same reason.
+_MARK_SEC_B, _MARK_NANOSEC_B = 0x2B0D1CE5, 0x3B9AC9FF - 0x4321
 
 
 class SerializedTemplate:
@@ -95,24 +101,37 @@ class SerializedTemplate:
         stamp: Callable[[object, int, int], None] | None = None,
     ) -> None:
         self._sizes = dict(sizes)
-        markers = {name: _markers(k, size) for k, (name, size) in enumerate(self._sizes.items())}
-        fill(message, markers)
-        if stamp is not None:
-            stamp(message, _MARK_SEC, _MARK_NANOSEC)
-        data = bytes(serialize_message(message))
+        # Padding bytes of a serialization are not defined (they may hold a marker from an
+        # earlier serialization): a slot is where both marker families serialize to.
+        families = []
+        for family, marks in ((0, (_MARK_SEC, _MARK_NANOSEC)), (1, (_MARK_SEC_B, _MARK_NANOSEC_B))):
+            markers = {
+                name: _markers(k, size, family)
+                for k, (name, size) in enumerate(self._sizes.items())
+            }
+            fill(message, markers)
+            if stamp is not None:
+                stamp(message, *marks)
+            families.append((bytes(serialize_message(message)), markers, marks))
+        (data, markers, _), (data_b, markers_b, _) = families
         self._buffer = bytearray(data)
         self._slots: dict[str, np.ndarray] = {}
         for name, values in markers.items():
-            offset = _find_once(data, values.astype("<f8").tobytes(), name)
+            offset = _find_once(
+                (data, data_b),
+                (values.astype("<f8").tobytes(), markers_b[name].astype("<f8").tobytes()),
+                name,
+            )
             self._slots[name] = np.frombuffer(
                 self._buffer, dtype="<f8", count=values.size, offset=offset
             )
         self._stamp: tuple[np.ndarray, np.ndarray] | None = None
         if stamp is not None:
-            pattern = (
-                np.array([_MARK_SEC], "<i4").tobytes() + np.array([_MARK_NANOSEC], "<u4").tobytes()
+            patterns = tuple(
+                np.array([sec], "<i4").tobytes() + np.array([nanosec], "<u4").tobytes()
+                for sec, nanosec in ((_MARK_SEC, _MARK_NANOSEC), (_MARK_SEC_B, _MARK_NANOSEC_B))
             )
-            offset = _find_once(data, pattern, "stamp")
+            offset = _find_once((data, data_b), patterns, "stamp")
             self._stamp = (
                 np.frombuffer(self._buffer, dtype="<i4", count=1, offset=offset),
                 np.frombuffer(self._buffer, dtype="<u4", count=1, offset=offset + 4),
@@ -147,11 +166,21 @@ class SerializedTemplate:
         return bytes(self._buffer)
 
 
-def _find_once(data: bytes, pattern: bytes, label: str) -> int:
-    offset = data.find(pattern)
-    if offset < 0 or data.find(pattern, offset + 1) >= 0:
+def _find_once(data: tuple[bytes, bytes], patterns: tuple[bytes, bytes], label: str) -> int:
+    """The one offset where each serialization in ``data`` holds its pattern."""
+    found = [_offsets(blob, pattern) for blob, pattern in zip(data, patterns, strict=True)]
+    common = found[0] & found[1]
+    if len(common) != 1:
         raise TemplateError(f"slot {label!r} not found exactly once in the serialized message")
-    return offset
+    return common.pop()
+
+
+def _offsets(data: bytes, pattern: bytes) -> set[int]:
+    offsets, start = set(), data.find(pattern)
+    while start >= 0:
+        offsets.add(start)
+        start = data.find(pattern, start + 1)
+    return offsets
 
 
 # --- reading: the fields a control loop needs, straight from the CDR bytes --------------------

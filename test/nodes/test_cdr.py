@@ -276,3 +276,21 @@ def test_twist_template_and_reader_agree_with_rclpy(data, frame, stamp):
     assert fields.frame_id == expected.frame_id
     assert np.array_equal(fields.linear, expected.linear)
     assert np.array_equal(fields.angular, expected.angular)
+
+
+def test_a_stale_marker_in_padding_bytes_is_not_taken_for_the_slot():
+    """Padding bytes of a CDR serialization are not defined: they can hold a marker from an
+    earlier serialization. The slot is where both marker families sit."""
+    from rns_ros.nodes.cdr import TemplateError, _find_once
+
+    a, b = b"AAAAAAAA", b"BBBBBBBB"
+    true, stale = 16, 40
+    blob_a = bytearray(64)
+    blob_b = bytearray(64)
+    blob_a[true : true + 8] = a
+    blob_a[stale : stale + 8] = a  # stale copy in padding
+    blob_b[true : true + 8] = b
+    assert _find_once((bytes(blob_a), bytes(blob_b)), (a, b), "slot") == true
+    blob_b[stale : stale + 8] = b  # both families stale at the same place: ambiguous
+    with pytest.raises(TemplateError, match="not found exactly once"):
+        _find_once((bytes(blob_a), bytes(blob_b)), (a, b), "slot")

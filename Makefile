@@ -42,7 +42,8 @@ export RMW_IMPLEMENTATION
 export AMENT_PREFIX_PATH := $(CURDIR)/$(VENV)$(if $(AMENT_PREFIX_PATH),:$(AMENT_PREFIX_PATH))
 
 # config/ needs no reinstall: .venv/share/rns_ros/config is a link to the source tree's.
-STAMP_DEPS := requirements.txt requirements-dev.txt setup.py setup.cfg package.xml
+STAMP_DEPS := requirements.txt requirements-dev.txt requirements-msgs.txt setup.py setup.cfg package.xml \
+	msgs/tf2_msgs/msg/TFMessage.msg scripts/build_msgs.sh
 
 .PHONY: venv demo test test-quick lint format clean distclean
 
@@ -53,6 +54,8 @@ $(STAMP): $(STAMP_DEPS)
 	test -x $(VENV_PY) || $(PYTHON) -m venv $(VENV)
 	$(VENV_PY) -m pip install --upgrade pip
 	$(VENV_PY) -m pip install -r requirements-dev.txt
+	$(VENV_PY) -m pip install -r requirements-msgs.txt
+	bash scripts/build_msgs.sh $(VENV)
 	$(VENV_PY) -m pip install --no-deps --no-build-isolation -e .
 	mkdir -p $(VENV)/share/ament_index/resource_index/packages $(VENV)/share/rns_ros
 	touch $(VENV)/share/ament_index/resource_index/packages/rns_ros

@@ -130,6 +130,7 @@ class SimulatorNode(Node):
             else max(1, round(params["publish_rate"] / params["energy_rate"])),
             wheel_inertia=params["wheel_inertia"],
             stamp=self._stamp,
+            publish_tf=params["publish_tf"],
         )
         self._commands = CommandIntake(
             self,

@@ -130,6 +130,11 @@ PARAMETERS = (
     LOCKSTEP_PERIOD,
     WORLD_FRAME,
     ParameterSpec(
+        "publish_tf",
+        True,
+        "Publish /tf and /tf_static as robot_state_publisher would (false beside one)",
+    ),
+    ParameterSpec(
         "servo_natural_frequency",
         50.0,
         "Dynamic-mode joint servo bandwidth omega_n",

@@ -28,6 +28,7 @@ from rns_ros.nodes.cdr import (
     wrench_template,
 )
 from rns_ros.nodes.sim_clock import stamp_from_seconds
+from rns_ros.nodes.tf_publishing import TfPublisher
 from rns_ros.sim.free_floating import SimulationState
 from rns_ros.sim.reaction_wheels import WHEEL_NAMES
 
@@ -80,6 +81,7 @@ class StatePublisher:
         energy_every: the energy topic with every k-th state; 0: none.
         wheel_inertia: I_r [kg m^2] of the energy metric.
         stamp: the header stamp of a state.
+        publish_tf: /tf and /tf_static (:class:`rns_ros.nodes.tf_publishing.TfPublisher`).
     """
 
     def __init__(
@@ -94,6 +96,7 @@ class StatePublisher:
         energy_every: int,
         wheel_inertia: float,
         stamp: Callable[[SimulationState], TimeMsg],
+        publish_tf: bool = True,
     ) -> None:
         self.robot = robot
         self._logger = node.get_logger()
@@ -124,6 +127,7 @@ class StatePublisher:
         self._momentum_msg.header.frame_id = world_frame
         self._clock_msg = Clock()
         self.templates = self._state_templates()
+        self.tf = TfPublisher.create(node, robot, world_frame) if publish_tf else None
 
     def reset_energy(self) -> None:
         """C_max and C_sum count from now (a ~/reset)."""
@@ -181,6 +185,8 @@ class StatePublisher:
             self._publish_messages(state, stamp)
         if wheels is not None:
             self._publish_wheels(wheels, stamp)
+        if self.tf is not None:
+            self.tf.publish(state.q, stamp)
         if clock:
             self.send_clock(state.time)
 

@@ -862,3 +862,66 @@ def test_commands_stamped_ahead_each_act_from_their_own_stamp(ros):
     assert np.array_equal(node.simulator.reference.velocities, first)
     node.advance()
     assert np.array_equal(node.simulator.reference.velocities, second)
+
+
+def test_tf_carries_the_link_tree_as_robot_state_publisher_would(ros):
+    """/tf_static (transient local: a late subscriber gets it) holds the fixed joints, /tf the
+    world -> base pose of base_odom and every moving joint; composed, they put the camera where
+    the core's forward kinematics does."""
+    from tf2_msgs.msg import TFMessage
+
+    from rns_ros.nodes.tf_publishing import STATIC_QOS
+
+    node = _simulator(ros, real_time_factor=0.0, publish_clock=True, initial_momentum=MOMENTUM)
+    probe = ros.probe()
+    odom = Recorder(probe, Odometry, "base_odom")
+    joints = Recorder(probe, JointState, "joint_states")
+    tf = Recorder(probe, TFMessage, "/tf")
+    static = Recorder(probe, TFMessage, "/tf_static", STATIC_QOS)
+    ros.spin_until(lambda: static.messages and len(tf.messages) > 5 and odom.messages, 10.0)
+    robot = node.robot
+    (fixed,) = static.messages
+    message = tf.messages[-1]
+    stamp = (message.transforms[0].header.stamp.sec, message.transforms[0].header.stamp.nanosec)
+    ros.spin_until(lambda: stamp in odom.by_stamp() and stamp in joints.by_stamp(), 5.0)
+    pose = odom.by_stamp()[stamp].pose.pose
+    world_base = message.transforms[0]
+    assert (world_base.header.frame_id, world_base.child_frame_id) == ("world", robot.base_link)
+    t, r = world_base.transform.translation, world_base.transform.rotation
+    position, orientation = pose.position, pose.orientation
+    expected = [position.x, position.y, position.z]
+    expected += [orientation.x, orientation.y, orientation.z, orientation.w]
+    np.testing.assert_allclose([t.x, t.y, t.z, r.x, r.y, r.z, r.w], expected)
+    assert len(message.transforms) == 1 + robot.n  # world -> base, one per moving joint
+    placed = {}
+    for transform in [*fixed.transforms, *message.transforms]:
+        tr, rot = transform.transform.translation, transform.transform.rotation
+        placed[transform.child_frame_id] = (
+            transform.header.frame_id,
+            pin.XYZQUATToSE3(np.array([tr.x, tr.y, tr.z, rot.x, rot.y, rot.z, rot.w])),
+        )
+
+    def world_pose(frame: str) -> pin.SE3:
+        parent, relative = placed[frame]
+        return relative if parent == "world" else world_pose(parent) * relative
+
+    state = joints.by_stamp()[stamp]
+    q = robot.configuration(state.position, expected[:3], expected[3:])
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, q)
+    camera = robot.model.frames[robot.camera_frame_id].name
+    np.testing.assert_allclose(
+        world_pose(camera).homogeneous, data.oMf[robot.camera_frame_id].homogeneous, atol=1e-9
+    )
+
+
+def test_publish_tf_false_leaves_tf_to_a_robot_state_publisher(ros):
+    from tf2_msgs.msg import TFMessage
+
+    _simulator(ros, real_time_factor=0.0, publish_clock=True, publish_tf=False)
+    probe = ros.probe()
+    joints = Recorder(probe, JointState, "joint_states")
+    tf = Recorder(probe, TFMessage, "/tf")
+    ros.spin_until(lambda: len(joints.messages) > 20, 10.0)
+    assert len(joints.messages) > 20
+    assert tf.messages == []

@@ -1,0 +1,78 @@
+"""The link tree of a model as robot_state_publisher publishes it on /tf and /tf_static: one
+transform per URDF joint, parent link -> child link, at the current configuration.
+
+Joints the model drives (its controlled joints) move; fixed and held joints, and the mount of an
+added satellite, are static. A root link the loader replaced by the satellite (a fixed-base
+``world``) hands its children to the satellite, as the model does.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from rns_ros.core.model import FreeFloatingModel
+
+
+@dataclass(frozen=True)
+class LinkEdge:
+    """One transform of the tree.
+
+    Attributes:
+        parent, child: link names (frame ids on /tf).
+        parent_frame, child_frame: their Pinocchio BODY frame ids.
+        static: True for /tf_static (independent of theta).
+    """
+
+    parent: str
+    child: str
+    parent_frame: int
+    child_frame: int
+    static: bool
+
+
+def link_edges(robot: FreeFloatingModel) -> tuple[LinkEdge, ...]:
+    """The edges of ``robot``'s link tree, from its URDF text (:attr:`urdf_xml`)."""
+    model = robot.model
+    frames = {
+        frame.name: index
+        for index, frame in enumerate(model.frames)
+        if frame.type == pin.FrameType.BODY
+    }
+    controlled = set(robot.joint_names)
+    root = ET.fromstring(robot.urdf_xml.encode())
+    children = set()
+    edges = []
+    for joint in root.iter("joint"):
+        parent = joint.find("parent").get("link")
+        child = joint.find("child").get("link")
+        children.add(child)
+        if child not in frames:
+            continue
+        if parent not in frames:  # a root the satellite replaced
+            parent = robot.base_link
+        static = joint.get("name") not in controlled
+        edges.append(LinkEdge(parent, child, frames[parent], frames[child], static))
+    links = [link.get("name") for link in root.iter("link")]
+    for link in (name for name in links if name not in children):
+        if link in frames and link != robot.base_link:  # the arm's root on an added satellite
+            frame = frames[robot.base_link]
+            edges.insert(0, LinkEdge(robot.base_link, link, frame, frames[link], True))
+    return tuple(edges)
+
+
+def edge_transforms(
+    robot: FreeFloatingModel, edges: tuple[LinkEdge, ...], q: np.ndarray
+) -> np.ndarray:
+    """Parent-to-child transforms of ``edges`` at configuration q (7 + n,): rows [x, y, z, qx,
+    qy, qz, qw] ([m], unit quaternion), shape (len(edges), 7). Uses its own ``pin.Data``."""
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, np.asarray(q, dtype=float))
+    rows = np.empty((len(edges), 7))
+    for k, edge in enumerate(edges):
+        relative = data.oMf[edge.parent_frame].actInv(data.oMf[edge.child_frame])
+        rows[k] = pin.SE3ToXYZQUAT(relative)
+    return rows

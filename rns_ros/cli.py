@@ -128,6 +128,16 @@ def output_folder_problem(path: Path) -> str | None:
     return None
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that raises ConfigError (one line, exit 2 in :func:`run_main`) instead of
+    printing its usage; the line points at the program's --help."""
+
+    def error(self, message: str):
+        from rns_ros.core.errors import ConfigError
+
+        raise ConfigError(f"{message} (see {self.prog.split()[0]} --help)")
+
+
 def one_line(error: BaseException | str) -> str:
     """The text of ``error`` on one line, without rcl's C source locations.
 

@@ -209,6 +209,23 @@ def rcl_one_line(error: BaseException) -> str:
     return " ".join(text.split()).removesuffix(" ^")
 
 
+def add_listing_arguments(listing: argparse.ArgumentParser) -> None:
+    """The options of a ``list`` subcommand (``rns_topic list``, ``rns_service list``)."""
+    listing.add_argument(
+        "-t",
+        "--show-types",
+        action="store_true",
+        help="accepted for ros2 compatibility: types are always shown",
+    )
+    listing.add_argument(
+        "--spin-time",
+        type=seconds,
+        default=DEFAULT_SPIN_TIME,
+        metavar="SEC",
+        help=f"discovery time after the first node appeared (default {DEFAULT_SPIN_TIME:g})",
+    )
+
+
 def _timeout_parser(what: str) -> argparse.ArgumentParser:
     """The ``--timeout SEC`` option every subcommand shares (a parent parser)."""
     common = ToolParser(add_help=False)

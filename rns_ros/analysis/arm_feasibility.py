@@ -111,7 +111,7 @@ def arm_feasibility(
     values below ``rank_tolerance`` times the largest count as zero.
     """
     if theta is None:
-        theta = getattr(robot, "initial_theta", np.zeros(robot.n))
+        theta = robot.initial_theta
     state = FreeFloatingState.compute(
         robot, robot.configuration(theta), rank_tolerance=rank_tolerance
     )
@@ -120,13 +120,12 @@ def arm_feasibility(
     stacked = np.vstack((_unit_scale(coupling), _unit_scale(state.camera.jacobian[3:])))
     stacked_rank = _rank(stacked, rank_tolerance)
     restricted = np.linalg.svd(state.restricted_jacobian, compute_uv=False)
-    base_mass = float(robot.model.inertias[1].mass)
     wrist = None if robot.wrist_frame_id is None else robot.model.frames[robot.wrist_frame_id].name
     result = ArmFeasibility(
         controlled_joints=tuple(robot.joint_names),
-        held_joints=dict(getattr(robot, "held_joints", {}) or {}),
+        held_joints=dict(robot.held_joints),
         total_mass=float(robot.total_mass),
-        base_mass=base_mass,
+        base_mass=robot.base_mass,
         theta=np.array(state.theta),
         coupling_rank=robot.n - state.reaction_null_space_rank,
         stacked_rank=stacked_rank,

@@ -119,7 +119,7 @@ def start_configuration(scenario: Scenario, robot: FreeFloatingModel) -> tuple[n
     which the note says.
     """
     theta = scenario.initial_theta
-    own = np.asarray(getattr(robot, "initial_theta", np.zeros(robot.n)), dtype=float)
+    own = robot.initial_theta
     if theta.shape != (robot.n,):
         why = (
             f"gives {theta.size} initial angles, the model has {robot.n} controlled joints "

@@ -48,7 +48,7 @@ import rerun as rr
 import yaml
 
 from rns_ros.control.contact_topics import ERROR_LABELS
-from rns_ros.core.config import load_model, load_model_config
+from rns_ros.core.config import load_model
 from rns_ros.core.contact_geometry import ArcConstraint, PlaneConstraint
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, load_fixed_base_model
@@ -260,10 +260,7 @@ def load_arm_model(path: str | Path) -> tuple[FreeFloatingModel | FixedBaseModel
         robot = load_fixed_base_model(path)
         return robot, (Path(path).parent / str(content["urdf"])).resolve()
     robot = load_model(path)
-    source = getattr(robot, "source_path", None)
-    if source is None:  # a loader without it: the YAML's urdf, as load_model_config resolves it
-        source, _ = load_model_config(path)
-    return robot, Path(source)
+    return robot, Path(robot.source_path)
 
 
 @dataclass(frozen=True)

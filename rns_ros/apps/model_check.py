@@ -102,18 +102,13 @@ def report_lines(path: Path, robot, feasibility) -> list[str]:
     ]
 
 
-#: FreeFloatingModel.describe() gives 4 summary lines (printed above in this command's own
-#: words), then one line per change loading made to the URDF.
-LOADING_NOTES = 4
-
-
 def _check(path: Path) -> int:
     from rns_ros.analysis.arm_feasibility import arm_feasibility
 
     robot = _load(path)
     feasibility = arm_feasibility(robot)
     print("\n".join(report_lines(path, robot, feasibility)))
-    for note in robot.describe()[LOADING_NOTES:]:
+    for note in robot.loading_notes:
         print(f"note: {note}")
     for warning in feasibility.warnings:
         print(f"warning: {warning}")

@@ -101,6 +101,8 @@ class FreeFloatingModel:
         total_mass: m_C of eq. (2.9) [kg].
         urdf_xml: the URDF text as loaded (the arm's, before the satellite is added).
         source_path: the URDF file, or None when built from text.
+        loading_notes: one line per change loading made to the URDF (satellite added, root
+            replaced, continuous joints unbounded); the end of :meth:`describe`.
     """
 
     def __init__(
@@ -136,7 +138,7 @@ class FreeFloatingModel:
         self.urdf_xml = urdf_xml
         self.source_path = source_path
         self._held_rules = dict(held_rules or {})
-        self._notes = tuple(notes)
+        self.loading_notes: tuple[str, ...] = tuple(notes)
         self.camera_frame_id = self._frame_id(spec.camera_frame, "camera_frame")
         self.wrist_frame_id = (
             None if spec.wrist_frame is None else self._frame_id(spec.wrist_frame, "wrist_frame")
@@ -303,7 +305,7 @@ class FreeFloatingModel:
             f"base '{self.base_link}': {self.base_mass:.6g} kg (with the links fixed to it)",
             f"total mass {self.total_mass:.6g} kg (arm {arm:.6g} kg, base/arm "
             f"{self.base_mass / arm if arm > 0 else math.inf:.4g})",
-            *self._notes,
+            *self.loading_notes,
         ]
 
     # configurations --------------------------------------------------------------------------

@@ -65,11 +65,16 @@ def link_edges(robot: FreeFloatingModel) -> tuple[LinkEdge, ...]:
 
 
 def edge_transforms(
-    robot: FreeFloatingModel, edges: tuple[LinkEdge, ...], q: np.ndarray
+    robot: FreeFloatingModel,
+    edges: tuple[LinkEdge, ...],
+    q: np.ndarray,
+    data: pin.Data | None = None,
 ) -> np.ndarray:
     """Parent-to-child transforms of ``edges`` at configuration q (7 + n,): rows [x, y, z, qx,
-    qy, qz, qw] ([m], unit quaternion), shape (len(edges), 7). Uses its own ``pin.Data``."""
-    data = robot.model.createData()
+    qy, qz, qw] ([m], unit quaternion), shape (len(edges), 7). ``data``: a ``pin.Data`` of the
+    model to work in (a caller that publishes every state keeps one); default a new one, never
+    ``robot.data``, which holds the current state's quantities."""
+    data = robot.model.createData() if data is None else data
     pin.framesForwardKinematics(robot.model, data, np.asarray(q, dtype=float))
     rows = np.empty((len(edges), 7))
     for k, edge in enumerate(edges):

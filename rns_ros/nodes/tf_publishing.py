@@ -40,6 +40,7 @@ class TfPublisher:
 
     def __init__(self, node: Node, robot: FreeFloatingModel, world_frame: str, message_type):
         self._robot, self._world_frame, self._type = robot, world_frame, message_type
+        self._data = robot.model.createData()  # reused by every /tf message
         edges = link_edges(robot)
         self._moving: tuple[LinkEdge, ...] = tuple(e for e in edges if not e.static)
         static = tuple(e for e in edges if e.static)
@@ -72,7 +73,7 @@ class TfPublisher:
         """world -> base and the moving joints at configuration q (7 + n,), stamped ``stamp``."""
         base = np.concatenate([q[:3], q[3:7]])
         transforms = [_transform(self._world_frame, self._robot.base_link, base, stamp)]
-        rows = edge_transforms(self._robot, self._moving, q)
+        rows = edge_transforms(self._robot, self._moving, q, self._data)
         transforms += [
             _transform(e.parent, e.child, row, stamp)
             for e, row in zip(self._moving, rows, strict=True)

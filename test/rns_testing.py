@@ -177,3 +177,22 @@ class SimClock:
         stamp = stamp_from_seconds(self.seconds)
         self._publisher.publish(self._msg_type(clock=stamp))
         return stamp
+
+
+def six_joint_model(folder, wrist_frame: str | None = "wrist"):
+    """A model YAML in ``folder`` for the default arm with joint_7 welded (a fixed joint): 6
+    controlled joints; ``wrist_frame`` None writes ``wrist_frame: null``. Returns its path."""
+    from rns_ros.core.config import load_model_config
+    from rns_ros.resources import default_model_config
+
+    urdf, _ = load_model_config(default_model_config())
+    text = urdf.read_text()
+    welded = text.replace(
+        '<joint name="joint_7" type="revolute">', '<joint name="joint_7" type="fixed">'
+    )
+    assert welded != text
+    (folder / "arm6.urdf").write_text(welded)
+    model = folder / "arm6.yaml"
+    wrist = "null" if wrist_frame is None else wrist_frame
+    model.write_text(f"urdf: arm6.urdf\ncamera_frame: camera\nwrist_frame: {wrist}\n")
+    return model

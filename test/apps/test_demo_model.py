@@ -13,15 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from rns_testing import SHORT_ROLL_SCENARIO
+from rns_testing import SHORT_ROLL_SCENARIO, six_joint_model
 
 from rns_ros.analysis.closed_loop import run_scenario
 from rns_ros.apps import demo
 from rns_ros.apps.demo import main
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import load_model
-from rns_ros.core.config import load_model_config
-from rns_ros.resources import default_model_config
 from rns_ros.runs.inspection import DemoRow, start_configuration
 from rns_ros.viz.readback import recording_summary
 
@@ -31,19 +29,6 @@ DOMAIN = str(int(os.environ.get("ROS_DOMAIN_ID", "43")) + 1)
 SIX_ANGLES_DEG = [-90.0, -30.0, 0.0, -70.0, 180.0, -30.0]
 
 
-def _six_joint_model(folder: Path) -> Path:
-    urdf, _ = load_model_config(default_model_config())
-    text = urdf.read_text()
-    welded = text.replace(
-        '<joint name="joint_7" type="revolute">', '<joint name="joint_7" type="fixed">'
-    )
-    assert welded != text
-    (folder / "arm6.urdf").write_text(welded)
-    model = folder / "arm6.yaml"
-    model.write_text("urdf: arm6.urdf\ncamera_frame: camera\nwrist_frame: null\n")
-    return model
-
-
 def _scenario(folder: Path, degrees: list[float], name: str = "short.yaml") -> Path:
     path = folder / name
     path.write_text(yaml.safe_dump({**SHORT_ROLL_SCENARIO, "initial_joint_positions_deg": degrees}))
@@ -51,7 +36,7 @@ def _scenario(folder: Path, degrees: list[float], name: str = "short.yaml") -> P
 
 
 def test_a_scenario_for_the_arm_gives_the_start(tmp_path):
-    robot = load_model(_six_joint_model(tmp_path))
+    robot = load_model(six_joint_model(tmp_path, wrist_frame=None))
     scenario = load_scenario(_scenario(tmp_path, SIX_ANGLES_DEG))
     theta, note = start_configuration(scenario, robot)
     np.testing.assert_array_equal(theta, np.deg2rad(SIX_ANGLES_DEG))
@@ -59,12 +44,12 @@ def test_a_scenario_for_the_arm_gives_the_start(tmp_path):
 
 
 def test_a_scenario_for_another_arm_starts_from_the_models_configuration(tmp_path):
-    robot = load_model(_six_joint_model(tmp_path))
+    robot = load_model(six_joint_model(tmp_path, wrist_frame=None))
     scenario = load_scenario(
         _scenario(tmp_path, SHORT_ROLL_SCENARIO["initial_joint_positions_deg"])
     )
     theta, note = start_configuration(scenario, robot)
-    np.testing.assert_array_equal(theta, getattr(robot, "initial_theta", np.zeros(6)))
+    np.testing.assert_array_equal(theta, robot.initial_theta)
     assert "gives 7 initial angles, the model has 6 controlled joints" in note
 
 
@@ -79,7 +64,7 @@ def test_angles_outside_the_joint_limits_are_another_arms(tmp_path, robot):
 
 
 def test_demo_passes_the_model_and_prints_the_note(tmp_path, monkeypatch, capsys):
-    model = _six_joint_model(tmp_path)
+    model = six_joint_model(tmp_path, wrist_frame=None)
     seen = []
 
     def fake_run(method, args, _file):
@@ -128,7 +113,7 @@ def _figures():
 def test_demo_runs_a_six_joint_arm_reactionless_over_dds(tmp_path):
     """Simulator, controller, operator and logger all on the 6-joint model: the camera turns
     30 deg while the base stays as still as the in-process closed loop keeps it."""
-    model = _six_joint_model(tmp_path)
+    model = six_joint_model(tmp_path, wrist_frame=None)
     scenario = _scenario(tmp_path, SIX_ANGLES_DEG)
     summary = tmp_path / "summary.json"
     argv = ["--scenario", str(scenario), "--model", str(model), "--methods", "dls"]

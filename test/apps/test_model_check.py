@@ -13,11 +13,11 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from rns_testing import six_joint_model
 
 from rns_ros.analysis.arm_feasibility import NEAR_SINGULAR, arm_feasibility
 from rns_ros.apps import model_check
@@ -48,21 +48,6 @@ def _independent(robot, theta):
     stacked_sigma = np.linalg.svd(stacked, compute_uv=False)
     stacked_rank = int(np.sum(stacked_sigma > RELATIVE_RANK * stacked_sigma[0]))
     return robot.n - rank, stacked_rank, restricted
-
-
-def _six_joint_model(tmp_path: Path, wrist_frame: str | None = "wrist") -> Path:
-    """The default arm with joint_7 welded (a fixed joint): 6 controlled joints."""
-    urdf, _ = load_model_config(config_dir() / "model.yaml")
-    text = urdf.read_text()
-    welded = text.replace(
-        '<joint name="joint_7" type="revolute">', '<joint name="joint_7" type="fixed">'
-    )
-    assert welded != text
-    (tmp_path / "arm6.urdf").write_text(welded)
-    model = tmp_path / "arm6.yaml"
-    wrist = "null" if wrist_frame is None else wrist_frame
-    model.write_text(f"urdf: arm6.urdf\ncamera_frame: camera\nwrist_frame: {wrist}\n")
-    return model
 
 
 def _check(capsys, *args: str) -> tuple[int, str, str]:
@@ -107,7 +92,7 @@ def test_check_prints_the_default_arm(capsys):
     code, out, err = _check(capsys, str(path))
     assert code == 0
     assert err == ""
-    theta = getattr(robot, "initial_theta", np.zeros(robot.n))
+    theta = robot.initial_theta
     dimension, _stacked_rank, restricted = _independent(robot, theta)
     assert _value(out, r"controlled joints \((\d+)\)") == "7"
     assert int(_value(out, r"reaction null space: dimension (\d+)")) == dimension
@@ -121,7 +106,7 @@ def test_check_prints_the_default_arm(capsys):
 
 
 def test_six_joints_warn_that_no_redundancy_is_left_for_the_wrist(tmp_path, capsys):
-    model = _six_joint_model(tmp_path)
+    model = six_joint_model(tmp_path)
     robot = load_model(model)
     assert robot.n == 6
     theta = np.deg2rad([-90, -30, 0, -70, 180, -30])  # away from the singularities
@@ -144,7 +129,7 @@ def test_six_joints_warn_that_no_redundancy_is_left_for_the_wrist(tmp_path, caps
 
 
 def test_six_joints_without_a_wrist_frame_have_nothing_to_warn_about_the_wrist(tmp_path):
-    robot = load_model(_six_joint_model(tmp_path, wrist_frame=None))
+    robot = load_model(six_joint_model(tmp_path, wrist_frame=None))
     result = arm_feasibility(robot, np.deg2rad([-90, -30, 0, -70, 180, -30]))
     assert result.pointing_feasible
     assert result.wrist_null_space_dimension == 0
@@ -153,7 +138,7 @@ def test_six_joints_without_a_wrist_frame_have_nothing_to_warn_about_the_wrist(t
 
 def test_five_joints_cannot_point_reactionlessly(tmp_path):
     """5 joints: a 2-dimensional null space for 3 camera rows."""
-    model = _six_joint_model(tmp_path)
+    model = six_joint_model(tmp_path)
     urdf = tmp_path / "arm6.urdf"
     urdf.write_text(
         urdf.read_text().replace(
@@ -171,11 +156,7 @@ def test_five_joints_cannot_point_reactionlessly(tmp_path):
 
 
 def test_held_joint_makes_a_six_joint_arm(tmp_path, capsys):
-    """With the model YAML's held_joints (the loader's, when it has them): joint_7 held."""
-    from rns_ros.core import config
-
-    if "held_joints" not in getattr(config, "_KEYS", set()):
-        pytest.skip("this model loader has no held_joints key")
+    """With the model YAML's held_joints: joint_7 held."""
     urdf, _ = load_model_config(config_dir() / "model.yaml")
     model = tmp_path / "held.yaml"
     model.write_text(

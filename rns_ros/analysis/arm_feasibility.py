@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from rns_ros.core.inverses import kernel_basis
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.state import DEFAULT_RANK_TOLERANCE, FreeFloatingState
 
@@ -118,7 +119,7 @@ def arm_feasibility(
     coupling = state.coupling_angular_momentum_matrix
     # rows scaled to one: M~_omega_m [kg m^2] and J_omega_e [-] have different units
     stacked = np.vstack((_unit_scale(coupling), _unit_scale(state.camera.jacobian[3:])))
-    stacked_rank = _rank(stacked, rank_tolerance)
+    _, _, stacked_rank = kernel_basis(stacked, rank_tolerance, checked=True)
     restricted = np.linalg.svd(state.restricted_jacobian, compute_uv=False)
     wrist = None if robot.wrist_frame_id is None else robot.model.frames[robot.wrist_frame_id].name
     result = ArmFeasibility(
@@ -139,13 +140,6 @@ def _unit_scale(matrix: np.ndarray) -> np.ndarray:
     """``matrix`` divided by its largest singular value (unchanged when it is zero)."""
     largest = np.linalg.norm(matrix, 2)
     return matrix / largest if largest > 0.0 else matrix
-
-
-def _rank(matrix: np.ndarray, rank_tolerance: float) -> int:
-    sigma = np.linalg.svd(matrix, compute_uv=False)
-    if sigma.size == 0 or sigma[0] == 0.0:
-        return 0
-    return int(np.sum(sigma > rank_tolerance * sigma[0]))
 
 
 def _with_warnings(result: ArmFeasibility) -> ArmFeasibility:

@@ -19,6 +19,7 @@ import pinocchio as pin
 
 from rns_ros.core.errors import InputError, ModelError
 from rns_ros.core.model import FreeFloatingModel, ModelSpec
+from rns_ros.core.urdf_prep import INERTIA_KEYS, inertia_matrix
 
 _ROOT = Path(__file__).resolve().parents[2]
 #: The first, inferred arm: every candidate reuses its base, mount, masses and moments (Table 4.1).
@@ -159,14 +160,7 @@ def load_reference(path: str | Path = REFERENCE_URDF) -> ReferenceData:
         if inertial is None:
             raise ModelError(f"{path}: link_{i} has no <inertial>")
         element = inertial.find("inertia")
-        v = {k: float(element.get(k)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-        matrix = np.array(
-            [
-                [v["ixx"], v["ixy"], v["ixz"]],
-                [v["ixy"], v["iyy"], v["iyz"]],
-                [v["ixz"], v["iyz"], v["izz"]],
-            ]
-        )
+        matrix = inertia_matrix({k: float(element.get(k)) for k in INERTIA_KEYS})
         rotation = _rpy_matrix(inertial.find("origin").get("rpy"))
         matrix = rotation @ matrix @ rotation.T
         com = np.array([float(x) for x in inertial.find("origin").get("xyz").split()])

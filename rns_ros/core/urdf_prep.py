@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -34,7 +35,8 @@ from rns_ros.core.errors import ModelError
 #: Relative tolerance of the triangle inequality on principal moments (I1 + I2 >= I3): URDFs
 #: exported from CAD round their moments, and a thin disk (I, I, 2I) sits exactly on the bound.
 TRIANGLE_RTOL = 1e-4
-_INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+#: The six moments of a URDF <inertia> [kg m^2].
+INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 #: Name of the satellite link added as the URDF root (a suffix is added if the arm has one).
 SATELLITE_LINK = "satellite"
 #: A root link of this name (massless) stands for the ground of a fixed-base description.
@@ -130,19 +132,26 @@ def check_urdf_inertials(xml: str, name: str = "robot") -> None:
         where = f"{name}: link '{link.get('name')}'"
         mass = _number(inertial.find("mass"), "value", f"{where} <mass>")
         element = inertial.find("inertia")
-        values = {key: _number(element, key, f"{where} <inertia>") for key in _INERTIA_KEYS}
+        values = {key: _number(element, key, f"{where} <inertia>") for key in INERTIA_KEYS}
         if mass == 0.0 and not any(values.values()):
             continue  # an empty inertial: a frame link
         if not mass > 0.0:
             raise ModelError(f"{where}: mass must be finite and > 0 kg, got {mass}")
-        matrix = np.array(
-            [
-                [values["ixx"], values["ixy"], values["ixz"]],
-                [values["ixy"], values["iyy"], values["iyz"]],
-                [values["ixz"], values["iyz"], values["izz"]],
-            ]
-        )
-        check_inertia_matrix(matrix, where)
+        check_inertia_matrix(inertia_matrix(values), where)
+
+
+def inertia_matrix(moments: Mapping[str, float]) -> np.ndarray:
+    """The rotational inertia [kg m^2] (3, 3) of a URDF ``<inertia>``'s six moments
+    (``ixx ixy ixz iyy iyz izz``, :data:`INERTIA_KEYS`)."""
+    m = moments
+    return np.array(
+        [
+            [m["ixx"], m["ixy"], m["ixz"]],
+            [m["ixy"], m["iyy"], m["iyz"]],
+            [m["ixz"], m["iyz"], m["izz"]],
+        ],
+        dtype=float,
+    )
 
 
 def check_inertia_matrix(matrix: np.ndarray, where: str) -> None:
@@ -306,7 +315,7 @@ def _add_satellite(
     ET.SubElement(inertial, "origin", xyz="0 0 0", rpy="0 0 0")
     ET.SubElement(inertial, "mass", value=repr(float(base.mass)))
     matrix = np.array(base.inertia, dtype=float)
-    moments = dict(zip(_INERTIA_KEYS, matrix[np.triu_indices(3)].tolist(), strict=True))
+    moments = dict(zip(INERTIA_KEYS, matrix[np.triu_indices(3)].tolist(), strict=True))
     ET.SubElement(inertial, "inertia", {key: repr(value) for key, value in moments.items()})
     root.insert(0, link)
     mount = pin.SE3(pin.rpy.rpyToMatrix(*map(float, base.mount_rpy)), np.array(base.mount_xyz))

@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.core.urdf_prep import inertia_matrix
+
 #: Smallest semi-axis drawn [m]: a flat or needle-like inertia still shows.
 MIN_SEMI_AXIS = 0.005
 
@@ -142,13 +144,7 @@ def _ellipsoid(inertial: ET.Element):
     with contextlib.suppress(TypeError, ValueError, AttributeError):
         mass = float(inertial.find("mass").get("value"))
         values = {k: float(v) for k, v in inertial.find("inertia").attrib.items()}
-        matrix = np.array(
-            [
-                [values["ixx"], values["ixy"], values["ixz"]],
-                [values["ixy"], values["iyy"], values["iyz"]],
-                [values["ixz"], values["iyz"], values["izz"]],
-            ]
-        )
+        matrix = inertia_matrix(values)
         if mass > 0.0 and np.all(np.isfinite(matrix)) and np.linalg.eigvalsh(matrix)[0] > 0.0:
             origin = inertial.find("origin")
             rotation = _rpy_matrix(_vector(origin, "rpy"))

@@ -196,3 +196,16 @@ def six_joint_model(folder, wrist_frame: str | None = "wrist"):
     wrist = "null" if wrist_frame is None else wrist_frame
     model.write_text(f"urdf: arm6.urdf\ncamera_frame: camera\nwrist_frame: {wrist}\n")
     return model
+
+
+def simulated_camera(simulator):
+    """An in-process rns_simulator's simulated time [s] and its camera's rotation in world (3, 3)
+    at that time (one snapshot: the arm as the simulation has integrated it)."""
+    import pinocchio as pin
+
+    with simulator._lock:
+        state = simulator.simulator.snapshot()
+    robot = simulator.robot
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, state.q)
+    return state.time, data.oMf[robot.camera_frame_id].rotation.copy()

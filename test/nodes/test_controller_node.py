@@ -20,7 +20,7 @@ from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import Recorder, big_endian_joint_state, status_values
+from rns_testing import Recorder, big_endian_joint_state, simulated_camera, status_values
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -99,17 +99,6 @@ def _latest_state(streams):
     return status_values(messages[-1])["state"] if messages else None
 
 
-def _simulated_camera(simulator) -> tuple[float, np.ndarray]:
-    """The simulator's simulated time [s] and its camera's rotation in world at that time (one
-    snapshot: the arm as the simulation has integrated it)."""
-    with simulator._lock:
-        state = simulator.simulator.snapshot()
-    robot = simulator.robot
-    data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, state.q)
-    return state.time, data.oMf[robot.camera_frame_id].rotation.copy()
-
-
 def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
     """An operator streams 0.1 rad/s about world x. Over the simulated time between two
     snapshots of the simulator the camera turns by 0.1 rad/s times that time, about x only (the
@@ -124,9 +113,9 @@ def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
     operator.angular, operator.active = (0.1, 0.0, 0.0), True
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
     start = len(streams["references"].messages)
-    time_0, camera_0 = _simulated_camera(stack.simulator)
+    time_0, camera_0 = simulated_camera(stack.simulator)
     ros.spin_for(1.5)
-    time_1, camera_1 = _simulated_camera(stack.simulator)
+    time_1, camera_1 = simulated_camera(stack.simulator)
     references = streams["references"].messages[start:]
     stamps = np.array([_seconds(m.header.stamp) for m in references])
     # the output rate on the wall clock is a timing figure: scripts/benchmark.py --only latency
@@ -265,9 +254,9 @@ def test_teleop_twist_keyboard_style_input_turns_the_camera_about_its_own_z(ros)
     assert ros.spin_until(
         lambda: status.messages and status_values(status.messages[-1])["state"] == "OK"
     )
-    time_0, camera_0 = _simulated_camera(simulator)
+    time_0, camera_0 = simulated_camera(simulator)
     ros.spin_for(1.0)
-    time_1, camera_1 = _simulated_camera(simulator)
+    time_1, camera_1 = simulated_camera(simulator)
     assert status_values(status.messages[-1])["frame"] == "camera"
     # the rotation between the two camera attitudes, in the first camera's axes
     turned = pin.log3(camera_0.T @ camera_1)

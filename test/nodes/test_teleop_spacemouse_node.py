@@ -18,7 +18,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
-from rns_testing import Recorder, status_values
+from rns_testing import Recorder, simulated_camera, status_values
 
 from rns_ros.control.spacemouse import SpaceMouseReading
 from rns_ros.core.integration import attitude_deviation
@@ -183,17 +183,9 @@ def test_the_spacenav_twist_stream_turns_the_camera_through_the_controller(ros):
         timeout=10.0,
     )
 
-    def camera():
-        with simulator._lock:
-            state = simulator.simulator.snapshot()
-        robot = simulator.robot
-        data = robot.model.createData()
-        pin.framesForwardKinematics(robot.model, data, state.q)
-        return state.time, data.oMf[robot.camera_frame_id].rotation.copy()
-
-    time_0, camera_0 = camera()
+    time_0, camera_0 = simulated_camera(simulator)
     ros.spin_for(1.0)
-    time_1, camera_1 = camera()
+    time_1, camera_1 = simulated_camera(simulator)
     assert status_values(status.messages[-1])["frame"] == "camera"
     turned = pin.log3(camera_0.T @ camera_1)  # in the first camera's axes
     print(f"turned {turned[2]:.5f} rad in {time_1 - time_0:.4f} s of simulated time")

@@ -131,7 +131,8 @@ def test_the_correction_is_capped_and_a_runaway_error_restarts():
     assert step.correction @ AXIS > 0  # towards the commanded attitude
     camera = pin.exp3(-0.2 * AXIS)
     step = tracker.step(camera, 0.0)  # 0.4 rad off: cannot be closed
-    assert step.restarted and step.error == pytest.approx(0.4)
+    assert step.restarted
+    assert step.error == pytest.approx(0.4)
     assert angle_between(tracker.target(0.0), camera) < 1e-12
     assert np.linalg.norm(tracker.step(camera, 0.0).correction) < 1e-12
 
@@ -139,12 +140,14 @@ def test_the_correction_is_capped_and_a_runaway_error_restarts():
 def test_nothing_is_tracked_before_a_restart_or_after_a_stop():
     tracker = CommandedAttitude(TrackingSettings())
     tracker.take(AXIS, TwistFrame.WORLD, 0.0, 0.0, I3)
-    assert tracker.target(1.0) is None and not tracker.active
+    assert tracker.target(1.0) is None
+    assert not tracker.active
     assert not tracker.step(I3, 1.0).correction.any()
     tracker.restart(I3)
     assert tracker.active
     tracker.stop()
-    assert not tracker.active and tracker.target(1.0) is None
+    assert not tracker.active
+    assert tracker.target(1.0) is None
 
 
 @pytest.mark.parametrize(

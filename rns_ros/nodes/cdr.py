@@ -33,6 +33,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.core.errors import InputError, RnsError
+from rns_ros.nodes.robot_io import trajectory_end
 
 #: Stamp markers (sec, nanosec): unlikely byte patterns in any other field.
 _MARK_SEC, _MARK_NANOSEC = 0x5A17C0DE, 0x3B9AC9FF - 0x1234
@@ -562,26 +563,46 @@ def clock_template() -> SerializedTemplate:
     return SerializedTemplate(Clock(), {}, lambda msg, values: None, stamp)
 
 
+class _StreamedTrajectoryTemplate(SerializedTemplate):
+    """The template of :func:`joint_trajectory_template`: ``end_positions`` is written into
+    points 1 and 2 (slot ``rest_positions``, unless given on its own)."""
+
+    def serialize(
+        self, values: Mapping[str, np.ndarray], stamp: tuple[int, int] | None = None
+    ) -> bytes:
+        if "end_positions" in values and "rest_positions" not in values:
+            values = {**values, "rest_positions": values["end_positions"]}
+        return super().serialize(values, stamp)
+
+
+def _set_duration(duration, seconds: float) -> None:
+    sec, nanosec = divmod(round(seconds * 1e9), 1_000_000_000)
+    duration.sec, duration.nanosec = int(sec), int(nanosec)
+
+
 def joint_trajectory_template(names: Sequence[str], horizon: float) -> SerializedTemplate:
     """trajectory_msgs/JointTrajectory of ``names`` shaped as
     :func:`rns_ros.nodes.robot_io.streamed_trajectory`: point 0 at time_from_start 0 (slots
     ``positions``, ``velocities``), point 1 at ``horizon`` [s] (slot ``end_positions``, no
-    velocities); each slot (len(names),)."""
+    velocities), point 2 at :func:`rns_ros.nodes.robot_io.trajectory_end` of ``horizon`` [s]
+    with point 1's positions (slot ``rest_positions``, written with ``end_positions`` unless
+    given) and zero velocities; each slot (len(names),)."""
     n = len(names)
     message = JointTrajectory(joint_names=list(names))
-    sec, nanosec = divmod(round(horizon * 1e9), 1_000_000_000)
-    message.points = [JointTrajectoryPoint(), JointTrajectoryPoint()]
-    message.points[1].time_from_start.sec = int(sec)
-    message.points[1].time_from_start.nanosec = int(nanosec)
+    message.points = [JointTrajectoryPoint(), JointTrajectoryPoint(), JointTrajectoryPoint()]
+    _set_duration(message.points[1].time_from_start, horizon)
+    _set_duration(message.points[2].time_from_start, trajectory_end(horizon))
+    message.points[2].velocities = [0.0] * n
 
     def fill(msg, values) -> None:
-        start, end = msg.points
+        start, end_point, rest = msg.points
         start.positions = [float(x) for x in values["positions"]]
         start.velocities = [float(x) for x in values["velocities"]]
-        end.positions = [float(x) for x in values["end_positions"]]
+        end_point.positions = [float(x) for x in values["end_positions"]]
+        rest.positions = [float(x) for x in values["rest_positions"]]
 
-    sizes = {"positions": n, "velocities": n, "end_positions": n}
-    return SerializedTemplate(message, sizes, fill, _header_stamp)
+    sizes = {"positions": n, "velocities": n, "end_positions": n, "rest_positions": n}
+    return _StreamedTrajectoryTemplate(message, sizes, fill, _header_stamp)
 
 
 __all__ = [

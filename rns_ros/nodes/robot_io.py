@@ -36,17 +36,29 @@ OUTPUT_TOPICS = {
     "velocity": "joint_velocities",
     "position": "joint_positions",
 }
-#: A streamed JointTrajectory ends this many output periods after its stamp: the next one
-#: replaces it one period later, so one more period of latency (or clock offset between our
-#: node and the controller) passes before joint_trajectory_controller refuses it as ending in
-#: the past, and the arm comes to rest this long after the last one.
+#: A streamed JointTrajectory comes to rest this many output periods after its stamp (its
+#: point 1): the next one replaces it one period later, and the arm stops this long after the
+#: last one.
 TRAJECTORY_HORIZON_PERIODS = 2.0
+#: time_from_start [s] of a streamed JointTrajectory's last point (point 2, point 1's positions
+#: at rest): joint_trajectory_controller refuses a trajectory that ends before it arrives, so a
+#: message delivered up to this long after its stamp (latency plus the offset between our clock
+#: and the controller's) is still taken, and played as a hold at rest once past point 1. Above
+#: the receipt lag of a loaded machine (max 163 ms, p99 43 ms at 100 Hz).
+TRAJECTORY_DELIVERY_MARGIN = 0.25
 
 
 def trajectory_horizon(period: float) -> float:
-    """time_from_start [s] of a streamed JointTrajectory's last point for the output ``period``
-    [s]."""
+    """time_from_start [s] of a streamed JointTrajectory's point 1, where it comes to rest, for
+    the output ``period`` [s]."""
     return TRAJECTORY_HORIZON_PERIODS * period
+
+
+def trajectory_end(horizon: float) -> float:
+    """time_from_start [s] of a streamed JointTrajectory's last point for point 1 at
+    ``horizon`` [s]: :data:`TRAJECTORY_DELIVERY_MARGIN`, or twice ``horizon`` when that is later
+    (long output periods: the points' times must increase)."""
+    return max(TRAJECTORY_DELIVERY_MARGIN, 2.0 * horizon)
 
 
 def hold_end_positions(positions, velocities, horizon: float) -> np.ndarray:
@@ -70,9 +82,12 @@ def streamed_trajectory(
     Point 0 (time_from_start 0): ``positions`` [rad] and ``velocities`` [rad/s] (n,), the held
     command; rns_simulator reads this point. Point 1 (time_from_start ``horizon`` [s]):
     positions + horizon velocities, no velocities: joint_trajectory_controller interpolates
-    linearly between the two (at exactly ``velocities``) and the trajectory ends at rest, as its
-    default ``allow_nonzero_velocity_at_trajectory_end: false`` requires.
+    linearly between the two (at exactly ``velocities``), so the arm is at rest there. Point 2
+    (time_from_start :func:`trajectory_end` of ``horizon``, [s]): point 1's positions, zero
+    velocities: the hold at rest that keeps a late message valid, and the trajectory ends at
+    rest, as JTC's default ``allow_nonzero_velocity_at_trajectory_end: false`` requires.
     """
+    end_positions = hold_end_positions(positions, velocities, horizon).tolist()
     msg = JointTrajectory()
     msg.header.stamp = stamp
     msg.joint_names = list(joint_names)
@@ -81,9 +96,11 @@ def streamed_trajectory(
             positions=np.asarray(positions, dtype=float).tolist(),
             velocities=np.asarray(velocities, dtype=float).tolist(),
         ),
+        JointTrajectoryPoint(positions=end_positions, time_from_start=duration_msg(horizon)),
         JointTrajectoryPoint(
-            positions=hold_end_positions(positions, velocities, horizon).tolist(),
-            time_from_start=duration_msg(horizon),
+            positions=end_positions,
+            velocities=[0.0] * len(end_positions),
+            time_from_start=duration_msg(trajectory_end(horizon)),
         ),
     ]
     return msg
@@ -131,6 +148,8 @@ class JointCommand:
         self.joint_names = list(joint_names)
         self.period = period
         self.horizon = trajectory_horizon(period)
+        #: time_from_start [s] of a streamed trajectory's last point (at rest)
+        self.end = trajectory_end(self.horizon)
         # data[order[i]] is model joint i (ros2_control's forward_command_controller order)
         self.order = (
             None if interface == "trajectory" else velocity_joint_order(joints, joint_names)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -33,6 +34,7 @@ from rns_ros.nodes.cdr import (
     twist_stamped_template,
     wrench_template,
 )
+from rns_ros.nodes.robot_io import TRAJECTORY_DELIVERY_MARGIN, streamed_trajectory
 
 # names and frame ids of any length (the padding after them varies) and any character a ROS
 # string can hold (not NUL: rclpy cuts a string there)
@@ -102,16 +104,23 @@ def test_trajectory_template_reads_back_as_the_streamed_trajectory(data, names, 
         JointTrajectory,
     )
     assert list(msg.joint_names) == names
-    assert len(msg.points) == 2
-    first, last = msg.points
+    assert len(msg.points) == 3
+    first, stop, rest = msg.points
     assert np.array_equal(first.positions, positions)
     assert np.array_equal(first.velocities, velocities)
     assert len(first.accelerations) == 0
     assert (first.time_from_start.sec, first.time_from_start.nanosec) == (0, 0)
-    assert np.array_equal(last.positions, end)
-    assert len(last.velocities) == len(last.accelerations) == 0
-    assert (last.time_from_start.sec, last.time_from_start.nanosec) == (0, 20_000_000)
+    assert np.array_equal(stop.positions, end)
+    assert len(stop.velocities) == len(stop.accelerations) == 0
+    assert (stop.time_from_start.sec, stop.time_from_start.nanosec) == (0, 20_000_000)
+    assert np.array_equal(rest.positions, end)
+    assert np.array_equal(rest.velocities, np.zeros(n))
+    assert len(rest.accelerations) == 0
+    margin = round(TRAJECTORY_DELIVERY_MARGIN * 1e9)
+    assert (rest.time_from_start.sec, rest.time_from_start.nanosec) == divmod(margin, 10**9)
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == stamp
+    streamed = streamed_trajectory(Time(), names, np.zeros(n), np.zeros(n), 0.02)
+    assert [p.time_from_start for p in msg.points] == [p.time_from_start for p in streamed.points]
 
 
 def test_clock_template_round_trips_the_time():

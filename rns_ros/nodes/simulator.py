@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import sys
 import threading
+import time
+from collections.abc import Callable
 
 import numpy as np
 from builtin_interfaces.msg import Time as TimeMsg
@@ -89,12 +91,18 @@ class SimulatorNode(Node):
     :class:`~rns_ros.nodes.lockstep.LockstepPacer` steps it (a
     :class:`~rns_ros.nodes.lockstep.SteppedSimulation`), a
     :class:`~rns_ros.nodes.simulator_commands.CommandIntake` feeds it, a
-    :class:`~rns_ros.nodes.simulator_publishing.StatePublisher` publishes its states."""
+    :class:`~rns_ros.nodes.simulator_publishing.StatePublisher` publishes its states.
 
-    def __init__(self, **node_kwargs) -> None:
+    Args:
+        wall_clock: monotonic wall clock [s] of the pace, the lockstep patience and the
+            commands' wall-time ages.
+        node_kwargs: as for :class:`rclpy.node.Node`.
+    """
+
+    def __init__(self, *, wall_clock: Callable[[], float] = time.monotonic, **node_kwargs) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         try:
-            self._start()
+            self._start(wall_clock)
         except BaseException:
             # a failed start-up leaves nothing registered: its parts reference the node, so it
             # would live on until a garbage collection, and rcl keeps one /rosout publisher per
@@ -102,7 +110,7 @@ class SimulatorNode(Node):
             Node.destroy_node(self)
             raise
 
-    def _start(self) -> None:
+    def _start(self, wall_clock: Callable[[], float]) -> None:
         params = declare_parameters(self, PARAMETERS)
         # as every node loads it: the same joints, held joints, base
         self.robot = load_node_model(self, params["model_config"])
@@ -114,7 +122,9 @@ class SimulatorNode(Node):
         self._run_state = RunState()
 
         # at real_time_factor 0 the command callback steps: the simulation thread only polls
-        self._pacer = LockstepPacer.from_parameters(self.simulator, params, idle_poll=CALLBACK_POLL)
+        self._pacer = LockstepPacer.from_parameters(
+            self.simulator, params, clock=wall_clock, idle_poll=CALLBACK_POLL
+        )
         self._lock, self._stop = self._pacer.lock, self._pacer.stop
         self._command_arrived = self._pacer.wake
         self._publisher = StatePublisher(

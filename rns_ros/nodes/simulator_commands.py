@@ -376,24 +376,62 @@ class CommandIntake:
             self.simulator.set_reference(positions, velocities, accelerations)
 
     def expire_stale(self) -> None:
-        """Commands older than ``command_timeout``: wheel motors off, joints stopped (logged)."""
+        """Commands older than ``command_timeout``: wheel motors off, joints stopped (logged
+        once, naming the command's simulated and wall-time ages).
+
+        The age is simulated time in lockstep (a simulation paused for a busy controller does
+        not age its command), wall time otherwise. In lockstep a command is stale in wall time
+        too while the simulation waits at a pause for a newer joint command: there it takes one
+        step per ``LOCKSTEP_PATIENCE`` (5 s) of wall time, so a killed controller's last
+        command would act for about 42 min of wall time (1 ms steps, a 0.5 s timeout) before
+        its simulated age reached the timeout. Within its lockstep period a joint command
+        stays in force however slowly the simulation runs (a slow ``real_time_factor``, a
+        process waiting for a core). Caller holds the lock."""
         pacer = self._pacer
-        if self._last_wheel_command is not None and (
-            pacer.command_age(self._last_wheel_command, self._wheel_command_sim_time)
-            > self.command_timeout
-        ):
-            self.simulator.set_wheel_torque(np.zeros(3))
-            self._last_wheel_command = None
-            if not self._wheel_stale_logged:
-                self._logger.warn(f"no wheel torque for {self.command_timeout} s: wheel motors off")
-                self._wheel_stale_logged = True
+        waiting = pacer.pauses_here()  # at a pause: this step is one the patience forced
+        if self._last_wheel_command is not None:
+            sim_age = self.simulator.time - self._wheel_command_sim_time
+            # a wheel torque that answered the paused state is fresh: its controller waits
+            # for the simulation too
+            ages = self._stale_ages(
+                self._last_wheel_command,
+                self._wheel_command_sim_time,
+                waiting and sim_age > 0.5 * self.simulator.dt,
+            )
+            if ages is not None:
+                self.simulator.set_wheel_torque(np.zeros(3))
+                self._last_wheel_command = None
+                if not self._wheel_stale_logged:
+                    self._logger.warn(f"wheel torque {self._ages_text(*ages)}: wheel motors off")
+                    self._wheel_stale_logged = True
         if pacer.last_command is None:
             return
-        if pacer.command_age(pacer.last_command, pacer.command_sim_time) > self.command_timeout:
+        ages = self._stale_ages(pacer.last_command, pacer.command_sim_time, waiting)
+        if ages is not None:
             self.simulator.set_reference(velocities=np.zeros(self.robot.n))
             pacer.last_command = None
             if not self._stale_logged:
-                self._logger.warn(
-                    f"no joint command for {self.command_timeout} s: stopping the joints"
-                )
+                self._logger.warn(f"joint command {self._ages_text(*ages)}: stopping the joints")
                 self._stale_logged = True
+
+    def _stale_ages(
+        self, received: float, sim_received: float, judged_on_wall: bool
+    ) -> tuple[float, float] | None:
+        """(simulated, wall) age [s] of a command received at wall time ``received`` [s] and
+        simulated time ``sim_received`` [s] when it is older than ``command_timeout`` by the
+        pacer's age (:meth:`LockstepPacer.command_age`) or, ``judged_on_wall``, in wall time;
+        None while it is in force. Caller holds the lock."""
+        pacer = self._pacer
+        sim_age = self.simulator.time - sim_received
+        wall_age = pacer.clock() - received
+        if pacer.command_age(received, sim_received) > self.command_timeout or (
+            judged_on_wall and wall_age > self.command_timeout
+        ):
+            return sim_age, wall_age
+        return None
+
+    def _ages_text(self, sim_age: float, wall_age: float) -> str:
+        return (
+            f"{sim_age:.3f} s old in simulated time, {wall_age:.3f} s in wall time "
+            f"(command_timeout {self.command_timeout} s)"
+        )

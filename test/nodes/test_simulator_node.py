@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -396,6 +397,77 @@ def test_lockstep_patience_takes_one_step_with_a_state_and_a_clock(ros):
     assert node.simulator.time == pytest.approx(pause + dt)  # one step, then paused again
     assert _seconds(joints.messages[-1].header.stamp) == pytest.approx(pause + dt)
     assert _seconds(clock.messages[-1].clock) == pytest.approx(pause + dt)
+
+
+class _Wall:
+    """A monotonic wall clock [s] the test moves on by ``offset`` [s]."""
+
+    def __init__(self) -> None:
+        self.offset = 0.0
+
+    def __call__(self) -> float:
+        return time.monotonic() + self.offset
+
+
+def test_lockstep_a_command_stale_in_wall_time_stops_the_joints_and_wheels(ros):
+    """Controllers gone in lockstep: the pause lasts LOCKSTEP_PATIENCE of wall time (the
+    injected clock jumps past it) and the step then forced finds the joint command and the
+    wheel torque one period old in simulated time but older than command_timeout in wall
+    time: the joints stop and the wheel motors go off from that step on, logged once with both
+    ages; the simulation then runs in real time."""
+    period = 0.01
+    wall = _Wall()
+    overrides = {
+        "real_time_factor": 0.0,
+        "publish_clock": True,
+        "lockstep_period": period,
+        "command_interface": "velocity",
+        "reaction_wheels": True,
+        "command_timeout": 0.5,
+    }
+    node = ros.add(
+        SimulatorNode(
+            context=ros.context,
+            parameter_overrides=[Parameter(name, value=value) for name, value in overrides.items()],
+            wall_clock=wall,
+        )
+    )
+    probe = ros.probe()
+    warnings = _rosout_errors(probe, level=Log.WARN)
+    joints = Recorder(probe, JointState, "joint_states", qos=1000)
+    wheels = Recorder(probe, JointState, "wheel_states", qos=1000)
+    command = probe.create_publisher(Float64MultiArray, "joint_velocities", COMMAND_QOS)
+    torque = probe.create_publisher(Vector3Stamped, "wheel_torque", COMMAND_QOS)
+    assert ros.spin_until(lambda: len(joints.messages) >= 1)
+    wheel_torque = Vector3Stamped()
+    wheel_torque.vector.z = 0.05
+    torque.publish(wheel_torque)
+    assert ros.spin_until(lambda: node._commands._last_wheel_command is not None, timeout=2.0)
+    command.publish(Float64MultiArray(data=[0.1] * 7))
+    assert ros.spin_until(lambda: node._pacer.last_command is not None, timeout=2.0)
+    pause = node._pacer.command_sim_time + period
+    assert ros.spin_until(lambda: node.simulator.time == pytest.approx(pause), timeout=2.0)
+    assert ros.spin_until(
+        lambda: _seconds(joints.messages[-1].header.stamp) == pytest.approx(pause), timeout=2.0
+    )
+    assert np.allclose(joints.messages[-1].velocity, 0.1)  # in force up to the pause
+    assert ros.spin_until(lambda: wheels.messages and wheels.messages[-1].effort[2] == 0.05)
+
+    wall.offset += LOCKSTEP_PATIENCE + 1.0  # the controllers have not answered for 6 s
+    dt = node.simulator.dt
+
+    def after_pause(recorder):
+        return [m for m in recorder.messages if _seconds(m.header.stamp) > pause + 0.5 * dt]
+
+    assert ros.spin_until(lambda: after_pause(joints) and after_pause(wheels), timeout=10.0)
+    assert node.simulator.time - pause < 1.0  # simulated time barely moved
+    assert not np.any(after_pause(joints)[0].velocity)
+    assert after_pause(wheels)[0].effort[2] == 0.0
+    assert ros.spin_until(lambda: sum("stopping the joints" in w for w in warnings) == 1)
+    stop = next(w for w in warnings if "stopping the joints" in w)
+    assert "s old in simulated time" in stop
+    assert "s in wall time" in stop
+    assert any("wheel motors off" in w for w in warnings)
 
 
 def test_velocity_interface_takes_the_order_of_the_joints_parameter(ros):

@@ -73,7 +73,7 @@ from rns_ros.control.teleop import (
 )
 from rns_ros.control.ticks import AwaitedTicks, ServedTick, TickInstants, next_tick_in
 from rns_ros.core import FreeFloatingState
-from rns_ros.core.commands import match_named_command
+from rns_ros.core.commands import ExtraJointsReport, match_joint_state
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes import controller_parameters
 from rns_ros.nodes.cdr import (
@@ -227,6 +227,7 @@ class ControllerNode(Node):
         # cheaper than rclpy building the message
         self._clock_type = self.get_clock().clock_type
         self._joint_state_reader = JointStateReader()
+        self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
         self.create_subscription(
             JointState, "joint_states", self._on_joint_state, INPUT_QOS, raw=True
         )
@@ -333,7 +334,7 @@ class ControllerNode(Node):
             self._reporter.reject(self._topics["joint_states"], exc)
             return
         try:
-            command = match_named_command(
+            command, extras = match_joint_state(
                 fields.names,
                 self.robot.joint_names,
                 positions=fields.position,
@@ -342,6 +343,9 @@ class ControllerNode(Node):
         except InputError as exc:
             self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
             return
+        note = self._extra_joints.note(extras)
+        if note is not None:
+            self.get_logger().info(note)
         if command.positions is None:
             return
         sec, nanosec = fields.stamp

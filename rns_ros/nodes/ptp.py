@@ -58,7 +58,7 @@ from rns_ros.control.ptp_phases import plan_deployment
 from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.control.ptp_sampling import sample_plan
 from rns_ros.core import FreeFloatingState
-from rns_ros.core.commands import match_named_command, partial_joint_goal
+from rns_ros.core.commands import ExtraJointsReport, match_joint_state, partial_joint_goal
 from rns_ros.core.errors import ConfigError, InputError, RnsError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import ptp_parameters
@@ -158,6 +158,7 @@ class PtpNode(Node):
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self.create_subscription(JointState, "ptp_goal", self._on_goal, QoSProfile(depth=10))
+        self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
         self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
         self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
         self._state_topic = self.resolve_topic_name("joint_states")
@@ -200,10 +201,15 @@ class PtpNode(Node):
     # --- inputs ---------------------------------------------------------------------------------
     def _on_joint_state(self, msg: JointState) -> None:
         try:
-            command = match_named_command(msg.name, self.robot.joint_names, positions=msg.position)
+            command, extras = match_joint_state(
+                msg.name, self.robot.joint_names, positions=msg.position
+            )
         except InputError as exc:
             self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
             return
+        note = self._extra_joints.note(extras)
+        if note is not None:
+            self.get_logger().info(note)
         if command.positions is None:
             return
         self._theta = command.positions

@@ -45,9 +45,10 @@ def test_operator_publishes_the_profile_then_zeros(ros, tmp_path):
     rates = twists.array(lambda m: [m.twist.angular.x, m.twist.angular.y, m.twist.angular.z])
     ns = np.array([m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in twists.messages])
     assert ns.max() < finished
-    # each twist is the profile at its stamp, the first at the start (start_delay 0), however
-    # late a busy machine made the ticks (times in integer ns, as the node takes them)
-    t = (ns - ns[0]) * 1e-9
+    # each twist is the profile at its stamp, however late a busy machine made the ticks
+    # (times in integer ns from the profile's start, as the node takes them)
+    t = _profile_times(twists, operator)
+    assert t[0] >= 0.0
     expected = [operator.scenario.angular_velocity(k) for k in t]
     np.testing.assert_allclose(rates, expected, rtol=0.0, atol=1e-12)
     assert np.all(rates[:, [0, 2]] == 0.0)
@@ -88,7 +89,8 @@ def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
     """Under use_sim_time with ``lead`` (lockstep with an awaiting controller): at each /clock
     instant c the operator publishes the sample of c + lead, stamped c + lead. The stream
     starts at the start condition (/clock 10.0 here), with zeros until the profile starts
-    max(start_delay, lead) later, and the samples integrate to the scenario's angle."""
+    max(start_delay, lead) later, then the profile at each stamp, which integrates to the
+    scenario's angle."""
     path = tmp_path / "short.yaml"
     path.write_text(yaml.safe_dump(SCENARIO))
     twists = ros.record(TwistStamped, "cmd_twist")
@@ -110,10 +112,18 @@ def test_with_lead_each_sample_goes_out_ahead_stamped_with_its_instant(
     first = int(np.argmax(np.abs(stamps - profile_start) < 1e-9))
     assert stamps[first] == pytest.approx(profile_start, abs=1e-9)
     assert np.all(rates[:first] == 0.0)  # zeros before the profile
-    # then the profile from its start (piecewise: the first segment's rate)
+    # then the profile from its start (piecewise: the first segment's rate), each sample the
+    # profile at its stamp; the profile on the clock's grid integrates to the scenario's angle
+    # (a sample lost in delivery leaves a gap in what arrived, not in what was sent)
     assert rates[first, 1] == pytest.approx(np.deg2rad(15.0) / 0.4, rel=1e-9)
-    angle = np.sum(rates[:-1, 1] * np.diff(stamps))
-    assert angle == pytest.approx(np.deg2rad(30.0), rel=0.05)
+    scenario = load_scenario(path)
+    start_ns = round(profile_start * 1e9)
+    for msg, rate in zip(twists.messages[first:], rates[first:], strict=True):
+        t = (msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec - start_ns) * 1e-9
+        np.testing.assert_allclose(rate, scenario.angular_velocity(t), atol=1e-12)
+    grid = np.arange(round(scenario.duration / 0.02)) * 20_000_000 * 1e-9  # as the node: ns
+    angle = np.sum([scenario.angular_velocity(t)[1] for t in grid]) * 0.02
+    assert angle == pytest.approx(np.deg2rad(30.0), rel=1e-9)
 
 
 def test_with_lead_zeros_go_out_before_the_start_condition_and_no_profile(ros, tmp_path):
@@ -283,44 +293,52 @@ def _profile_times(log, operator) -> np.ndarray:
 def test_motion_force_profile_integrates_to_the_reference_and_pushes_f_des_n(
     ros, tmp_path, content
 ):
+    """Each received twist and force setpoint is the profile at its stamp, and the profile,
+    sampled at the operator's rate, integrates to the reference displacement. Best-effort
+    samples lost and ticks made late by a busy machine leave gaps in what arrives: the
+    integral is taken over the profile, not over the samples received."""
     path = tmp_path / "short_part2.yaml"
     path.write_text(yaml.safe_dump(content))
     scenario = load_motion_force_scenario(path)
-    setup, duration, zero_duration = scenario.setup, scenario.duration, 0.3
+    setup, duration, zero_duration, rate = scenario.setup, scenario.duration, 0.3, 250.0
     twists = ros.record(TwistStamped, "cmd_twist")
     wrenches = ros.record(WrenchStamped, "force_setpoint")
     operator = ros.add(
         OperatorNode,
-        {"scenario": str(path), "rate": 250.0, "start_delay": 0.0, "zero_duration": zero_duration},
+        {"scenario": str(path), "rate": rate, "start_delay": 0.0, "zero_duration": zero_duration},
     )
     assert operator.motion_force
     assert ros.spin_until(lambda: operator.finished, timeout=20.0)
+    # then silence: nothing stamped after the tick that finished (earlier ones may still arrive)
+    finished = (operator.get_clock().now() - operator._start).nanoseconds * 1e-9
+    ros.spin_for(0.2)
     frames = {m.header.frame_id for m in twists.messages + wrenches.messages}
     assert frames == {"world"}
 
-    # cmd_twist: the reference velocity sampled at its stamps, angular 0; the trapezoid integral
-    # over the stamps is the reference displacement (end point - start point)
+    # cmd_twist: the reference velocity at its stamps, angular 0, zeros after the profile
     t = _profile_times(twists, operator)
     v = twists.array(_linear)
-    assert len(t) > 0.5 * 250 * duration  # most ticks arrived (best effort, one process)
     assert np.all(np.diff(t) > 0.0)
-    assert 0.0 <= t[0] < 0.05
-    assert t[-1] > duration
+    assert 0.0 <= t[0] < duration
+    assert duration < t[-1] <= duration + zero_duration < finished
     assert np.all(twists.array(lambda m: [m.twist.angular.x, m.twist.angular.y,
                                           m.twist.angular.z]) == 0.0)  # fmt: skip
     expected = np.array([operator_sample(setup, min(ti, duration)).linear for ti in t])
     np.testing.assert_allclose(v[t <= duration], expected[t <= duration], atol=1e-12)
-    assert np.all(v[t > duration] == 0.0)  # zeros after the profile
-    displacement = np.trapezoid(v, t, axis=0)
+    assert np.all(v[t > duration] == 0.0)
+    # the profile at the operator's rate: its trapezoid integral is the reference displacement
+    grid = np.linspace(0.0, duration, round(rate * duration) + 1)
+    profile = np.array([operator_sample(setup, ti).linear for ti in grid])
+    displacement = np.trapezoid(profile, grid, axis=0)
     reference = setup.reference(duration).position - setup.reference(0.0).position
     length = np.linalg.norm(reference)
     assert length > 0.1  # [m]: a real stroke / chord
-    assert np.linalg.norm(displacement - reference) < 0.01 * length
+    assert np.linalg.norm(displacement - reference) < PROFILE_INTEGRAL_TOLERANCE * length
 
     # force_setpoint: f_des(t) n(t) at the stamps, n at the reference point, held after the end
     tf = _profile_times(wrenches, operator)
     forces = wrenches.array(_force)
-    assert len(tf) > 0.5 * 250 * duration
+    assert np.all(np.diff(tf) > 0.0)
     assert np.all(wrenches.array(_torque) == 0.0)
     for ti, force in zip(tf, forces, strict=True):
         tau = min(ti, duration)
@@ -329,14 +347,15 @@ def test_motion_force_profile_integrates_to_the_reference_and_pushes_f_des_n(
         assert abs(np.linalg.norm(force) - f_des) <= 1e-9
         np.testing.assert_allclose(force, f_des * normal, atol=1e-9)
     held = forces[tf > duration]
-    assert len(held) >= 0.5 * 250 * zero_duration
+    assert len(held) > 0
     assert np.all(held == held[-1])  # held at its final value
     assert np.linalg.norm(held[-1]) == pytest.approx(setup.force(duration), abs=1e-9)
-    assert tf[-1] <= duration + zero_duration + 0.01
-    # then silence on both
-    counts = (len(twists), len(wrenches))
-    ros.spin_for(0.2)
-    assert (len(twists), len(wrenches)) == counts
+    assert duration < tf[-1] <= duration + zero_duration
+
+
+#: Relative error of the trapezoid integral of a Part II velocity profile sampled at 250 Hz
+#: (2.6e-10 for the short wall and arc).
+PROFILE_INTEGRAL_TOLERANCE = 1e-6
 
 
 def test_motion_force_with_lead_both_streams_go_out_ahead_the_setpoints_from_the_start(

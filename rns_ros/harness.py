@@ -25,6 +25,11 @@ a domain of your choosing:
 * :class:`ProcessStack` - the installed console scripts (``rns_simulator`` ...) as subprocesses
   with ``--ros-args`` (``-p``, ``--params-file``, ``-r``), stopped with SIGINT like a terminal
   user would, killed if they do not exit.
+
+Two stacks on one domain mix their clocks, states and commands. :func:`claim_domain` looks at
+a domain's graph before a stack starts there and names any stack already running
+(:func:`running_stack`); the claim's node stays on the graph while the stack runs, so a later
+claim sees it too.
 """
 
 from __future__ import annotations
@@ -53,7 +58,7 @@ from rclpy.serialization import deserialize_message
 from rclpy.task import Future
 
 from rns_ros.cli import DOMAIN_ID_RANGE, one_line
-from rns_ros.core.errors import ConfigError
+from rns_ros.core.errors import ConfigError, RnsError
 from rns_ros.resources import apply_loopback_profile
 
 #: DDS discovery never leaves the machine.
@@ -64,6 +69,35 @@ EXECUTORS = ("single_threaded", "events")
 #: keeps what arrives while this process waits for a core (10 000 messages: 20 s of a 500 Hz
 #: stream), so a stalled recorder misses nothing.
 RECORD_QOS = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: Node names of an rns_ros stack's nodes (the executables'), and the prefix of a claim's node
+#: (:func:`claim_domain`; ``rns_demo`` names its claim ``rns_demo_<pid>``).
+STACK_NODES = (
+    "rns_simulator",
+    "rns_controller",
+    "rns_ptp",
+    "rns_force_controller",
+    "rns_attitude_control",
+    "rns_operator",
+    "rns_rerun_logger",
+)
+CLAIM_PREFIX = "rns_demo"
+#: Topics whose publishers a second stack would mix with its own: the lockstep clock, the
+#: robot states and every command stream.
+STACK_TOPICS = (
+    "/clock",
+    "/joint_states",
+    "/base_odom",
+    "/cmd_twist",
+    "/force_setpoint",
+    "/joint_references",
+    "/joint_velocities",
+    "/joint_positions",
+    "/joint_efforts",
+    "/wheel_torque",
+)
+#: Wall time [s] a new node waits for DDS discovery before it reads the domain's graph (0.4 s
+#: on localhost here).
+DISCOVERY_WAIT = 1.5
 
 
 def ros_environment(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
@@ -352,6 +386,73 @@ class Harness:
 
     def __exit__(self, *_exc) -> None:
         self.close()
+
+
+class DomainInUseError(RnsError):
+    """Another stack runs on the domain a stack is to start on.
+
+    Attributes:
+        domain_id: the domain.
+        stack: its nodes and the stack topics they publish (:func:`running_stack`).
+    """
+
+    def __init__(self, domain_id: int, stack: str) -> None:
+        super().__init__(f"domain {domain_id} already has a running stack ({stack})")
+        self.domain_id = domain_id
+        self.stack = stack
+
+
+def _full_name(name: str, namespace: str) -> str:
+    return f"{namespace.rstrip('/')}/{name}"
+
+
+def running_stack(node: Node) -> str | None:
+    """The stack in ``node``'s graph other than ``node``: '/a, /b publishing /clock,
+    /joint_states' for the nodes named as a stack's (:data:`STACK_NODES`, claims) and those
+    publishing :data:`STACK_TOPICS`, with the topics published; None when there is none."""
+    own = _full_name(node.get_name(), node.get_namespace())
+    names = {
+        _full_name(name, namespace)
+        for name, namespace in node.get_node_names_and_namespaces()
+        if name in STACK_NODES or name.startswith(CLAIM_PREFIX)
+    }
+    topics = []
+    for topic in STACK_TOPICS:
+        publishers = {
+            _full_name(info.node_name, info.node_namespace)
+            for info in node.get_publishers_info_by_topic(topic)
+        } - {own}
+        if publishers:
+            topics.append(topic)
+            names |= publishers
+    names.discard(own)
+    if not names:
+        return None
+    nodes = ", ".join(sorted(names))
+    return f"{nodes} publishing {', '.join(topics)}" if topics else nodes
+
+
+def claim_domain(domain_id: int | None, name: str, wait: float = DISCOVERY_WAIT) -> Harness:
+    """A :class:`Harness` on ``domain_id`` holding one node ``name``, once ``wait`` [s] of DDS
+    discovery found no other stack there (:func:`running_stack`). Keep it open while the stack
+    runs: its node shows the domain taken to a later claim. Start the claim's ``name`` with
+    :data:`CLAIM_PREFIX` and make it unique (two claims at once see each other).
+
+    Raises:
+        DomainInUseError: a stack already runs on the domain (closed again then).
+        ConfigError: ``domain_id`` out of range.
+    """
+    harness = Harness(domain_id)
+    try:
+        node = harness.probe(name)
+        time.sleep(wait)  # discovery runs in DDS's own threads
+        stack = running_stack(node)
+        if stack is not None:
+            raise DomainInUseError(harness.domain_id, stack)
+    except BaseException:
+        harness.close()
+        raise
+    return harness
 
 
 class ProcessStack:

@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 import pytest
+import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
@@ -17,7 +18,27 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 
 from rns_ros.core import ConfigError
-from rns_ros.harness import Harness, ProcessStack, TopicLog, cdr_header_stamp, ros_environment
+from rns_ros.harness import (
+    CLAIM_PREFIX,
+    STACK_NODES,
+    DomainInUseError,
+    Harness,
+    ProcessStack,
+    TopicLog,
+    cdr_header_stamp,
+    claim_domain,
+    ros_environment,
+    running_stack,
+)
+from rns_ros.nodes import (
+    attitude_control_parameters,
+    controller_parameters,
+    force_controller_parameters,
+    operator_parameters,
+    ptp_parameters,
+    rerun_logger_parameters,
+    simulator_parameters,
+)
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.operator import OperatorNode
 from rns_ros.nodes.simulator import SimulatorNode
@@ -265,3 +286,36 @@ def test_a_raw_log_drops_and_counts_bytes_that_are_not_its_type():
     assert log.rejected == 1
     log._append_raw(b"\x00\x01\x00\x00\xff")
     assert log.latest().name == ["a"]  # the newest that is a message
+
+
+def test_a_claim_names_the_stack_already_on_the_domain_and_a_later_claim_sees_it():
+    """A node named as a stack's node or publishing a stack topic takes the domain; the claim's
+    own node does not; an open claim takes it for the next one."""
+    with Harness(DOMAIN) as other:
+        other.add(rclpy.create_node("teleop", context=other.context))
+        other.nodes[-1].create_publisher(TwistStamped, "cmd_twist", 1)
+        other.add(rclpy.create_node("rns_operator", context=other.context))
+        with pytest.raises(DomainInUseError) as error:
+            claim_domain(DOMAIN, f"{CLAIM_PREFIX}_test_a")
+    assert error.value.stack == "/rns_operator, /teleop publishing /cmd_twist"
+    assert str(error.value).startswith(f"domain {DOMAIN} already has a running stack (")
+    with claim_domain(DOMAIN, f"{CLAIM_PREFIX}_test_a") as first:
+        assert running_stack(first.nodes[0]) is None
+        with pytest.raises(DomainInUseError, match=rf"\(/{CLAIM_PREFIX}_test_a\)"):
+            claim_domain(DOMAIN, f"{CLAIM_PREFIX}_test_b")
+
+
+def test_the_stack_node_names_are_the_executables_node_names():
+    names = {
+        module.NODE_NAME
+        for module in (
+            attitude_control_parameters,
+            controller_parameters,
+            force_controller_parameters,
+            operator_parameters,
+            ptp_parameters,
+            rerun_logger_parameters,
+            simulator_parameters,
+        )
+    }
+    assert names == set(STACK_NODES)

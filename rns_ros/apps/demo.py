@@ -13,6 +13,9 @@ scenario's ``initial_joint_positions_deg`` are used when they give one angle per
 of the model and lie within its joint limits; otherwise (a scenario written for another arm) the
 run starts from the model's ``initial_joint_positions`` (zeros without them) and a note says so
 (:func:`rns_ros.runs.inspection.start_configuration`).
+
+The runs start only on a domain without another stack (:func:`rns_ros.harness.claim_domain`);
+otherwise one line names it, exit code 2.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from rns_ros.cli import (
     split_ros_args,
 )
 from rns_ros.core import RnsError, load_model
+from rns_ros.harness import CLAIM_PREFIX, DomainInUseError, claim_domain
 from rns_ros.resources import default_model_config, scenario_path
 from rns_ros.runs.clock import clock_text
 from rns_ros.runs.contact import (
@@ -229,10 +233,23 @@ def _main(argv: list[str] | None) -> int:
     args = parse_args(argv)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     if args.scenario in PTP_SCENARIOS:
-        return _main_ptp(args, PTP_SCENARIOS[args.scenario])
+        return _claimed(args, lambda: _main_ptp(args, PTP_SCENARIOS[args.scenario]))
     if is_contact_scenario(args.scenario):
-        return _main_contact(args)
+        return _claimed(args, lambda: _main_contact(args))
     return _main_inspection(args)
+
+
+def _claimed(args: argparse.Namespace, body: Callable[[], int]) -> int:
+    """``body()`` with the domain claimed for the demo's runs (:func:`claim_domain`: nothing
+    else of a stack on it, and the claim's node shows it taken to a later rns_demo); exit code
+    2 and one line naming the other stack when one runs there."""
+    try:
+        claim = claim_domain(args.domain_id, f"{CLAIM_PREFIX}_{os.getpid()}")
+    except DomainInUseError as exc:
+        print(f"rns_demo: {exc}: stop it or pass --domain-id N", file=sys.stderr)
+        return 2
+    with claim:
+        return body()
 
 
 def _main_inspection(args: argparse.Namespace) -> int:
@@ -245,6 +262,10 @@ def _main_inspection(args: argparse.Namespace) -> int:
     except RnsError as exc:
         print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
         return 2
+    return _claimed(args, lambda: _inspection_runs(args, scenario, scenario_file, robot, note))
+
+
+def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, note: str) -> int:
     print(f"scenario: {scenario_file} ({scenario.description})")
     if note:
         print(f"note: {note}")

@@ -11,11 +11,15 @@ Subscribes:
                   (plan_deployment) from the measured configuration. A new goal replaces the
                   current plan: the arm stops and the goal is planned from the measured state.
     joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
-                  ``state_timeout`` (receipt time) stops the arm and abandons the plan. Ages are
-                  simulated time under ``use_sim_time`` (:class:`InputClock`), where a /clock
-                  that stands still for ``clock_timeout`` of wall time with no joint state
-                  meanwhile (a dead simulator) during a motion or a planning stops the arm the
-                  same way; else monotonic wall time.
+                  ``state_timeout`` (receipt time) stops the arm and holds the plan (HOLDING);
+                  fresh input resumes it on its path (:mod:`rns_ros.control.ptp_playback`) or,
+                  with the arm moved off the path, replans to the same goal; no fresh input for
+                  ``state_loss_timeout`` abandons it (STALE_STATE). Ages are simulated time
+                  under ``use_sim_time`` (:class:`InputClock`), where a /clock that stands still
+                  for ``clock_timeout`` of wall time with no joint state meanwhile (a dead
+                  simulator) holds the arm the same way, and abandons the plan after
+                  ``state_loss_timeout`` of wall time without a joint state; else monotonic
+                  wall time.
     base_odom     nav_msgs/Odometry (base pose, for the predicted coupling momentum; watched like
                   joint_states once it has arrived)
 Publishes (only while a plan plays, plus one zero-velocity message at each stop):
@@ -24,7 +28,8 @@ Publishes (only while a plan plays, plus one zero-velocity message at each stop)
                       the tick and its rate at mid-period, point 1 two periods on, at rest
                       (rns_controller's shape); with ``plan_output: whole`` the whole plan once
                       when it starts (samples every ``plan_sample_period`` at most, phase ends
-                      included, the last at rest), then per-period messages only to cancel; or
+                      included, the last at rest), then per-period messages only to cancel
+                      or to hold, and the rest of the plan as one message at a resume; or
     joint_velocities  std_msgs/Float64MultiArray in the order of ``joints``
                       (``output_interface: velocity``), or
     joint_positions   std_msgs/Float64MultiArray, the plan at the end of the period, in that order
@@ -56,7 +61,8 @@ from std_srvs.srv import Trigger
 from rns_ros.control.ptp import PtpMethod, PtpSettings
 from rns_ros.control.ptp_phases import plan_deployment
 from rns_ros.control.ptp_planner import plan_ptp
-from rns_ros.control.ptp_sampling import sample_plan
+from rns_ros.control.ptp_playback import PlanPlayback, PlaybackMode
+from rns_ros.control.ptp_sampling import PlanSamples, sample_plan
 from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import ExtraJointsReport, match_joint_state, partial_joint_goal
 from rns_ros.core.errors import ConfigError, InputError, RnsError
@@ -76,11 +82,9 @@ from rns_ros.nodes.status import CommanderWatch, level_rank, node_names, status_
 
 #: A goal whose JointState name list is exactly this runs the full reactionless deployment.
 DEPLOY_GOAL = ["deploy"]
-#: A stale state while a goal is planned does not abandon it: planning (pure Python, holding the
-#: GIL) can starve the executor, and the arm is at rest. A plan that is ready waits this long [s]
-#: (input clock: simulated time under use_sim_time) for a fresh joint state before it is
-#: abandoned as STALE_STATE.
-PLANNING_GRACE = 1.0
+#: A plan resumes after a hold on a joint state received this many periods after the stop: the
+#: arm at rest, not still slowing down from the last command.
+RESUME_PERIODS = 2.0
 #: Period of the /diagnostics publication [s] (wall clock).
 DIAGNOSTICS_PERIOD = 1.0
 
@@ -91,6 +95,7 @@ class PtpState(Choice):
     PLANNING = "PLANNING"
     MOVING = "MOVING"
     CANCELLING = "CANCELLING"
+    HOLDING = "HOLDING"
     SETTLING = "SETTLING"
     DONE = "DONE"
     GOAL_MISSED = "GOAL_MISSED"
@@ -101,11 +106,15 @@ class PtpState(Choice):
 
 STATE_LEVELS = {
     PtpState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
+    PtpState.HOLDING: DiagnosticStatus.WARN,
     PtpState.INVALID_GOAL: DiagnosticStatus.ERROR,
     PtpState.GOAL_MISSED: DiagnosticStatus.ERROR,
     PtpState.STALE_STATE: DiagnosticStatus.ERROR,
     PtpState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
 }
+
+#: States in which each tick commands the joints from the plan.
+PLAYING = (PtpState.MOVING, PtpState.CANCELLING)
 
 
 class PtpNode(Node):
@@ -118,7 +127,11 @@ class PtpNode(Node):
         self.method = PtpMethod.parse(params["method"])
         self.settings = from_parameters(PtpSettings, params)
         self._period = 1.0 / params["rate"]
-        self._deceleration = params["cancel_deceleration"]
+        if params["state_loss_timeout"] < params["state_timeout"]:
+            raise ConfigError(
+                f"state_loss_timeout {params['state_loss_timeout']} s must be >= state_timeout "
+                f"{params['state_timeout']} s (the input is stale before it is lost)"
+            )
         self._theta: np.ndarray | None = None
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
@@ -127,12 +140,15 @@ class PtpNode(Node):
         self._state_received = -np.inf
         self._state_received_wall = -np.inf
         self._odom_received: float | None = None
-        # plan playback: the plan, its clock s [s], the playback rate r [-], node-clock time of
-        # the last tick [s]
+        # plan playback: the plan, its playback (clock s, rate r), node-clock time of the last
+        # tick [s]
         self.plan = None
-        self._s = 0.0
-        self._rate = 1.0
+        self._playback: PlanPlayback | None = None
         self._last_clock: float | None = None
+        # HOLDING: the state, detail and input-clock time [s] of the hold (what fresh input
+        # returns to)
+        self._held: tuple[PtpState, str, float] | None = None
+        self._hold_note = ""
         self._mode = PtpState.WAITING_FOR_STATE
         self._detail = ""
         self._rejected = ""  # why the newest goal was rejected (shown while not moving)
@@ -243,7 +259,7 @@ class PtpNode(Node):
         if self._deferred is not None:  # still stopping for an earlier goal: this one replaces it
             self._deferred = (msg, self._deferred[1])
             return
-        if self.plan is not None and self._mode in (PtpState.MOVING, PtpState.CANCELLING):
+        if self.plan is not None and self._mode in PLAYING:
             # the arm moves: stop it and plan from where it comes to rest, sampled by a joint
             # state received after the stop (joint_states lag by up to a publish period)
             self.get_logger().info("new goal: the current motion stops and is replaced")
@@ -255,7 +271,7 @@ class PtpNode(Node):
         self._start_planning(theta, goal)
 
     def _start_planning(self, theta: np.ndarray, goal: np.ndarray | None) -> None:
-        self.plan = None
+        self.plan, self._playback, self._held = None, None, None
         self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
         with self._lock:
             self._generation += 1
@@ -305,13 +321,19 @@ class PtpNode(Node):
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected ptp_goal: {reason}")
         self._rejected = reason
-        if self._mode not in (PtpState.MOVING, PtpState.CANCELLING, PtpState.PLANNING):
+        if self._mode not in (*PLAYING, PtpState.PLANNING, PtpState.HOLDING):
             self._mode, self._detail = PtpState.INVALID_GOAL, reason
 
     def _on_cancel(self, _request, response):
         if self._mode is PtpState.MOVING:
+            self._playback.cancel()
             self._mode, self._detail = PtpState.CANCELLING, "decelerating on the path"
             response.success, response.message = True, "decelerating to rest on the path"
+        elif self._mode is PtpState.HOLDING and self._held[0] is PtpState.MOVING:
+            self._playback.cancel()  # held at rest on the path: the plan ends there
+            self._held = (PtpState.CANCELLING, *self._held[1:])
+            response.success = True
+            response.message = "held at rest on the path (stale input): the plan ends there"
         elif self._mode is PtpState.PLANNING:
             with self._lock:
                 self._generation += 1
@@ -335,16 +357,25 @@ class PtpNode(Node):
             return
         now = self._input_clock.now()
         fault = self._fault(now)
-        if fault is not None and self._mode is PtpState.PLANNING:
+        loss = self._params["state_loss_timeout"]
+        planning = self._mode is PtpState.PLANNING
+        if fault is not None and planning:
+            # planning holds the GIL and may starve the executor; the arm is at rest
             with self._lock:
                 ready = self._planned[2] if self._planned is not None else None
             if self._deferred is not None:
                 ready = self._deferred[1]
-            if ready is None or now - ready < PLANNING_GRACE:
+            if ready is None or now - ready < loss:
                 self._publish_status(self._mode, f"{self._detail} (waiting: {fault[1]})")
                 return
         if fault is not None:
             state, text = fault
+            if state is PtpState.STALE_STATE and not planning and self._input_age(now) <= loss:
+                self._hold(text, elapsed)
+                self._publish_status(self._mode, self._detail)
+                return
+            if state is PtpState.STALE_STATE:
+                text = f"{text}; no fresh input for state_loss_timeout {loss} s: input lost"
             if self._mode is not state:
                 abandoned = "; the plan is abandoned" if self.plan is not None else ""
                 self.get_logger().error(
@@ -354,6 +385,11 @@ class PtpNode(Node):
             self._mode, self._detail = state, text
             self._publish_status(self._mode, text)
             return
+        if self._mode is PtpState.HOLDING:
+            if not self._end_hold(now):
+                self._publish_status(self._mode, self._detail)
+                return
+            elapsed = 0.0  # the arm stood still since the hold: the playback goes on from here
         if self._mode in FAULTS or self._mode is PtpState.WAITING_FOR_STATE:
             self._mode, self._detail = PtpState.IDLE, ""
         if self._mode is PtpState.PLANNING and self._deferred is not None:
@@ -362,11 +398,85 @@ class PtpNode(Node):
             self._take_plan()
             if self._mode is PtpState.MOVING:
                 elapsed = 0.0  # the plan starts at this tick
-        if self._mode in (PtpState.MOVING, PtpState.CANCELLING):
+        if self._mode in PLAYING:
             self._play(elapsed)
         elif self._mode is PtpState.SETTLING:
             self._settle(now)
         self._publish_status(self._mode, self._detail)
+
+    def _input_age(self, now: float) -> float:
+        """Age [s] at ``now`` (input clock) of the older of joint_states and base_odom (once
+        seen)."""
+        age = now - self._state_received
+        if self._odom_received is not None:
+            age = max(age, now - self._odom_received)
+        return age
+
+    def _hold(self, text: str, elapsed: float) -> None:
+        """A stale input (``text`` says which): a moving arm stops at the plan's sample where
+        the last command, ``elapsed`` [s] ago, brought it (zero velocity; the playback rate
+        r = 0, s frozen: the path is kept); HOLDING until fresh input or state_loss_timeout."""
+        loss = self._params["state_loss_timeout"]
+        if self._mode is PtpState.HOLDING:
+            self._detail = f"{text}; {self._hold_note}"
+            return
+        self._held = (self._mode, self._detail, self._input_clock.now())
+        if self._mode in PLAYING:
+            step = self._playback.hold(elapsed)
+            self._publish_output(step.theta, step.theta_dot)
+            what = (
+                f"holding the plan at s = {step.s:.3g} s of {self.plan.duration:.3g} s (zero "
+                "velocity); it resumes when fresh"
+            )
+        elif self._mode is PtpState.SETTLING:
+            what = "the plan has played; the goal check waits for fresh input"
+        else:
+            what = "the arm is at rest; back to " + self._mode.value + " when fresh"
+        self.get_logger().warn(f"{text}: {what} (abandoned after state_loss_timeout {loss} s)")
+        self._hold_note = what
+        self._mode, self._detail = PtpState.HOLDING, f"{text}; {what}"
+
+    def _end_hold(self, now: float) -> bool:
+        """Fresh input after a hold: True when the node goes on at this tick (a plan resumed
+        on its path, or the state before the hold); False while it waits for a joint state of
+        the arm at rest, or when the plan ended (cancelled) or is replanned."""
+        held, detail, since = self._held
+        if self._state_received < since + RESUME_PERIODS * self._period:
+            return False
+        self._held = None
+        playback, plan = self._playback, self.plan
+        if held not in PLAYING or playback is None:
+            if held is PtpState.SETTLING:  # the goal check restarts with fresh input
+                self._settle_from = (self._settle_from[0], now)
+            self._mode, self._detail = held, detail
+            return True
+        if playback.mode is not PlaybackMode.HOLDING:  # cancelled: at rest where it stands
+            self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
+            self.get_logger().info(self._detail)
+            return False
+        error = playback.path_error(self._theta)
+        where = f"s = {playback.s:.3g} s of {plan.duration:.3g} s"
+        tolerance = self._params["resume_tolerance"]
+        if error > tolerance:
+            self.get_logger().warn(
+                f"fresh input: the arm is {error:.3g} rad from the held plan at {where} "
+                f"(resume_tolerance {tolerance} rad): replanned from the measured angles to "
+                "the same goal"
+            )
+            self._start_planning(self._theta.copy(), plan.goal)
+            self._detail = "replanning to the same goal from where the arm stands"
+            return False
+        playback.resume()
+        self._mode = PtpState.MOVING
+        self._detail = f"{plan.method} plan of {plan.duration:.3g} s, resumed at {where}"
+        self.get_logger().info(
+            f"fresh input: the plan resumes at {where} ({error:.2g} rad from it); the "
+            f"playback rate rises to 1 at resume_acceleration "
+            f"{self._params['resume_acceleration']} /s"
+        )
+        if self._whole:
+            self._publish_plan(playback.resumed_samples(self._params["plan_sample_period"]))
+        return True
 
     def _settle(self, now: float) -> None:
         """After the plan's last sample: DONE once every measured joint is within
@@ -394,7 +504,7 @@ class PtpNode(Node):
     def _abandon(self) -> None:
         """Zero velocity; the plan, a deferred goal and a plan being computed are dropped."""
         self._stop_output()
-        self.plan = None
+        self.plan, self._playback, self._held = None, None, None
         self._deferred = None
         with self._lock:
             self._generation += 1
@@ -403,9 +513,10 @@ class PtpNode(Node):
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint
-        state came for as long either (a dead simulator), a motion or a planning stops here as
-        on a stale state, and the status is published from here: the sim-time playback timer
-        that would do it has stopped too. An arm at rest is left as it is."""
+        state came for as long either (a dead simulator), a motion is held here as on a stale
+        state, and abandoned once no joint state came for state_loss_timeout of wall time; the
+        status is published from here: the sim-time playback timer that would do it has
+        stopped too. An arm at rest is left as it is."""
         quiet = time.monotonic() - self._state_received_wall
         if quiet < self._input_clock.timeout:
             return
@@ -413,20 +524,30 @@ class PtpNode(Node):
             f"/clock stood still for {still:.3f} s (clock_timeout "
             f"{self._params['clock_timeout']} s wall time)"
         )
-        if self._mode in (PtpState.MOVING, PtpState.CANCELLING, PtpState.PLANNING):
+        loss = self._params["state_loss_timeout"]
+        active = (PtpState.MOVING, PtpState.CANCELLING, PtpState.PLANNING, PtpState.HOLDING)
+        if self._mode in active and quiet > loss:
+            text = f"{text}; no joint_states for {quiet:.3f} s (state_loss_timeout {loss} s)"
             abandoned = "; the plan is abandoned" if self.plan is not None else ""
             self.get_logger().error(
                 f"{PtpState.STALE_STATE.value}: {text}; joints commanded to rest{abandoned}"
             )
             self._abandon()
+            self._mode, self._detail = PtpState.STALE_STATE, text
+        elif self._mode in active and self._mode is not PtpState.PLANNING:
+            clock_now = self.get_clock().now().nanoseconds * 1e-9
+            last, self._last_clock = self._last_clock, clock_now
+            self._hold(text, 0.0 if last is None else max(clock_now - last, 0.0))
+        elif self._mode is PtpState.PLANNING:  # the arm is at rest: planning goes on
+            self._publish_status(self._mode, f"{self._detail} (waiting: {text})")
+            return
         elif self._mode is not PtpState.STALE_STATE or not self._detail.startswith("/clock"):
             return  # nothing commanded: the arm is at rest, nothing to stop
         else:
             self.get_logger().error(
-                f"{PtpState.STALE_STATE.value}: {text}", throttle_duration_sec=5.0
+                f"{PtpState.STALE_STATE.value}: {self._detail}", throttle_duration_sec=5.0
             )
-        self._mode, self._detail = PtpState.STALE_STATE, text
-        self._publish_status(self._mode, text)
+        self._publish_status(self._mode, self._detail)
 
     def _apply_parameters(self, parameters) -> None:
         """After a set: the run-time parameters (clock_timeout) take their new values."""
@@ -464,56 +585,48 @@ class PtpNode(Node):
             self._mode = PtpState.IDLE  # nothing moves; _reject reports INVALID_GOAL
             self._reject(str(result))
             return
-        self.plan, self._s, self._rate = result, 0.0, 1.0
+        self.plan = result
+        self._playback = PlanPlayback(
+            result,
+            self._period,
+            self._params["resume_acceleration"],
+            self._params["cancel_deceleration"],
+        )
         self._mode = PtpState.MOVING
         self._detail = f"{result.method} plan of {result.duration:.3g} s"
         for note in result.notes:
             self.get_logger().info(f"plan: {note}")
         self.get_logger().info(f"moving: {self._detail}")
         if self._whole:
-            self._publish_plan(result)
+            self._publish_plan(sample_plan(result, self._params["plan_sample_period"]))
 
     def _play(self, elapsed: float) -> None:
-        plan, period = self.plan, self._period
-        if self._mode is PtpState.CANCELLING:
-            self._rate = max(self._rate - self._deceleration * elapsed, 0.0)
-        self._s = min(self._s + self._rate * elapsed, plan.duration)
-        if self._s >= plan.duration or self._rate <= 0.0:
-            reference = plan.sample(self._s)
+        """One tick of the playback, ``elapsed`` [s] after the last (node clock): the plan at s
+        and r_mid theta_dot_plan(s_mid), held over the period (reactionless over the hold)."""
+        step = self._playback.tick(elapsed)
+        if step.at_rest:
             if not self._whole or self._mode is PtpState.CANCELLING:
                 # a whole plan ends at rest on its own; a cancelled one on this message
-                self._publish_output(reference.theta, np.zeros(self.robot.n))
-            if self._rate <= 0.0:
+                self._publish_output(step.theta, step.theta_dot)
+            if step.mode is PlaybackMode.CANCELLED:
                 self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
                 self.get_logger().info(self._detail)
             else:
                 # DONE only once the measured angles are there (:meth:`_settle`)
                 self._mode, self._detail = PtpState.SETTLING, "plan played: checking the angles"
-                self._settle_from = (
-                    np.array(reference.theta, dtype=float),
-                    self._input_clock.now(),
-                )
+                self._settle_from = (step.theta, self._input_clock.now())
             return
-        # mid-period hold correction: the rate held over the period is the plan's rate at its
-        # middle (reactionless over the hold), scaled by the mid-period playback rate
-        rate_mid = self._rate
-        if self._mode is PtpState.CANCELLING:
-            rate_mid = max(self._rate - 0.5 * self._deceleration * period, 0.0)
-        reference = plan.sample(self._s)
-        middle = plan.sample(min(self._s + rate_mid * 0.5 * period, plan.duration))
-        velocities = rate_mid * np.asarray(middle.theta_dot, dtype=float)
-        positions = np.asarray(reference.theta, dtype=float)
-        if not (np.all(np.isfinite(velocities)) and np.all(np.isfinite(positions))):
+        if not (np.all(np.isfinite(step.theta_dot)) and np.all(np.isfinite(step.theta))):
             self._stop_output()
-            self.plan = None
+            self.plan, self._playback = None, None
             self._mode, self._detail = PtpState.INVALID_GOAL, "the plan gave a non-finite sample"
             self.get_logger().error(self._detail)
             return
         if self._whole and self._mode is PtpState.MOVING:
-            self._velocities = velocities  # the controller plays the plan sent at its start
+            self._velocities = step.theta_dot  # the controller plays the trajectory sent
             return
         # per period (and with a whole plan, to cancel: the first replaces the plan)
-        self._publish_output(positions, velocities)
+        self._publish_output(step.theta, step.theta_dot)
 
     def _fault(self, now: float) -> tuple[PtpState, str] | None:
         """(state, reason) when the measured state cannot be trusted: two sources or stale."""
@@ -536,10 +649,10 @@ class PtpNode(Node):
         stamp = self.get_clock().now().to_msg()
         self._output.publish(self._command.message(stamp, positions, velocities))
 
-    def _publish_plan(self, plan) -> None:
-        """plan_output whole: ``plan`` as one JointTrajectory stamped now (the playback clock
-        starts at this tick), sampled by :func:`sample_plan`."""
-        samples = sample_plan(plan, self._params["plan_sample_period"])
+    def _publish_plan(self, samples: PlanSamples) -> None:
+        """plan_output whole: ``samples`` (of a plan from its start, :func:`sample_plan`, or of
+        its rest after a hold, :meth:`PlanPlayback.resumed_samples`) as one JointTrajectory
+        stamped now (the playback clock goes on from this tick)."""
         if not (np.isfinite(samples.theta).all() and np.isfinite(samples.theta_dot).all()):
             self._abandon()
             self._mode, self._detail = PtpState.INVALID_GOAL, "the plan gave a non-finite sample"
@@ -557,15 +670,17 @@ class PtpNode(Node):
     # --- status ---------------------------------------------------------------------------------
     def _values(self, state: PtpState) -> dict:
         values = {"method": self.method.value}
-        plan = self.plan
-        moving = state in (PtpState.MOVING, PtpState.CANCELLING)
+        plan, playback = self.plan, self._playback
+        moving = state in PLAYING
         if plan is not None:
-            reference = plan.sample(self._s)
+            s = playback.s if playback is not None else 0.0
+            reference = plan.sample(s)
+            on_path = moving or (state is PtpState.HOLDING and reference.phase != "done")
             values["plan_method"] = str(plan.method)
-            values["phase"] = reference.phase if moving else "done"
+            values["phase"] = reference.phase if on_path else "done"
             values["progress"] = float(reference.progress)
             values["duration"] = float(plan.duration)
-            values["playback_rate"] = self._rate if moving else 0.0
+            values["playback_rate"] = playback.rate if moving else 0.0
             folds = [
                 f"{p.name}: {math.degrees(p.fold_reached):.4g} deg"
                 for p in plan.phases

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from rns_ros.control.ptp import PtpMethod
 from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
@@ -55,14 +57,45 @@ PARAMETERS = (
     ParameterSpec("rate", 100.0, "Output rate (playback period)", "[Hz]", 1.0, 1000.0),
     ParameterSpec(
         "state_timeout",
-        0.1,
+        0.25,
         "joint_states (base_odom once arrived) older than this by receipt time: zero velocity, "
-        "STALE_STATE, plan abandoned",
+        "plan held (HOLDING)",
         "[s]",
         0.005,
         10.0,
     ),
-    CLOCK_TIMEOUT,
+    ParameterSpec(
+        "state_loss_timeout",
+        3.0,
+        "No fresh joint_states / base_odom this long: the input is lost, STALE_STATE, the plan "
+        "abandoned (>= state_timeout)",
+        "[s]",
+        0.005,
+        600.0,
+    ),
+    ParameterSpec(
+        "resume_tolerance",
+        0.005,
+        "After a hold the plan resumes if every measured joint is this close to its held "
+        "sample, else it is replanned",
+        "[rad]",
+        1e-6,
+        1.0,
+    ),
+    ParameterSpec(
+        "resume_acceleration",
+        2.0,
+        "After a hold the playback rate rises from 0 to 1 at this rate: the arm resumes on its "
+        "path",
+        "[1/s]",
+        0.01,
+        1000.0,
+    ),
+    replace(
+        CLOCK_TIMEOUT,
+        description="use_sim_time: /clock standing still this long (wall time) with no "
+        "joint_states holds the arm (HOLDING)",
+    ),
     ParameterSpec(
         "goal_tolerance",
         0.01,

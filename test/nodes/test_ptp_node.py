@@ -88,10 +88,11 @@ class _Lockstep:
     ticks several periods apart.)
 
     Attributes as :func:`_stack`'s; ``commands`` records rns_ptp's output (``references`` too on
-    the trajectory interface); :meth:`run_until` steps the loop.
+    the trajectory interface); :meth:`run_until` steps the loop. With ``relay_states`` the test
+    relays rns_simulator's joint_states too, and drops them while ``gap`` is True.
     """
 
-    def __init__(self, ros, simulator=None, **ptp_overrides) -> None:
+    def __init__(self, ros, simulator=None, relay_states=False, **ptp_overrides) -> None:
         simulator = {**LOCKSTEP, **(simulator or {})}
         self.velocity = simulator.get("command_interface") == "velocity"
         topic, msg_type = (
@@ -99,12 +100,24 @@ class _Lockstep:
             if self.velocity
             else ("joint_references", JointTrajectory)
         )
-        self.simulator = ros.add(SimulatorNode, simulator, remappings={topic: f"lockstep/{topic}"})
+        remappings = {topic: f"lockstep/{topic}"}
+        if relay_states:
+            remappings["joint_states"] = "lockstep/joint_states"
+        self.simulator = ros.add(SimulatorNode, simulator, remappings=remappings)
         # a simulation paused for a late rns_ptp is not a dead one: /clock watch hang-sized
         ptp_overrides.setdefault("clock_timeout", 30.0)
         self.ptp = _node(ros, PtpNode, use_sim_time=True, **ptp_overrides)
         self.ros = ros
         self.probe = probe = ros.probe()
+        self.gap = False
+        if relay_states:
+            states = probe.create_publisher(JointState, "joint_states", 10)
+
+            def relay(msg: JointState) -> None:
+                if not self.gap:
+                    states.publish(msg)
+
+            probe.create_subscription(JointState, "lockstep/joint_states", relay, 10)
         self.goal = probe.create_publisher(JointState, "ptp_goal", 10)
         self.commands = Recorder(probe, msg_type, topic)
         self.references = self.commands
@@ -379,12 +392,19 @@ def test_cancel_decelerates_to_rest_without_a_velocity_jump(ros):
 
 
 def test_stale_state_stops_the_arm_and_abandons_the_plan(ros):
-    """The simulator dies mid-plan: once the state is state_timeout old the arm is commanded to
-    rest and the plan is abandoned; a fresh state does not resume it. (The age rule, on given
-    times, is test_controller_node's; state_timeout 0.5 s here, so a loaded machine's hiccups
-    do not end the plan before the simulator dies.)"""
+    """The simulator dies mid-plan (wall clock): once the state is state_timeout old the arm is
+    commanded to rest and the plan held, and once it is state_loss_timeout old the plan is
+    abandoned; a fresh state does not resume it. (The ages on given times are the sim-time
+    tests'; state_timeout 0.5 s here.)"""
     simulator = _node(ros, SimulatorNode)
-    _node(ros, PtpNode, method="joint_space", duration=3.0, state_timeout=0.5)
+    ptp = _node(
+        ros,
+        PtpNode,
+        method="joint_space",
+        duration=3.0,
+        state_timeout=0.5,
+        state_loss_timeout=1.5,
+    )
     probe = ros.probe()
     goal = probe.create_publisher(JointState, "ptp_goal", 10)
     references = Recorder(probe, JointTrajectory, "joint_references")
@@ -394,15 +414,17 @@ def test_stale_state_stops_the_arm_and_abandons_the_plan(ros):
     _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
     assert ros.spin_until(lambda: _state(stack) == "MOVING", timeout=10.0)
     ros.spin_for(0.5)
-    assert _state(stack) == "MOVING"
     ros.detach(simulator)
     simulator.destroy_node()
     assert ros.spin_until(lambda: _state(stack) == "STALE_STATE", timeout=10.0)
+    assert "HOLDING" in {_tick_state(m) for m in status.messages}
     ros.spin_for(0.3)
     assert np.all(np.array(references.messages[-1].points[0].velocities) == 0.0)
     entry = status.messages[-1].status[0]
     assert entry.level == entry.ERROR
     assert "joint_states" in entry.message
+    assert "state_loss_timeout 1.5 s" in entry.message
+    assert ptp.plan is None
     # a fresh state: IDLE, the old plan does not resume (no moving reference from here on)
     _node(ros, SimulatorNode)
     count = len(references.messages)
@@ -432,6 +454,10 @@ def test_status_before_the_first_joint_state(ros):
         ({"method": "magic"}, "'method' must be one of"),
         ({"rate": 5000.0}, "'rate' out of range"),
         ({"output_interface": "velocity", "joints": JOINTS[:6]}, "'joints'"),
+        (
+            {"state_timeout": 1.0, "state_loss_timeout": 0.5},
+            r"state_loss_timeout 0.5 s must be >= state_timeout 1.0 s",
+        ),
     ],
 )
 def test_bad_parameters_fail_with_a_clear_error(ros, overrides, message):
@@ -466,6 +492,56 @@ def test_deploy_goal_runs_the_reactionless_deployment(ros):
     )
     assert math.degrees(dds) < 0.01
     assert values["fold_reached"].startswith("deploy: ")
+
+
+def test_a_gap_in_joint_states_holds_the_deployment_and_it_resumes_on_its_path(ros):
+    """Lockstep on simulated time; the test relays rns_simulator's joint_states and drops them
+    for 0.4 s mid-plan (longer than state_timeout, shorter than state_loss_timeout): rns_ptp
+    stops the arm with one zero-velocity command and holds the plan; when joint states come
+    again it resumes the same plan where it stood, from rest. The deployment stays reactionless
+    across the pause and ends at its goal."""
+    stack = _Lockstep(ros, relay_states=True, deploy_duration=2.0, state_timeout=0.1)
+    _ready(ros, stack)
+    stack.goal.publish(JointState(name=["deploy"]))
+    assert stack.run_until(lambda: _played(stack, 0.8))  # mid-plan: fast
+    plan = stack.ptp.plan
+    references = stack.references.messages
+    stack.gap = True
+    assert stack.run_until(lambda: _state(stack) == "HOLDING")
+    held_at = _first_stamp(stack, "HOLDING")
+    hold = len(references) - 1
+    assert _seconds(references[hold].header.stamp) == pytest.approx(held_at)
+    assert not np.any(references[hold].points[0].velocities)
+    speed = np.abs(references[hold - 1].points[0].velocities).max()
+    assert speed > 0.05
+    entry = stack.status.messages[-1].status[0]
+    assert entry.level == entry.WARN
+    assert "holding the plan at s = " in entry.message
+    assert stack.run_until(lambda: _seconds(stack.status.messages[-1].header.stamp) > held_at + 0.3)
+    assert _state(stack) == "HOLDING"
+    assert len(references) == hold + 1  # nothing but the stop during the gap
+    assert stack.ptp.plan is plan
+    stack.gap = False
+    assert stack.run_until(lambda: _state(stack) == "MOVING")
+    assert stack.ptp.plan is plan  # not replanned: the same path
+    resumed = references[hold + 1]
+    np.testing.assert_array_equal(resumed.points[0].positions, references[hold].points[0].positions)
+    # from rest: the playback rate rises at resume_acceleration (mid-period rate 0.01)
+    assert 0.0 < np.abs(resumed.points[0].velocities).max() < 0.05 * speed
+    assert stack.run_until(lambda: _state(stack) == "DONE")
+    final = _state_after(stack, _first_stamp(stack, "DONE"))
+    error = np.abs(final - plan.goal).max()
+    states = [_tick_state(m) for m in stack.status.messages]
+    played = [state for k, state in enumerate(states) if k == 0 or state != states[k - 1]]
+    assert played[-5:] == ["MOVING", "HOLDING", "MOVING", "SETTLING", "DONE"]
+    odom = stack.odom.messages
+    dds = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
+    print(
+        f"deploy held {_first_stamp(stack, 'DONE') - held_at:.2f} s before its end: joint "
+        f"error {error:.2e} rad, base deviation {math.degrees(dds):.2e} deg"
+    )
+    assert error < stack.ptp.get_parameter("goal_tolerance").value
+    assert math.degrees(dds) < 0.01
 
 
 def test_velocity_interface_and_a_planned_closed_loop_method(ros):
@@ -526,7 +602,9 @@ def test_two_joint_state_sources_stop_the_arm_and_a_second_commander_is_reported
     moving when a loaded machine gets to it, and the state watchdog (5 s) rides out the build
     of the second simulator in this process, which holds the GIL long enough on a loaded
     machine to age the first one's states past 0.5 s."""
-    stack = _stack(ros, method="joint_space", duration=10.0, state_timeout=5.0)
+    stack = _stack(
+        ros, method="joint_space", duration=10.0, state_timeout=5.0, state_loss_timeout=10.0
+    )
     _ready(ros, stack)
     commander = ros.probe("other_commander")
     other = commander.create_publisher(JointTrajectory, "joint_references", 1)
@@ -632,6 +710,7 @@ def _sim_time_stack(ros, **ptp_overrides):
 
     stack = SimpleNamespace(
         ptp=ptp,
+        probe=probe,
         goal=probe.create_publisher(JointState, "ptp_goal", 10),
         references=Recorder(probe, JointTrajectory, "joint_references"),
         status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
@@ -662,29 +741,60 @@ def test_sim_time_a_wall_clock_pause_of_the_simulation_does_not_stop_the_arm(ros
     for _ in range(20):
         stack.step()
     assert _state(stack) == "MOVING"
-    assert "STALE_STATE" not in _states_seen(stack)
+    assert not {"STALE_STATE", "HOLDING"} & _states_seen(stack)
     assert np.abs(_velocities(stack)).max() > 0.0
     assert stack.ptp.plan is not None
 
 
-def test_sim_time_a_stopped_clock_stops_the_arm(ros):
-    """/clock stops during a motion (a dead simulator): no simulated time passes and the
-    playback timer stops, yet after clock_timeout of wall time (set at run time) the arm gets
-    zero velocity and the status says STALE_STATE; the clock coming back leaves it at rest."""
-    stack = _sim_time_stack(ros, state_timeout=0.5, clock_timeout=30.0)
+def _stop_the_clock(ros, stack) -> None:
+    """clock_timeout 1 s set at run time, seen by the /clock watch at its new checks while the
+    clock moves; then /clock (and joint_states) stop until rns_ptp reports it."""
     result = stack.ptp.set_parameters([Parameter("clock_timeout", value=1.0)])
     assert result[0].successful
-    for _ in range(50):  # the watch sees /clock move at its new checks
+    for _ in range(50):
         stack.step()
     assert _state(stack) == "MOVING"
     assert ros.spin_until(
         lambda: "/clock stood still" in stack.status.messages[-1].status[0].message,
         timeout=15.0,
     )
+
+
+def test_sim_time_a_stopped_clock_holds_the_arm_and_the_plan_resumes_with_it(ros):
+    """/clock stops during a motion: no simulated time passes and the playback timer stops, yet
+    after clock_timeout of wall time the arm gets zero velocity and the plan is held (HOLDING,
+    WARN); when /clock and joint_states come back the same plan resumes where it stood (a 20 s
+    plan: the arm that stands at START is still on its path)."""
+    stack = _sim_time_stack(ros, duration=20.0, state_timeout=0.5, clock_timeout=30.0)
+    plan = stack.ptp.plan
+    _stop_the_clock(ros, stack)
     entry = stack.status.messages[-1].status[0]
-    assert status_values(stack.status.messages[-1])["state"] == "STALE_STATE"
-    assert entry.level == entry.ERROR
+    assert status_values(stack.status.messages[-1])["state"] == "HOLDING"
+    assert entry.level == entry.WARN
     assert "(clock_timeout 1.0 s wall time)" in entry.message
+    assert np.all(_velocities(stack) == 0.0)
+    assert stack.ptp.plan is plan
+    references = stack.references.messages
+    held = len(references) - 1
+    assert stack.step_until(lambda: _state(stack) == "MOVING")
+    assert stack.ptp.plan is plan
+    np.testing.assert_array_equal(
+        references[held + 1].points[0].positions, references[held].points[0].positions
+    )
+    assert "STALE_STATE" not in _states_seen(stack)
+
+
+def test_sim_time_a_dead_simulator_abandons_the_plan_after_state_loss_timeout(ros):
+    """/clock and joint_states stop for good: the arm is held at clock_timeout, and once no joint
+    state came for state_loss_timeout of wall time the plan is abandoned (STALE_STATE); the clock
+    coming back leaves the arm at rest."""
+    stack = _sim_time_stack(ros, state_timeout=0.5, state_loss_timeout=2.0, clock_timeout=30.0)
+    _stop_the_clock(ros, stack)
+    assert ros.spin_until(lambda: _state(stack) == "STALE_STATE", timeout=15.0)
+    entry = stack.status.messages[-1].status[0]
+    assert entry.level == entry.ERROR
+    assert "(state_loss_timeout 2.0 s)" in entry.message
+    assert "HOLDING" in _states_seen(stack)
     assert np.all(_velocities(stack) == 0.0)
     assert stack.ptp.plan is None
     count = len(stack.references.messages)
@@ -694,16 +804,94 @@ def test_sim_time_a_stopped_clock_stops_the_arm(ros):
     assert len(stack.references.messages) == count
 
 
-def test_sim_time_a_state_stale_in_simulated_time_stops_the_arm(ros):
+def test_sim_time_a_state_stale_for_state_loss_timeout_abandons_the_plan(ros):
     """/clock goes on without joint_states: after state_timeout of simulated time the arm gets
-    zero velocity, STALE_STATE, and the plan is abandoned."""
-    stack = _sim_time_stack(ros, state_timeout=0.5, clock_timeout=30.0)
+    zero velocity and the plan is held; after state_loss_timeout it is abandoned
+    (STALE_STATE)."""
+    stack = _sim_time_stack(ros, state_timeout=0.25, state_loss_timeout=1.0, clock_timeout=30.0)
+    plan = stack.ptp.plan
+    last_state = stack.ptp._state_received  # receipt time of the last joint state [s]
+    assert stack.step_until(lambda: _state(stack) == "HOLDING", state=False)
+    assert np.all(_velocities(stack) == 0.0)
+    held = _first_stamp(stack, "HOLDING")
+    assert 0.25 <= held - last_state <= 0.25 + 2 * STEP
+    assert stack.ptp.plan is plan
+    _send(stack, JOINTS, START)  # refused while the input is stale; the hold goes on
+    for _ in range(5):
+        stack.step(state=False)
+    assert _state(stack) == "HOLDING"
+    assert "joint_states" in status_values(stack.status.messages[-1])["rejected_goal"]
+    assert stack.ptp.plan is plan
+    count = len(stack.references.messages)
     assert stack.step_until(lambda: _state(stack) == "STALE_STATE", state=False)
+    lost = _first_stamp(stack, "STALE_STATE")
+    assert 1.0 <= lost - last_state <= 1.0 + 2 * STEP
     message = stack.status.messages[-1].status[0].message
     assert "joint_states" in message
-    assert "(state_timeout 0.5 s)" in message
+    assert "state_loss_timeout 1.0 s" in message
     assert np.all(_velocities(stack) == 0.0)
+    assert len(stack.references.messages) == count + 1  # the zero of the hold, then of the loss
     assert stack.ptp.plan is None
+
+
+def test_sim_time_a_cancel_during_a_hold_ends_the_plan_where_the_arm_stands(ros):
+    stack = _sim_time_stack(ros, state_timeout=0.25, clock_timeout=30.0)
+    assert stack.step_until(lambda: _state(stack) == "HOLDING", state=False)
+    client = stack.probe.create_client(Trigger, "rns_ptp/cancel")
+    future = client.call_async(Trigger.Request())
+    assert stack.step_until(future.done, state=False)
+    assert future.result().success
+    assert "held at rest on the path" in future.result().message
+    count = len(stack.references.messages)
+    assert stack.step_until(lambda: _state(stack) == "IDLE")
+    for _ in range(10):
+        stack.step()
+    assert len(stack.references.messages) == count  # at rest since the hold: nothing resumes
+    assert "cancelled: at rest on the path" in stack.status.messages[-1].status[0].message
+
+
+def test_sim_time_an_arm_off_the_held_path_is_replanned_to_the_same_goal(ros):
+    """The plan has moved 0.08 rad from START, where the test's arm stands: after a gap in
+    joint_states the arm is not on the held plan (resume_tolerance), so the goal is planned
+    again from the measured angles instead of jumping to the path."""
+    stack = _sim_time_stack(ros, state_timeout=0.25, clock_timeout=30.0)
+    for _ in range(150):
+        stack.step()
+    plan = stack.ptp.plan
+    assert stack.step_until(lambda: _state(stack) == "HOLDING", state=False)
+    assert stack.ptp.plan is plan
+    assert stack.step_until(lambda: _state(stack) == "MOVING")
+    states = [_tick_state(m) for m in stack.status.messages]
+    assert "PLANNING" in states[states.index("HOLDING") :]
+    replanned = stack.ptp.plan
+    assert replanned is not plan
+    np.testing.assert_allclose(replanned.start, START, atol=1e-12)
+    np.testing.assert_allclose(replanned.goal, plan.goal, atol=1e-12)
+
+
+def test_sim_time_a_whole_plan_is_held_and_its_rest_sent_at_the_resume(ros):
+    """plan_output whole: the hold replaces the plan by one at rest where the arm stands; at the
+    resume the rest of the plan goes out as one trajectory, from rest at the held sample to the
+    goal."""
+    stack = _sim_time_stack(
+        ros, duration=20.0, plan_output="whole", state_timeout=0.25, clock_timeout=30.0
+    )
+    plan = stack.ptp.plan
+    references = stack.references.messages
+    assert len(references) == 1
+    assert stack.step_until(lambda: _state(stack) == "HOLDING", state=False)
+    assert len(references) == 2
+    held = references[1]
+    assert not np.any(held.points[0].velocities)
+    assert stack.step_until(lambda: _state(stack) == "MOVING")
+    assert stack.ptp.plan is plan
+    assert len(references) == 3
+    rest = references[2]
+    np.testing.assert_array_equal(rest.points[0].positions, held.points[0].positions)
+    assert not np.any(rest.points[0].velocities)
+    np.testing.assert_allclose(rest.points[-1].positions, plan.goal, atol=1e-12)
+    times = [_seconds(p.time_from_start) for p in rest.points]
+    assert np.diff(times).max() <= stack.ptp.get_parameter("plan_sample_period").value + 1e-6
 
 
 def test_a_goal_flood_plans_one_goal_at_a_time_and_the_newest_wins(ros):

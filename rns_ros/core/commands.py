@@ -2,8 +2,9 @@
 
 A command names its joints; rns_ros matches them to the model's joint order and rejects anything
 ambiguous: unknown or missing names, duplicated names, wrong lengths, NaN/Inf, or speeds beyond
-the joint velocity limits. Every rejection is an :class:`InputError` whose message says what was
-wrong and what would be valid.
+the joint velocity limits. A measured joint state (:func:`match_joint_state`) may carry joints
+beyond the model's, which are ignored; missing model joints are an error there too. Every
+rejection is an :class:`InputError` whose message says what was wrong and what would be valid.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ from rns_ros.core.errors import InputError
 VELOCITY_LIMIT_TOLERANCE = 0.01
 #: Names an error message lists at most [-] (a stranger's command may name thousands).
 MAX_LISTED = 10
+#: Distinct sets of extra joint_states names a node reports at most [-] (one line each).
+MAX_REPORTED_SETS = 16
 
 
 class NamedJointCommand(NamedTuple):
@@ -99,15 +102,24 @@ def _cached_order(names: tuple[str, ...], model_joints: tuple[str, ...]) -> np.n
     return order
 
 
-def _field(values: Sequence[float], order: np.ndarray, label: str) -> np.ndarray | None:
+def _field(
+    values: Sequence[float], order: np.ndarray, label: str, count: int | None = None
+) -> np.ndarray | None:
+    """``values`` (one per name, ``count`` names; default one per model joint) picked by
+    ``order`` into model order, None when empty.
+
+    Raises:
+        InputError: a length other than ``count``, or a picked value that is not finite.
+    """
     if len(values) == 0:
         return None
-    if len(values) != order.size:
-        raise InputError(f"{label} has {len(values)} values for {order.size} joints")
-    array = np.asarray(values, dtype=float)
+    count = order.size if count is None else count
+    if len(values) != count:
+        raise InputError(f"{label} has {len(values)} values for {count} joints")
+    array = np.asarray(values, dtype=float)[order]
     if not np.isfinite(array).all():
         raise InputError(f"{label} must be finite, got {array.tolist()}")
-    return array[order]
+    return array
 
 
 def match_named_command(
@@ -141,6 +153,101 @@ def match_named_command(
     if command.velocities is not None and velocity_limits is not None:
         check_velocity_limits(command.velocities, velocity_limits, model_joints)
     return command
+
+
+def joint_state_order(
+    names: Sequence[str], model_joints: Sequence[str]
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Index array p with state[p[i]] belonging to model joint i, and the names that are not
+    model joints (in message order): a measured state may carry more joints than the model
+    (a gripper's fingers beside the arm's, from joint_state_broadcaster), which are ignored.
+
+    A stream repeats one name list at every message, so the newest lists are cached (the
+    returned array is read-only).
+
+    Raises:
+        InputError: missing model joints, or a model joint named twice (listed, at most
+            MAX_LISTED of each).
+    """
+    return _cached_state_order(tuple(names), tuple(model_joints))
+
+
+@functools.lru_cache(maxsize=16)
+def _cached_state_order(
+    names: tuple[str, ...], model_joints: tuple[str, ...]
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    model, named = set(model_joints), set(names)
+    missing = [joint for joint in model_joints if joint not in named]
+    duplicated = [name for name in _duplicated(names) if name in model]
+    problems = []
+    if missing:
+        problems.append(f"missing joints {listed(missing)}")
+    if duplicated:
+        problems.append(f"duplicated joints {listed(duplicated)}")
+    if problems:
+        raise InputError("; ".join(problems) + f" (model joints: {list(model_joints)})")
+    index = {name: i for i, name in enumerate(names) if name in model}
+    order = np.array([index[joint] for joint in model_joints])
+    order.flags.writeable = False
+    extras = tuple(dict.fromkeys(name for name in names if name not in model))
+    return order, extras
+
+
+def match_joint_state(
+    names: Sequence[str],
+    model_joints: Sequence[str],
+    *,
+    positions: Sequence[float] = (),
+    velocities: Sequence[float] = (),
+) -> tuple[NamedJointCommand, tuple[str, ...]]:
+    """A measured joint state (sensor_msgs/JointState) in the model's joint order, and the
+    names it carries beyond the model's joints (ignored; see :func:`joint_state_order`).
+
+    Args:
+        names: joint names of the message.
+        model_joints: the model's joint names (theta order), shape (n,).
+        positions: [rad], empty or len(names).
+        velocities: [rad/s], empty or len(names).
+
+    Returns:
+        (positions (n,) and velocities (n,), each None when empty; accelerations None), and
+        the extra names in message order (each once).
+
+    Raises:
+        InputError: missing or duplicated model joints, a length other than len(names), a
+            model joint's value that is not finite (the extras' values are not checked), or
+            neither positions nor velocities.
+    """
+    order, extras = joint_state_order(names, model_joints)
+    count = len(names)
+    state = NamedJointCommand(
+        positions=_field(positions, order, "positions", count),
+        velocities=_field(velocities, order, "velocities", count),
+        accelerations=None,
+    )
+    if state.positions is None and state.velocities is None:
+        raise InputError("the joint state has neither positions nor velocities")
+    return state, extras
+
+
+class ExtraJointsReport:
+    """Which sets of extra joint names (:func:`match_joint_state`) a node has reported: each
+    distinct set once, the first ``MAX_REPORTED_SETS`` of them."""
+
+    def __init__(self) -> None:
+        self._reported: set[tuple[str, ...]] = set()
+
+    def note(self, extras: Sequence[str], topic: str = "joint_states") -> str | None:
+        """The line to log for ``extras`` received on ``topic``, or None (no extras, or this
+        set was reported already)."""
+        extras = tuple(extras)
+        if not extras or extras in self._reported or len(self._reported) >= MAX_REPORTED_SETS:
+            return None
+        self._reported.add(extras)
+        more = len(extras) - MAX_LISTED
+        return f"{topic}: ignoring joints not in the model: {', '.join(extras[:MAX_LISTED])}" + (
+            f" and {more} more" if more > 0 else ""
+        )
 
 
 def check_velocity_limits(

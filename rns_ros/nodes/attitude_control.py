@@ -6,8 +6,8 @@ reaction. The law is :class:`rns_ros.control.attitude.AttitudeControlLaw` (eq. 5
 + PD on the attitude error, clipped to ``torque_limit``); this node only converts messages.
 
 Subscribes:
-    joint_states      sensor_msgs/JointState (by joint name): theta, and theta_dot when no fresh
-                      joint reference is there
+    joint_states      sensor_msgs/JointState (by joint name, other joints ignored): theta, and
+                      theta_dot when no fresh joint reference is there
     base_odom         nav_msgs/Odometry: base attitude and angular velocity (base axes); the
                       first one sets the attitude to hold (``~/hold`` sets it again)
     wheel_states      sensor_msgs/JointState of rns_simulator: wheel rates relative to the base,
@@ -47,7 +47,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from rns_ros.control.attitude import AttitudeControlLaw, AttitudeGains
 from rns_ros.core import FreeFloatingState
-from rns_ros.core.commands import match_named_command
+from rns_ros.core.commands import ExtraJointsReport, match_joint_state, match_named_command
 from rns_ros.core.errors import InputError
 from rns_ros.core.validation import Choice
 from rns_ros.nodes import attitude_control_parameters
@@ -111,6 +111,7 @@ class AttitudeControlNode(Node):
         self._stopped = True  # no torque is being applied
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
         self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
         self.create_subscription(Odometry, "base_odom", self._on_odom, qos)
         self.create_subscription(JointState, "wheel_states", self._on_wheels, qos)
@@ -136,24 +137,31 @@ class AttitudeControlNode(Node):
             if required and getattr(command, required) is None:
                 raise InputError(f"{topic} has no {required}")
         except InputError as exc:
-            self.get_logger().error(f"ignored {topic}: {exc}", throttle_duration_sec=1.0)
+            self._ignore(topic, exc)
             return None
         return command
 
+    def _ignore(self, topic: str, exc: InputError) -> None:
+        self.get_logger().error(f"ignored {topic}: {exc}", throttle_duration_sec=1.0)
+
     def _on_joint_state(self, msg: JointState) -> None:
-        command = self._matched(
-            "joint_states",
-            msg.name,
-            self.robot.joint_names,
-            "positions",
-            positions=msg.position,
-            velocities=msg.velocity,
-        )
-        if command is None:
+        """theta (and theta_dot) by joint name; joints beyond the model's are ignored
+        (reported once per set)."""
+        try:
+            state, extras = match_joint_state(
+                msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
+            )
+            if state.positions is None:
+                raise InputError("joint_states has no positions")
+        except InputError as exc:
+            self._ignore("joint_states", exc)
             return
-        self._theta = command.positions
-        if command.velocities is not None:
-            self._theta_dot = command.velocities
+        note = self._extra_joints.note(extras)
+        if note is not None:
+            self.get_logger().info(note)
+        self._theta = state.positions
+        if state.velocities is not None:
+            self._theta_dot = state.velocities
         self._note_receipt("joints", msg.header.stamp)
 
     def _on_odom(self, msg: Odometry) -> None:

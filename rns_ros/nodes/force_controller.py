@@ -17,8 +17,9 @@ or stalled): the step runs with the newest commands, whose ages (simulated time)
 motion as without ``await_commands``.
 
 Subscribes:
-    joint_states    sensor_msgs/JointState (by name; position, velocity, effort = the torque held
-                    over the step that ended there); reliable, depth 10; triggers the step
+    joint_states    sensor_msgs/JointState (by name, other joints ignored; position, velocity,
+                    effort = the torque held over the step that ended there); reliable, depth
+                    10; triggers the step
     wrist_wrench    geometry_msgs/WrenchStamped, EE axes (frame_id the EE frame, "" or "ee";
                     world_frame also accepted), the wrench the EE exerts on the environment;
                     reliable, depth 10; matched to the state of the same stamp
@@ -72,7 +73,7 @@ from rns_ros.control.force.controller import ForceTeleopController
 from rns_ros.control.force.settings import CommandFrame, ForceControlSettings
 from rns_ros.control.force.status import ForceControlState, ForceStep
 from rns_ros.control.ticks import AwaitedTicks, ServedTick
-from rns_ros.core.commands import joint_order
+from rns_ros.core.commands import ExtraJointsReport, joint_state_order, match_joint_state
 from rns_ros.core.errors import ConfigError, InputError, RnsError
 from rns_ros.core.fixed_base import load_fixed_base_model
 from rns_ros.nodes import force_controller_parameters
@@ -173,6 +174,7 @@ class ForceControllerNode(Node):
         command_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         if self._awaited is not None:
             command_qos = SCHEDULED_COMMAND_QOS
+        self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
         self.create_subscription(JointState, "joint_states", self._on_joint_state, reliable)
         self.create_subscription(WrenchStamped, "wrist_wrench", self._on_wrench, reliable)
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, command_qos)
@@ -346,21 +348,23 @@ class ForceControllerNode(Node):
 
     def _on_joint_state(self, msg: JointState) -> None:
         try:
-            order = joint_order(msg.name, self.robot.joint_names)
-            q = np.asarray(msg.position, dtype=float)
-            v = np.asarray(msg.velocity, dtype=float)
-            if q.size != order.size or v.size != order.size:
+            state, extras = match_joint_state(
+                msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
+            )
+            if state.positions is None or state.velocities is None:
                 raise InputError(
-                    f"joint_states needs {order.size} positions and velocities, got "
-                    f"{q.size} and {v.size}"
+                    f"joint_states needs positions and velocities of {self.robot.n} joints, got "
+                    f"{len(msg.position)} and {len(msg.velocity)} values"
                 )
-            if not (np.isfinite(q).all() and np.isfinite(v).all()):
-                raise InputError("joint_states positions/velocities are not finite")
+            order, _ = joint_state_order(msg.name, self.robot.joint_names)
             effort = np.asarray(msg.effort, dtype=float)
-            effort = effort[order] if effort.size == order.size else None
+            effort = effort[order] if effort.size == len(msg.name) else None
         except InputError as exc:
             self.get_logger().error(f"ignored joint_states: {exc}", throttle_duration_sec=1.0)
             return
+        note = self._extra_joints.note(extras)
+        if note is not None:
+            self.get_logger().info(note)
         stamp = _stamp_ns(msg.header.stamp)
         now = self._input_clock.receipt_time(stamp * 1e-9)
         if self._stale:
@@ -368,7 +372,7 @@ class ForceControllerNode(Node):
             self.controller.resync()
         self._stale = False
         self._state_received, self._state_received_wall = now, time.monotonic()
-        measurement = JointMeasurement(stamp, q[order], v[order], effort)
+        measurement = JointMeasurement(stamp, state.positions, state.velocities, effort)
         if self._awaited is None:
             self._control_step(measurement, now)
             return

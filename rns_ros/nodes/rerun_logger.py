@@ -7,8 +7,9 @@ is replaced by this node's clock).
 
 Subscribes (best effort, depth 100: matches reliable and best-effort publishers, and holds 1 s
 of 100 Hz state while a busy logger catches up instead of dropping samples):
-    joint_states              sensor_msgs/JointState (by joint name): joint transforms, camera
-                              arrow and trail, joint velocities, achieved camera angular velocity
+    joint_states              sensor_msgs/JointState (by joint name, other joints ignored): joint
+                              transforms, camera arrow and trail, joint velocities, achieved
+                              camera angular velocity
     base_odom                 nav_msgs/Odometry: base pose, attitude deviation from the first
                               message; its twist (base axes) enters the achieved velocity
     momentum                  geometry_msgs/WrenchStamped: |p| (force) and |l| (torque)
@@ -65,7 +66,7 @@ from std_msgs.msg import Float64MultiArray, String
 
 from rns_ros.control.contact_topics import CONTACT_LABELS, ERROR_LABELS
 from rns_ros.control.teleop import twist_frame_ids
-from rns_ros.core.commands import match_named_command, partial_joint_goal
+from rns_ros.core.commands import ExtraJointsReport, match_joint_state, partial_joint_goal
 from rns_ros.core.errors import InputError
 from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.nodes import rerun_logger_parameters
@@ -116,6 +117,7 @@ class RerunLoggerNode(Node):
             # deep queue: a recorder should not drop samples while rerun work or a busy CPU
             # holds it up (1 s of a 100 Hz stream)
             qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
+            self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
             self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
             if self.fixed_base:
                 self._subscribe_contact(qos, params["force_errors_topic"])
@@ -162,16 +164,20 @@ class RerunLoggerNode(Node):
 
     def _on_joint_state(self, msg: JointState) -> None:
         try:
-            command = match_named_command(
+            state, extras = match_joint_state(
                 msg.name, self.robot.joint_names, positions=msg.position, velocities=msg.velocity
             )
-            if command.positions is None:
+            if state.positions is None:
                 raise InputError("joint_states has no positions")
             self._last_state_stamp = self._stamp_ns(msg.header)
-            self.recorder.joint_state(self._last_state_stamp, command.positions, command.velocities)
+            self.recorder.joint_state(self._last_state_stamp, state.positions, state.velocities)
             self.get_logger().info("receiving joint_states", once=True)
         except InputError as exc:
             self._ignored("joint_states", exc)
+            return
+        note = self._extra_joints.note(extras)
+        if note is not None:
+            self.get_logger().info(note)
 
     def _on_odom(self, msg: Odometry) -> None:
         pose, twist = msg.pose.pose, msg.twist.twist

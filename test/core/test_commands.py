@@ -4,9 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from rns_ros.core import InputError
-from rns_ros.core.commands import listed, match_named_command, partial_joint_goal
+from rns_ros.core.commands import (
+    MAX_LISTED,
+    MAX_REPORTED_SETS,
+    ExtraJointsReport,
+    listed,
+    match_joint_state,
+    match_named_command,
+    partial_joint_goal,
+)
 
 JOINTS = ("a", "b", "c")
 LIMITS = np.array([1.0, 1.0, 2.0])
@@ -100,3 +110,75 @@ def test_absent_bounds_accept_any_finite_command():
         check_reference_positions(np.array([100.1, 1.5, -100.1]), current, lower, upper, 1, JOINTS)
     goal = partial_joint_goal(["c"], [-1e3], GOAL_MODEL, current, lower, upper)
     assert goal.tolist() == [100.0, 0.0, -1e3]
+
+
+ARM = tuple(f"joint_{i}" for i in range(1, 8))
+FINGERS = ("finger_joint_1", "finger_joint_2")
+
+
+def test_a_joint_state_with_extra_joints_is_used_by_name():
+    """joint_state_broadcaster of an arm with a gripper: the fingers beside the arm's joints,
+    in its own order; the extras are returned (their values are not checked: a finger without
+    a velocity interface reports NaN)."""
+    names = ["finger_joint_1", "c", "a", "finger_joint_2", "b"]
+    state, extras = match_joint_state(
+        names,
+        JOINTS,
+        positions=[0.04, 3.0, 1.0, 0.04, 2.0],
+        velocities=[np.nan, 0.3, 0.1, np.nan, 0.2],
+    )
+    assert state.positions.tolist() == [1.0, 2.0, 3.0]
+    assert state.velocities.tolist() == [0.1, 0.2, 0.3]
+    assert state.accelerations is None
+    assert extras == FINGERS
+    state, extras = match_joint_state(["b", "c", "a"], JOINTS, positions=[2.0, 3.0, 1.0])
+    assert state.positions.tolist() == [1.0, 2.0, 3.0]
+    assert state.velocities is None
+    assert extras == ()
+
+
+@pytest.mark.parametrize(
+    ("names", "kwargs", "message"),
+    [
+        (["a", "b", "x"], {"positions": [0, 0, 0]}, r"missing joints \['c'\]"),
+        (["a", "a", "b", "c"], {"positions": [0] * 4}, r"duplicated joints \['a'\]"),
+        (["a", "b", "c", "x"], {"positions": [0, 0, 0]}, "positions has 3 values for 4 joints"),
+        (["a", "b", "c", "x"], {"velocities": [0] * 5}, "velocities has 5 values for 4 joints"),
+        (["x", "a", "b", "c"], {"positions": [0, 0, np.nan, 0]}, "positions must be finite"),
+        (["a", "b", "c", "x"], {"velocities": [0, np.inf, 0, 0]}, "velocities must be finite"),
+        (["a", "b", "c", "x"], {}, "neither positions nor velocities"),
+    ],
+)
+def test_a_bad_joint_state_is_rejected_with_its_reason(names, kwargs, message):
+    with pytest.raises(InputError, match=message):
+        match_joint_state(names, JOINTS, **kwargs)
+
+
+@given(
+    st.permutations(ARM + FINGERS + ("gripper_base",)),
+    st.lists(st.floats(-3.0, 3.0), min_size=10, max_size=10),
+)
+def test_any_order_with_extras_gives_the_model_order(names, values):
+    """A random permutation of the arm's joints and extra ones: each model joint gets its own
+    value, the extras come back in message order."""
+    value = dict(zip(names, values, strict=True))
+    state, extras = match_joint_state(names, ARM, positions=values, velocities=[-v for v in values])
+    assert state.positions.tolist() == [value[joint] for joint in ARM]
+    assert state.velocities.tolist() == [-value[joint] for joint in ARM]
+    assert extras == tuple(name for name in names if name not in ARM)
+
+
+def test_extra_joints_are_reported_once_per_distinct_set():
+    report = ExtraJointsReport()
+    assert report.note(()) is None
+    line = "joint_states: ignoring joints not in the model: finger_joint_1, finger_joint_2"
+    assert report.note(FINGERS) == line
+    assert report.note(FINGERS) is None
+    assert report.note(FINGERS[:1], "/arm/joint_states") == (
+        "/arm/joint_states: ignoring joints not in the model: finger_joint_1"
+    )
+    many = tuple(f"x{k}" for k in range(MAX_LISTED + 5))
+    assert report.note(many).endswith(f"x{MAX_LISTED - 1} and 5 more")
+    for k in range(MAX_REPORTED_SETS):
+        report.note((f"y{k}",))
+    assert report.note(("z",)) is None  # at most MAX_REPORTED_SETS sets

@@ -97,7 +97,7 @@ STACK_TOPICS = (
 )
 #: Wall time [s] a new node waits for DDS discovery before it reads the domain's graph (0.4 s
 #: on localhost here).
-DISCOVERY_WAIT = 1.5
+DISCOVERY_WAIT = 2.0
 
 
 def ros_environment(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:

@@ -52,6 +52,12 @@ MAX_HOLD_ITERATIONS = 5
 #: from being trusted; a looser or tighter value changes the base deviation little and the
 #: number of evaluations per period more (docs/controller.md).
 HOLD_CONSISTENCY = 3e-2
+#: A hold ends within max(MAX_HOLD_PERIODS T, MAX_HOLD_FLOOR) [-], [s]: a late tick of a busy
+#: executor ends one after up to ~3 T (28 ms seen at 100 Hz); a longer interval between two ticks
+#: means the clock jumped or the node stalled, and how far the held theta_dot took the arm is
+#: not known (:meth:`ReactionlessController.end_hold`).
+MAX_HOLD_PERIODS = 5.0
+MAX_HOLD_FLOOR = 0.05
 #: Speed floor of HOLD_CONSISTENCY [rad/s]: below it the tolerance stays at this speed's (slow
 #: motion turns the base by little: the error of an evaluation point scales with max|theta_dot|).
 HOLD_SPEED_FLOOR = 0.1
@@ -193,22 +199,43 @@ class ReactionlessController:
         self._open_hold = None
         self._recent_rates = ()
 
-    def end_hold(self, elapsed: float) -> None:
+    @property
+    def max_hold(self) -> float:
+        """The longest hold [s] :meth:`end_hold` takes: max(MAX_HOLD_PERIODS T, MAX_HOLD_FLOOR)."""
+        return max(MAX_HOLD_PERIODS * self.settings.period, MAX_HOLD_FLOOR)
+
+    def end_hold(self, elapsed: float) -> bool:
         """End the hold in progress after ``elapsed`` [s], which may differ from the period T.
 
         A plant holds theta_dot until the next output arrives, and outputs do not come exactly T
         apart: a new command is served at once (early), and a busy executor fires its timer late.
         theta_ref then stands where the held theta_dot actually brought the arm:
-        theta_ref = theta_ref,start + elapsed * theta_dot, ``elapsed`` >= 0, so a
-        position-tracking servo follows the motion the arm actually made; a pause long enough to
-        make theta_ref stray is caught by the node's resync. Without a hold in progress this
-        does nothing.
+        theta_ref = theta_ref,start + elapsed * theta_dot, so a position-tracking servo follows
+        the motion the arm actually made.
+
+        ``elapsed`` outside [0, :attr:`max_hold`] (or not finite) is a clock that went back or
+        jumped, or a node that stalled: the hold is dropped, theta_ref stays where it started
+        (never moved on by a clock difference), and False is returned: the caller restarts
+        theta_ref at the measured angles (:meth:`resync`). Without a hold in progress this does
+        nothing (True).
         """
         if self._open_hold is None:
-            return
+            return True
         start, theta_dot = self._open_hold
-        self._reference = start + max(float(elapsed), 0.0) * theta_dot
         self._open_hold = None
+        elapsed = float(elapsed)
+        if not 0.0 <= elapsed <= self.max_hold:
+            self._reference = start
+            return False
+        self._reference = start + elapsed * theta_dot
+        return True
+
+    def abandon_hold(self) -> None:
+        """Drop the hold in progress without ending it: theta_ref stays where it started (how
+        long the output was held is not known, e.g. the clock cannot be trusted)."""
+        if self._open_hold is not None:
+            self._reference = self._open_hold[0]
+            self._open_hold = None
 
     def configure(self, settings: ControllerSettings) -> None:
         """Swap settings between steps (run-time parameter changes)."""

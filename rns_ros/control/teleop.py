@@ -7,7 +7,8 @@ Pure logic (no ROS), used by the ``rns_controller`` node once per control period
   speed limit is scaled down to the limit as a whole vector (its direction, hence the camera's
   rotation axis, is kept), as MoveIt Servo does, and the command says so.
 * :class:`CommandGate` keeps the newest valid command. A command older than the timeout (judged
-  on receipt time, so clocks cannot defeat it) or a rejected one makes the commanded angular
+  on receipt time, so clocks cannot defeat it; one received after the time of the update, on a
+  clock that went back since, counts as stale) or a rejected one makes the commanded angular
   velocity ramp down to zero at a fixed angular deceleration. Starting from rest (the first
   command, after a stop, after a zero command, or after :meth:`CommandGate.stop`) the speed
   ramps up at a fixed angular acceleration. The output never jumps up from rest.
@@ -43,6 +44,7 @@ class ControllerState(StrEnum):
     INVALID_COMMAND = "INVALID_COMMAND"  # [ERROR] the newest command was rejected
     STALE_STATE = "STALE_STATE"  # [ERROR] joint_states / base_odom too old: zero velocity
     CONFLICTING_STATE = "CONFLICTING_STATE"  # [ERROR] several joint_states sources: zero
+    CLOCK_FAULT = "CLOCK_FAULT"  # [ERROR] /clock went back, jumped or has two sources: zero
     PAUSED = "PAUSED"  # [OK] held by ~/pause: exactly zero velocity, commands ignored
     GOAL_ACTIVE = "GOAL_ACTIVE"  # [OK] turning the camera to an orientation goal
     GOAL_REACHED = "GOAL_REACHED"  # [OK] the orientation goal was reached: zero command
@@ -236,7 +238,8 @@ class CommandGate:
             return GateOutput(zero, zero, self._default_frame, state, True, detail)
         age = now - command.received
         wanted = float(np.linalg.norm(command.angular))
-        if self._rejection is None and age <= self.timeout:
+        # received after now: the clock went back since, and its age is unknown (stale)
+        if self._rejection is None and 0.0 <= age <= self.timeout:
             return self._follow(command, wanted, period)
         if wanted > 0.0:
             self._speed = max(0.0, min(self._speed, wanted) - self.deceleration * period)
@@ -245,12 +248,15 @@ class CommandGate:
         stopped = self._speed == 0.0
         if stopped:
             self._ramping = True
+        detail = (
+            f"last command {age:.2f} s old"
+            if age >= 0.0
+            else f"last command received {-age:.3g} s later on a clock that went back"
+        )
         if self._rejection is not None:
             state, detail = ControllerState.INVALID_COMMAND, self._rejection
-        elif stopped:
-            state, detail = ControllerState.IDLE, f"last command {age:.2f} s old"
         else:
-            state, detail = ControllerState.DECELERATING, f"last command {age:.2f} s old"
+            state = ControllerState.IDLE if stopped else ControllerState.DECELERATING
         angular = command.angular * (self._speed / wanted) if wanted > 0.0 else np.zeros(3)
         return GateOutput(angular, np.zeros(3), command.frame, state, stopped, detail)
 

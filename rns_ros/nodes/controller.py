@@ -19,10 +19,13 @@ Subscribes:
     joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
                   ``state_timeout`` (receipt time; simulated time under use_sim_time) or from
                   more than one publisher stops the arm; under use_sim_time a /clock standing
-                  still for ``clock_timeout`` of wall time stops it too
+                  still for ``clock_timeout`` of wall time stops it too, and so does a /clock
+                  that goes back, jumps forward beyond ``max_clock_jump`` or has more than one
+                  publisher (CLOCK_FAULT)
     base_odom     nav_msgs/Odometry (base pose in world; identity until the first message, then
                   watched like joint_states)
-Publishes (joint commands only once a joint state has arrived):
+Publishes (joint commands only once a joint state has arrived; every one within the URDF limits
+and ``max_reference_error`` of the measured angles, :mod:`rns_ros.control.command_bounds`):
     joint_references  trajectory_msgs/JointTrajectory (``output_interface: trajectory``), stamped
                       when it applies: point 0 = integrated reference at the start of the period
                       and the held theta_dot, point 1 two periods on, at rest (what a stock
@@ -55,6 +58,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 
+from rns_ros.control.command_bounds import BoundedCommand, CommandBounds
 from rns_ros.control.controller import (
     ControllerSettings,
     ControllerStep,
@@ -103,7 +107,11 @@ from rns_ros.nodes.controller_status import (
     step_values,
 )
 from rns_ros.nodes.input_clock import InputClock, awaited_commands
-from rns_ros.nodes.parameters import declare_parameters, load_node_model
+from rns_ros.nodes.parameters import (
+    declare_parameters,
+    load_node_model,
+    sim_time_change_refused,
+)
 from rns_ros.nodes.robot_io import base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
 
@@ -153,12 +161,19 @@ class ControllerNode(Node):
         # input watchdogs: receipt times [s] on the input clock (simulated time under
         # use_sim_time), a discontinuity seen in joint_states; the monotonic receipt time of
         # the newest joint state [s] (output_lead's catch-up, the /clock watch)
-        self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
+        self._input_clock = InputClock(
+            self,
+            params["clock_timeout"],
+            self._on_clock_stopped,
+            on_clock_fault=self._on_clock_fault,
+            max_clock_jump=params["max_clock_jump"],
+        )
         self._state_received = -np.inf
         self._state_received_wall = -np.inf
         self._odom_received: float | None = None
         self._jump: str | None = None
         self._stopped = True  # the last output was zero velocity: the next one ramps up
+        self._resync = False  # the reference restarts at the measured angles this tick
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._predict = params["predict_state"]
         self._sim_time = bool(self.get_parameter("use_sim_time").value)
@@ -179,6 +194,7 @@ class ControllerNode(Node):
             params["joints"],
             self._period,
             keep=2 * MAX_PREDICTION_AGE,
+            bounds=CommandBounds.of(self.robot, params["max_reference_error"]),
         )
         self._output = self._joint_output.publisher  # destroy_node waits for its acks
         self._reporter = StatusReporter(self, self.robot.name)
@@ -410,8 +426,8 @@ class ControllerNode(Node):
             instant = self._lead_instant(instant)
             if instant is None:
                 return
-        if self._awaited is None:
-            self._serve_tick(instant)
+        if self._awaited is None or self._input_clock.clock_fault() is not None:
+            self._serve_tick(instant)  # a tick on an untrusted clock holds still: no wait
         else:
             self._serve_ready(self._awaited.tick(instant))
 
@@ -439,10 +455,16 @@ class ControllerNode(Node):
     def _serve_tick(self, tick: int) -> None:
         """The control period of ``tick`` [ns] once its inputs are there: state, law, output."""
         _, held = self._instants.serve(tick)
+        clock_fault = self._input_clock.clock_fault()
+        if clock_fault is not None:
+            self.controller.abandon_hold()  # held for a time no clock difference can tell
+            self._hold_still(ControllerState.CLOCK_FAULT, clock_fault, at=tick)
+            return
+        # the previous output was held this long on the plant's clock (sim time: /clock)
+        if held is not None and not self.controller.end_hold(held):
+            self._lost_hold(held)
         now = self._input_clock.now()
-        if held is not None:
-            # the previous output was held this long on the plant's clock (sim time: /clock)
-            self.controller.end_hold(held)
+        self._drop_future_receipts(now)
         fault = self._input_fault(now)
         if fault is not None:
             self._hold_still(*fault, at=tick)
@@ -457,8 +479,9 @@ class ControllerNode(Node):
         if goal is not None:
             self._gate.accept(goal)
         gate = self._gate.update(now, self._period)
-        if self._stopped or gate.stopped:
+        if self._stopped or gate.stopped or self._resync:
             self.controller.resync(state)  # restart the reference where the arm is
+            self._resync = False
         elif np.abs(self.controller.reference_positions - state.theta).max() > RESYNC_TOLERANCE:
             self.get_logger().warn("joint reference far from the measured angles: resynced")
             self.controller.resync(state)
@@ -467,14 +490,14 @@ class ControllerNode(Node):
         step = self.controller.step(state, omega, hold)
         self._stopped = gate.stopped
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
-        if not (np.isfinite(velocities).all() and np.isfinite(step.reference_positions).all()):
+        sent = self._publish_output(step.reference_positions, velocities, tick, self._lead)
+        if sent.non_finite:  # published as a stop at the finite positions
             self._hold_still(
                 ControllerState.INVALID_COMMAND,
                 "the law produced a non-finite joint velocity",
-                at=tick,
+                publish=False,
             )
             return
-        self._publish_output(step.reference_positions, velocities, tick, self._lead)
         reported, detail = self._requests.state(
             self._controller_state(step, gate, state, self._period if hold is None else hold),
             gate.detail,
@@ -534,6 +557,40 @@ class ControllerNode(Node):
             f"{self._params['clock_timeout']} s wall time)",
         )
 
+    def _on_clock_fault(self, text: str) -> None:
+        """use_sim_time: simulated time cannot be trusted (``text``: why, and who publishes
+        /clock): the arm is stopped now, and every tick holds it until /clock runs forward from
+        one publisher again (:meth:`InputClock.clock_fault`); it then resumes from the measured
+        angles, ramping up, as after a stale state. Ticks waiting for the operator are served
+        (held still) at once. With ``output_lead`` the ticks ride on /clock: the tick of the
+        faulty reading (or of the next reading) holds the arm, stamped as every output."""
+        if self._theta is None:
+            return  # nothing commanded yet
+        if self._awaited is not None:
+            self._serve_ready(self._awaited.give_up())
+        if not self._lead:
+            self._hold_still(ControllerState.CLOCK_FAULT, text)
+
+    def _lost_hold(self, held: float) -> None:
+        """The ticks came ``held`` [s] apart, outside what the controller integrates a held
+        output over (the clock went back or jumped less than max_clock_jump, or the node
+        stalled): where the held output took the arm is not known, so the reference restarts
+        at the measured angles this tick. A stall shorter than state_timeout is ridden through
+        like a gap in joint_states (the command goes on); a clock fault stops the arm."""
+        self.get_logger().warn(
+            f"{held:.4g} s between two ticks, outside [0, {self.controller.max_hold:.3g}] s (the "
+            "clock jumped or the node stalled): the reference restarts at the measured angles",
+            throttle_duration_sec=5.0,
+        )
+        self._resync = True
+
+    def _drop_future_receipts(self, now: float) -> None:
+        """Receipt times later than ``now`` [s] (noted on a clock that then went back) become
+        ``now``: the watchdogs age them from here instead of never."""
+        self._state_received = min(self._state_received, now)
+        if self._odom_received is not None:
+            self._odom_received = min(self._odom_received, now)
+
     def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:
         """(state, detail) when the measured state cannot be trusted: stale or two sources;
         ``now`` [s] on the input clock."""
@@ -547,22 +604,30 @@ class ControllerNode(Node):
         )
         return None if problem is None else (ControllerState(problem[0]), problem[1])
 
-    def _hold_still(self, state: ControllerState, detail: str, at: int | None = None) -> None:
-        """Publish zero velocity where the reference stands, report ``state``; the next good
-        tick restarts the reference at the measured angles and ramps the command up. ``at``:
-        the tick's instant [ns] (its output is stamped ``output_lead`` later, as a tick's is);
-        None: now."""
+    def _hold_still(
+        self,
+        state: ControllerState,
+        detail: str,
+        at: int | None = None,
+        publish: bool = True,
+    ) -> None:
+        """Publish zero velocity where the reference stands (bounded around the measured
+        angles), report ``state``; the next good tick restarts the reference at the measured
+        angles and ramps the command up. ``at``: the tick's instant [ns] (its output is stamped
+        ``output_lead`` later, as a tick's is); None: now. ``publish`` False: the stop was
+        published already."""
         if self._reporter.last_state is not state and state is not ControllerState.PAUSED:
             self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
         self._limit_stop.end()
         self._gate.stop()
         self._stopped = True
         self._served = None
-        positions = self.controller.reference_positions
-        if positions is None or not np.all(np.isfinite(positions)):
-            positions = self._theta
-        lead = self._lead if at is not None else 0.0
-        self._publish_output(positions, np.zeros(self.robot.n), at, lead)
+        if publish:
+            positions = self.controller.reference_positions
+            lead = self._lead if at is not None else 0.0
+            self._publish_output(
+                self._theta if positions is None else positions, np.zeros(self.robot.n), at, lead
+            )
         self._reporter.report(state, detail, {"method": self.controller.settings.method.value})
 
     def _plan(self, now: int) -> tuple[np.ndarray, float | None]:
@@ -583,6 +648,8 @@ class ControllerNode(Node):
             hold = self._period
         else:
             hold = next_tick_in(self._timer.time_until_next_call(), self._period)
+        if hold is not None and not 0.0 < hold <= self.controller.max_hold:
+            hold = None  # not a time the next tick can be from: the period
         theta = self._theta
         if self._theta_rate is None or self._stopped:
             return theta, hold
@@ -623,11 +690,23 @@ class ControllerNode(Node):
         velocities: np.ndarray,
         at: int | None = None,
         lead: float = 0.0,
-    ) -> None:
-        """One joint command planned at ``at`` [ns] (default now), stamped ``lead`` [s] later
-        (:meth:`JointOutput.publish`)."""
+    ) -> BoundedCommand:
+        """One joint command planned at ``at`` [ns] (default now), stamped ``lead`` [s] later,
+        within the URDF limits and max_reference_error of the measured angles (a non-finite one
+        as a stop; :meth:`JointOutput.publish`). Returns what was published."""
         now = self.get_clock().now().nanoseconds if at is None else at
-        self._joint_output.publish(positions, velocities, now, lead)
+        sent = self._joint_output.publish(positions, velocities, self._theta, now, lead)
+        if sent.clipped_joint is not None:
+            joint = sent.clipped_joint
+            low, high = self._joint_output.bounds.box(self._theta)
+            self.get_logger().warn(
+                f"joint command clipped: {self.robot.joint_names[joint]} "
+                f"{positions[joint]:.6g} rad is outside [{low[joint]:.6g}, {high[joint]:.6g}] "
+                "rad (URDF limits, max_reference_error "
+                f"{self._params['max_reference_error']} rad of the measured angle)",
+                throttle_duration_sec=1.0,
+            )
+        return sent
 
     # --- once a second: who publishes our inputs, /diagnostics --------------------------------
     def _on_diagnostics(self) -> None:
@@ -637,7 +716,10 @@ class ControllerNode(Node):
     # --- parameters, shutdown ---------------------------------------------------------------------
     def _validate_parameters(self, parameters) -> SetParametersResult:
         """On set: accept a change only when its values pass their specs and make valid law
-        settings and command gate (the reason names what is wrong)."""
+        settings and command gate, and use_sim_time stays (the reason names what is wrong)."""
+        refused = sim_time_change_refused(self, parameters)
+        if refused is not None:
+            return SetParametersResult(successful=False, reason=refused)
         try:
             self._configured(parameters)
         except RnsError as exc:

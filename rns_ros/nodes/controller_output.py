@@ -1,5 +1,7 @@
 """The joint command output of rns_controller (:class:`rns_ros.nodes.robot_io.JointCommand` on
-the ``output_interface`` chosen) and the record of recent outputs for the prediction."""
+the ``output_interface`` chosen), bounded just before it is published
+(:func:`rns_ros.control.command_bounds.bound_joint_command`), and the record of recent outputs
+for the prediction."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ from builtin_interfaces.msg import Time as TimeMsg
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 
+from rns_ros.control.command_bounds import BoundedCommand, CommandBounds, bound_joint_command
 from rns_ros.control.prediction import PublishedOutput
 from rns_ros.nodes.cdr import (
     SerializedTemplate,
@@ -31,6 +34,7 @@ class JointOutput:
         joints: the ``joints`` parameter (order of the Float64MultiArray interfaces).
         period: the control period T [s].
         keep: outputs newer than this [s] before the newest stay in :attr:`recent`.
+        bounds: what every command published stays within (:class:`CommandBounds`).
     """
 
     def __init__(
@@ -41,9 +45,13 @@ class JointOutput:
         joints: Sequence[str],
         period: float,
         keep: float,
+        bounds: CommandBounds,
     ) -> None:
         self._keep = keep
+        self.bounds = bounds
         self.command = JointCommand(interface, joint_names, joints, period)
+        # [s] the command holds its velocities for: to a trajectory's point 1, else one period
+        self._horizon = self.command.horizon if interface == "trajectory" else period
         self.publisher = node.create_publisher(
             self.command.message_type, self.command.topic, QoSProfile(depth=1)
         )
@@ -58,11 +66,20 @@ class JointOutput:
         self.recent: deque[PublishedOutput] = deque()
 
     def publish(
-        self, positions: np.ndarray, velocities: np.ndarray, planned: int, lead: float
-    ) -> None:
+        self,
+        positions: np.ndarray,
+        velocities: np.ndarray,
+        measured: np.ndarray,
+        planned: int,
+        lead: float,
+    ) -> BoundedCommand:
         """One joint command: ``positions`` [rad], ``velocities`` [rad/s] (n,), model order,
-        planned at ``planned`` [ns] on the node clock and stamped ``lead`` [s] later (a plant
-        acting from the stamp starts it there). :attr:`recent` keeps ``planned``."""
+        bounded around the newest ``measured`` angles [rad] (n,) (a command with a NaN/Inf
+        becomes a stop), planned at ``planned`` [ns] on the node clock and stamped ``lead`` [s]
+        later (a plant acting from the stamp starts it there). :attr:`recent` keeps ``planned``
+        and the velocities published. Returns what was published."""
+        bounded = bound_joint_command(positions, velocities, measured, self.bounds, self._horizon)
+        positions, velocities = bounded.positions, bounded.velocities
         stamp_ns = planned + round(lead * 1e9)
         seconds = planned * 1e-9
         self.recent.append(PublishedOutput(seconds, velocities))
@@ -76,6 +93,7 @@ class JointOutput:
                 "end_positions": hold_end_positions(positions, velocities, self.command.horizon),
             }
             self.publisher.publish(self._template.serialize(values, (sec, nanosec)))
-            return
+            return bounded
         stamp = TimeMsg(sec=sec, nanosec=nanosec)
         self.publisher.publish(self.command.message(stamp, positions, velocities))
+        return bounded

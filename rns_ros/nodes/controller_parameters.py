@@ -4,8 +4,10 @@ they configure."""
 from __future__ import annotations
 
 from rns_ros.control.camera_law import ControlGains, Method
+from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
 from rns_ros.control.controller import ControllerSettings, HoldCorrection, TwistFrame
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
+from rns_ros.control.watchdog import DEFAULT_MAX_CLOCK_JUMP
 from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
@@ -230,6 +232,22 @@ PARAMETERS = (
         read_only=False,
     ),
     CLOCK_TIMEOUT,
+    ParameterSpec(
+        "max_clock_jump",
+        DEFAULT_MAX_CLOCK_JUMP,
+        "use_sim_time: a /clock reading this far forward, or any back, stops the arm (CLOCK_FAULT)",
+        "[s]",
+        1e-3,
+        3600.0,
+    ),
+    ParameterSpec(
+        "max_reference_error",
+        DEFAULT_MAX_REFERENCE_ERROR,
+        "Commanded positions stay within this of the measured angles (and within the URDF limits)",
+        "[rad]",
+        0.01,
+        10.0,
+    ),
     OUTPUT_INTERFACE,
     JOINTS,
     WORLD_FRAME,

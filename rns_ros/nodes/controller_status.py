@@ -36,6 +36,7 @@ STATE_LEVELS = {
     ControllerState.INVALID_COMMAND: DiagnosticStatus.ERROR,
     ControllerState.STALE_STATE: DiagnosticStatus.ERROR,
     ControllerState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
+    ControllerState.CLOCK_FAULT: DiagnosticStatus.ERROR,
 }
 
 

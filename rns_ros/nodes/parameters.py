@@ -151,6 +151,32 @@ CAMERA_FRAME = ParameterSpec(
 )
 
 
+#: rclpy's own parameter that puts a node on /clock (declared by rclpy, not read-only).
+USE_SIM_TIME = "use_sim_time"
+
+
+def sim_time_change_refused(node: Node, parameters: Iterable) -> str | None:
+    """Why ``parameters`` (the list an on-set-parameters callback gets) cannot be set on the
+    running ``node``: one of them changes ``use_sim_time``; None when none does.
+
+    rclpy declares use_sim_time itself and switches the node's clock when it is set, but an
+    rns_ros node reads it once at start-up (its input watchdogs, ticks and stamps), so a switch
+    would leave it on neither clock. Call it first in the node's on-set callback and refuse
+    with the reason (``SetParametersResult(successful=False, reason=...)``). The callback must
+    be added after ``Node.__init__``: rclpy's TimeSource applies use_sim_time in an on-set
+    callback of its own, and callbacks added later run first.
+    """
+    current = node.get_parameter(USE_SIM_TIME).value
+    for parameter in parameters:
+        if parameter.name == USE_SIM_TIME and parameter.value != current:
+            return (
+                f"use_sim_time cannot change on a running node (it is {_yaml_text(current)}, "
+                f"asked {_yaml_text(parameter.value)}): restart it with "
+                f"-p use_sim_time:={_yaml_text(parameter.value)}"
+            )
+    return None
+
+
 def twist_frame_names(
     params: Mapping[str, Any], model_frames: Callable[[], tuple[str, str]] | None = None
 ) -> dict[TwistFrame, str]:

@@ -164,6 +164,7 @@ CONTROLLER_STATE_CODES = {
     "PAUSED": 11,
     "GOAL_ACTIVE": 12,
     "GOAL_REACHED": 13,
+    "CLOCK_FAULT": 14,
 }
 
 

@@ -73,6 +73,31 @@ def test_each_served_tick_ends_the_hold_of_the_one_before():
         TickInstants(0.0)
 
 
+@pytest.mark.parametrize("jump", [10**6 * 1000, -3200])  # [ms]: a stranger's /clock, a reset
+def test_a_clock_jump_between_two_ticks_ends_no_hold_on_the_clock_difference(robot, jump):
+    """The hold a tick ends is the difference of two clock readings: after a jump it says
+    nothing of how long the output was held. The controller then ends no hold (theta_ref stays
+    where the hold started, where a resync takes over) instead of theta_ref += 1e6 s theta_dot."""
+    from rns_ros.control.controller import ControllerSettings, ReactionlessController
+    from rns_ros.core.state import FreeFloatingState
+
+    state = FreeFloatingState.compute(
+        robot, robot.configuration(np.deg2rad([-90, -30, 0, -70, 180, -30, 0]))
+    )
+    controller = ReactionlessController(robot, ControllerSettings(period=PERIOD))
+    ticks = TickInstants(PERIOD, monotonic=FakeClock())
+    ticks.serve(5000 * MS)
+    step = controller.step(state, [0.2, 0.0, 0.0])
+    assert np.abs(step.joint_velocity).max() > 0.01
+    _, held = ticks.serve((5000 + jump) * MS)
+    assert not controller.end_hold(held)
+    assert np.array_equal(controller.reference_positions, step.reference_positions)
+    # within max(5 T, 0.05 s) a late tick still ends its hold
+    controller.step(state, [0.2, 0.0, 0.0])
+    assert controller.end_hold(controller.max_hold)
+    assert controller.max_hold == pytest.approx(0.05)
+
+
 def _lead_ticks(clock):
     return TickInstants(PERIOD, lead=PERIOD, monotonic=clock)
 

@@ -39,3 +39,15 @@ def test_the_defaults_make_the_thesis_settings_and_a_valid_gate():
     assert (gate.timeout, gate.deceleration, gate.acceleration) == (0.5, 1.0, 1.0)
     with pytest.raises(ConfigError, match="default_twist_frame"):
         command_gate({**DEFAULTS, "default_twist_frame": "odom"}, FRAMES)
+
+
+def test_command_bounds_default_to_what_the_simulator_accepts_and_clock_jumps_to_a_second():
+    """max_reference_error is rns_simulator's parameter of the same name: a command the
+    controller's bounds let through is one the simulator does not reject for its distance."""
+    from rns_ros.nodes.simulator_parameters import PARAMETERS as SIMULATOR
+
+    simulator = {spec.name: spec.default for spec in SIMULATOR}
+    assert DEFAULTS["max_reference_error"] == simulator["max_reference_error"]
+    assert DEFAULTS["max_clock_jump"] == 1.0
+    for name in ("max_reference_error", "max_clock_jump"):
+        assert SPECS[name].low > 0.0

@@ -116,8 +116,8 @@ PARAMETERS = (
     ParameterSpec(
         "command_timeout",
         0.5,
-        "A command older than this (by receipt time; in lockstep simulated time, and wall time "
-        "too while paused for a newer command) is dropped and the joints stop",
+        "A command older than this (receipt time; lockstep: sim time, and wall time while "
+        "paused) is dropped, joints stop",
         "[s]",
         0.01,
         60.0,

@@ -24,13 +24,17 @@ passes the same camera law (eq. 4.5, reactionless) and the same speed and joint-
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
 
 from rns_ros.control.controller import TwistFrame
 from rns_ros.core.errors import ConfigError
+
+#: An attitude error below this [rad] is rounding (log3 of a product of rotation matrices), not
+#: a gap: no correction, so an operator's zero twist leaves the joints exactly at rest.
+NEGLIGIBLE_ERROR = 1e-9
 
 
 @dataclass(frozen=True)
@@ -103,20 +107,30 @@ class CommandedAttitude:
         self.settings = settings
         self._committed: np.ndarray | None = None  # R_cmd at the held command's stamp (3, 3)
         self._held: _Held | None = None
+        self._stopped_at = -math.inf  # when the tracking last stopped [s] (input clock)
 
     @property
     def active(self) -> bool:
         """True while an attitude is tracked (after :meth:`restart`, until :meth:`stop`)."""
-        return self._committed is not None and self.settings.gain > 0.0
+        return self._committed is not None
 
-    def restart(self, camera_rotation: np.ndarray) -> None:
-        """R_cmd := the measured camera attitude ``camera_rotation`` (3, 3); no command held."""
+    def restart(self, camera_rotation: np.ndarray, now: float) -> None:
+        """R_cmd := the measured camera attitude ``camera_rotation`` (3, 3) at ``now`` [s]
+        (input clock), where the camera has stood since the tracking stopped; the held command
+        counts from its receipt or the stop, whichever came later (its stamp moved on alike)."""
         self._committed = np.array(camera_rotation, dtype=float)
-        self._held = None
+        held = self._held
+        if held is not None:
+            start = min(max(held.received, self._stopped_at), now)
+            if start > held.received:
+                shift = start - held.received
+                self._held = replace(held, stamp=held.stamp + shift, received=start)
 
-    def stop(self) -> None:
-        """Nothing tracked until the next :meth:`restart` (the arm stopped, a goal took over)."""
-        self._committed, self._held = None, None
+    def stop(self, now: float) -> None:
+        """Nothing tracked from ``now`` [s] (input clock) until the next :meth:`restart` (the
+        arm stopped, a goal took over); the newest command is kept."""
+        self._committed = None
+        self._stopped_at = now
 
     def take(
         self,
@@ -128,11 +142,9 @@ class CommandedAttitude:
     ) -> None:
         """A command: ``angular`` [rad/s] (3,) in ``frame`` axes, stamped ``stamp`` [s] (sender's
         clock), received at ``received`` [s] (input clock), with the base rotation (3, 3) at
-        receipt. The held command is committed over the stamp interval first."""
-        if self._committed is None:
-            return
+        receipt. The held command is committed over the stamp interval first (while tracked)."""
         held = self._held
-        if held is not None:
+        if held is not None and self._committed is not None:
             self._committed = self._advanced(self._committed, held, stamp - held.stamp)
         self._held = _Held(
             np.array(angular, dtype=float), frame, np.array(base_rotation), stamp, received
@@ -156,8 +168,11 @@ class CommandedAttitude:
         e = pin.log3(target @ np.asarray(camera_rotation).T)
         error = float(np.linalg.norm(e))
         if error > self.settings.max_error:
-            self.restart(camera_rotation)
+            self.stop(now)
+            self.restart(camera_rotation, now)
             return TrackingStep(np.zeros(3), error, restarted=True)
+        if error < NEGLIGIBLE_ERROR:
+            return TrackingStep(np.zeros(3), error)
         k, cap = self.settings.gain, self.settings.max_correction
         correction = k * e
         if k * error > cap:

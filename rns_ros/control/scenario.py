@@ -15,8 +15,9 @@ axes. Keys (all validated; unknown keys are rejected by name):
     segments: [[duration_s, fraction], ...]   piecewise only: constant rate in each segment,
                                         durations summing to ``duration``, fractions of the
                                         angle summing to 1 (a fraction may be 0: a pause)
-    controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain, max_angular_speed}
-                                        (controller overrides, optional)
+    controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain, max_angular_speed,
+                 tracking_gain}         (controller overrides, optional; rns_demo runs the
+                                        thesis' law, tracking_gain 0, unless set here)
 
 The peak commanded speed is known before anything runs (:meth:`Scenario.peak_angular_speed`):
 |angle| * max s_dot, i.e. 15/8 |angle| / duration for quintic, |angle| / duration for constant,
@@ -61,9 +62,10 @@ CONTROLLER_OVERRIDES = {
     "lambda2_max": float,
     "sc_gain": float,
     "max_angular_speed": float,
+    "tracking_gain": float,
 }
 #: Overrides that are controller-node settings rather than :class:`ControlGains` fields.
-_NOT_GAINS = {"method", "max_angular_speed"}
+_NOT_GAINS = {"method", "max_angular_speed", "tracking_gain"}
 
 
 class TimeScaling(Choice):

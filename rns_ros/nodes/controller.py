@@ -59,6 +59,7 @@ from rclpy.time import Time
 from sensor_msgs.msg import JointState
 
 from rns_ros.control.command_bounds import BoundedCommand, CommandBounds
+from rns_ros.control.command_tracking import CommandedAttitude
 from rns_ros.control.controller import (
     ControllerSettings,
     ControllerStep,
@@ -78,6 +79,7 @@ from rns_ros.control.teleop import (
 from rns_ros.control.ticks import AwaitedTicks, ServedTick, TickInstants, next_tick_in
 from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import ExtraJointsReport, match_joint_state
+from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes import controller_parameters
 from rns_ros.nodes.cdr import (
@@ -95,6 +97,7 @@ from rns_ros.nodes.controller_parameters import (
     SPECS,
     command_gate,
     controller_settings,
+    tracking_settings,
 )
 from rns_ros.nodes.controller_requests import OperatorRequests, goal_settings
 from rns_ros.nodes.controller_status import (
@@ -133,6 +136,9 @@ SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_
 #: cannot make the controller compute faster than this; a change within it waits for the tick.
 MIN_TICK_INTERVAL = 1e-3
 NS_PER_S = 1_000_000_000  # nanoseconds per second (message stamps)
+#: Gate states in which the camera follows the integral of the commanded rate (a fresh
+#: command); in the others nothing is tracked and the tracking restarts at the camera.
+TRACKED_STATES = (ControllerState.OK, ControllerState.RAMPING, ControllerState.SPEED_LIMITED)
 
 
 class ControllerNode(Node):
@@ -148,6 +154,9 @@ class ControllerNode(Node):
             self.robot, params["world_frame"], params["default_twist_frame"]
         )
         self._gate = command_gate(params, self._frames)
+        # the camera attitude the operator's rates add up to, and the last gap to it [rad]
+        self._tracking = CommandedAttitude(tracking_settings(params))
+        self._tracking_error = 0.0
         self._requests = OperatorRequests(
             self, params["world_frame"], goal_settings(params), self._gate.reject
         )
@@ -273,7 +282,7 @@ class ControllerNode(Node):
             return
         self._reporter.count(TWISTS_RECEIVED)
         if self._awaited is None:
-            self._take_twist(fields.angular, fields.linear, fields.frame_id)
+            self._take_twist(fields.angular, fields.linear, fields.frame_id, fields.stamp)
             return
         sec, nanosec = fields.stamp
         moving = any(value != 0.0 for value in (*fields.angular, *fields.linear))
@@ -306,8 +315,12 @@ class ControllerNode(Node):
         a, v = msg.angular, msg.linear
         self._take_twist([a.x, a.y, a.z], [v.x, v.y, v.z], "")
 
-    def _take_twist(self, angular, linear, frame_id: str) -> None:
-        """An operator twist: ``angular`` [rad/s] and ``linear`` [m/s] (3,) in ``frame_id``."""
+    def _take_twist(
+        self, angular, linear, frame_id: str, stamp: tuple[int, int] | None = None
+    ) -> None:
+        """An operator twist: ``angular`` [rad/s] and ``linear`` [m/s] (3,) in ``frame_id``,
+        stamped ``stamp`` (sec, nanosec) on the sender's clock (None or zero: unstamped, its
+        receipt time counts)."""
         try:
             command = validate_twist(
                 angular,
@@ -330,6 +343,14 @@ class ControllerNode(Node):
             )
         self._gate.accept(command)
         self._requests.twist_taken(command)
+        seconds = None if stamp is None else stamp[0] + 1e-9 * stamp[1]
+        self._tracking.take(
+            command.angular,
+            command.frame,
+            seconds or command.received,
+            command.received,
+            rotation_from_quaternion(self._base_orientation),
+        )
         if self._immediate and self._changes_output(command):
             now = time.monotonic()
             if now - self._instants.last_wall >= MIN_TICK_INTERVAL:
@@ -449,7 +470,7 @@ class ControllerNode(Node):
         """await_commands: the ticks whose twist in force is known, each after its twists."""
         for tick in ticks:
             for fields in tick.commands:
-                self._take_twist(fields.angular, fields.linear, fields.frame_id)
+                self._take_twist(fields.angular, fields.linear, fields.frame_id, fields.stamp)
             self._serve_tick(tick.instant)
 
     def _serve_tick(self, tick: int) -> None:
@@ -487,6 +508,7 @@ class ControllerNode(Node):
             self.controller.resync(state)
         self._served = (gate.angular, gate.frame)
         omega = angular_velocity_in_world(state, gate.angular, gate.frame)
+        omega = omega + self._tracking_correction(state, gate, goal is not None, now)
         step = self.controller.step(state, omega, hold)
         self._stopped = gate.stopped
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
@@ -507,6 +529,7 @@ class ControllerNode(Node):
             detail,
             lambda: {
                 **step_values(self.controller.settings.method.value, step, gate),
+                "tracking_error": self._tracking_error,
                 **self._requests.values(),
             },
         )
@@ -525,10 +548,38 @@ class ControllerNode(Node):
             )
             self._jump = None
             self._gate.stop()
+            self._tracking.stop(self._input_clock.now())
             self._stopped = True
             # a new pose (reset, re-homed arm): the wrist is held where it is now, eq. (4.6)
             self.controller.reset(state)
         return state
+
+    def _tracking_correction(
+        self, state: FreeFloatingState, gate: GateOutput, goal: bool, now: float
+    ) -> np.ndarray:
+        """omega_corr [rad/s] (3,), world axes, toward the camera attitude the operator's rates
+        add up to (:class:`CommandedAttitude`) at the instant the output acts (``now`` [s] on
+        the input clock plus output_lead); zero and not tracked while the gate does not follow
+        a fresh command or a camera goal drives the camera. The tracking restarts at the
+        measured camera when the gate follows again."""
+        if goal or gate.state not in TRACKED_STATES:
+            self._tracking.stop(now)
+            self._tracking_error = 0.0
+            return np.zeros(3)
+        at = now + self._lead
+        if not self._tracking.active:
+            self._tracking.restart(state.camera.rotation, at)
+        tracked = self._tracking.step(state.camera.rotation, at)
+        self._tracking_error = tracked.error
+        if tracked.restarted:
+            self.get_logger().warn(
+                f"the camera is {np.degrees(tracked.error):.3g} deg from the attitude the "
+                f"commands add up to (tracking_max_error "
+                f"{np.degrees(self._params['tracking_max_error']):.3g} deg: a joint limit or a "
+                "singular region): the commanded attitude restarts at the camera",
+                throttle_duration_sec=1.0,
+            )
+        return tracked.correction
 
     def _note_state_gap(self, now: float) -> None:
         """Log (throttled) a joint state older than a few periods at a tick ``now`` [s]: a gap
@@ -620,6 +671,7 @@ class ControllerNode(Node):
             self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
         self._limit_stop.end()
         self._gate.stop()
+        self._tracking.stop(self._input_clock.now())
         self._stopped = True
         self._served = None
         if publish:
@@ -733,6 +785,7 @@ class ControllerNode(Node):
         self._gate.timeout, self._gate.deceleration = gate.timeout, gate.deceleration
         self._gate.acceleration = gate.acceleration
         self._requests.goal.settings = goal_settings(self._params)
+        self._tracking.settings = tracking_settings(self._params)
         self._input_clock.set_clock_timeout(self._params["clock_timeout"])
 
     def _configured(self, parameters) -> tuple[dict, ControllerSettings, CommandGate]:
@@ -749,6 +802,7 @@ class ControllerNode(Node):
             if parameter.name in SPECS:
                 SPECS[parameter.name].check(parameter.value)
         goal_settings(updated)  # raises on an invalid goal setting
+        tracking_settings(updated)
         return updated, controller_settings(updated), command_gate(updated, self._frames)
 
     def destroy_node(self) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from rns_ros.control.camera_law import ControlGains, Method
 from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
+from rns_ros.control.command_tracking import TrackingSettings
 from rns_ros.control.controller import ControllerSettings, HoldCorrection, TwistFrame
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
 from rns_ros.control.watchdog import DEFAULT_MAX_CLOCK_JUMP
@@ -231,6 +232,35 @@ PARAMETERS = (
         0.5,
         read_only=False,
     ),
+    ParameterSpec(
+        "tracking_gain",
+        TrackingSettings.gain,
+        "The camera follows the integral of the commanded rate over the command stamps: "
+        "correction k e toward it; 0: off",
+        "[1/s]",
+        0.0,
+        20.0,
+        read_only=False,
+    ),
+    ParameterSpec(
+        "tracking_max_correction",
+        TrackingSettings.max_correction,
+        "Largest correction rate toward the commanded camera attitude",
+        "[rad/s]",
+        1e-4,
+        1.0,
+        read_only=False,
+    ),
+    ParameterSpec(
+        "tracking_max_error",
+        TrackingSettings.max_error,
+        "A larger gap to the commanded attitude (joint limit, singular region) restarts it at "
+        "the camera",
+        "[rad]",
+        1e-3,
+        3.14,
+        read_only=False,
+    ),
     CLOCK_TIMEOUT,
     ParameterSpec(
         "max_clock_jump",
@@ -289,6 +319,21 @@ def command_gate(params: dict, frames: dict[str, TwistFrame]) -> CommandGate:
     )
 
 
+def tracking_settings(params: dict) -> TrackingSettings:
+    """The commanded-attitude tracking from the parameter values ``params``; a command counts
+    for at most ``command_timeout``.
+
+    Raises:
+        ConfigError: a value the settings reject.
+    """
+    return TrackingSettings(
+        gain=params["tracking_gain"],
+        max_correction=params["tracking_max_correction"],
+        max_error=params["tracking_max_error"],
+        max_interval=params["command_timeout"],
+    )
+
+
 __all__ = [
     "NODE_NAME",
     "PARAMETERS",
@@ -296,4 +341,5 @@ __all__ = [
     "SUMMARY",
     "command_gate",
     "controller_settings",
+    "tracking_settings",
 ]

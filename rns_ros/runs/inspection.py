@@ -255,6 +255,8 @@ def _controller_parameters(
     parameters = {
         "method": method.removesuffix(WHEELS_SUFFIX),
         "rate": args.rate,
+        # the thesis' law, open in the rate: the figures are the law's, not a feedback's
+        "tracking_gain": 0.0,
         **({"use_sim_time": True} if sim_time else {}),
     }
     if sim_time and args.output_lead:

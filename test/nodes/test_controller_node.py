@@ -1093,3 +1093,58 @@ def test_a_second_commander_of_the_joints_is_reported_by_the_controller_and_the_
         "/other_commander",
     }
     del other
+
+
+class StampedStream:
+    """A 50 Hz operator on the probe node: ``angular`` [rad/s] (3,) in world axes for
+    ``seconds`` of its stamps, then zero; the stamps of its first moving and first zero twist."""
+
+    def __init__(self, probe, angular, seconds, rate=50.0):
+        self.publisher = probe.create_publisher(TwistStamped, "cmd_twist", COMMAND_QOS)
+        self.probe, self.angular, self.seconds = probe, angular, seconds
+        self.first: float | None = None  # stamp of the first moving twist [s]
+        self.stopped: float | None = None  # stamp of the first zero twist [s]
+        probe.create_timer(1.0 / rate, self._tick)
+
+    def _tick(self):
+        msg = TwistStamped()
+        msg.header.frame_id = "world"
+        msg.header.stamp = self.probe.get_clock().now().to_msg()
+        stamp = _seconds(msg.header.stamp)
+        if self.first is None:
+            self.first = stamp
+        if stamp - self.first < self.seconds:
+            msg.twist.angular.x, msg.twist.angular.y, msg.twist.angular.z = self.angular
+        elif self.stopped is None:
+            self.stopped = stamp
+        self.publisher.publish(msg)
+
+
+def test_the_camera_ends_where_the_commanded_rate_adds_up_over_the_stamps(ros, stack):
+    """The operator streams 0.1 rad/s about an oblique world axis for 1.5 s of its stamps, then
+    zeros. The command gate ramps up from rest (start_acceleration: 0.005 rad short) and the
+    simulation runs on its own clock; the camera still ends at exp(omega (t_stop - t_first))
+    R_c0, the integral over the stamps sent (tracking_gain), within 1e-3 rad, and the base does
+    not turn."""
+    axis = np.array([1.0, -2.0, 1.5]) / np.linalg.norm([1.0, -2.0, 1.5])
+    assert ros.spin_until(lambda: _latest_state(stack.streams) == "IDLE", timeout=10.0)
+    _, camera_0 = simulated_camera(stack.simulator)
+    stream = StampedStream(stack.probe, tuple(0.1 * axis), seconds=1.5)
+
+    def settled():
+        messages = stack.streams["status"].messages
+        if stream.stopped is None or not messages:
+            return False
+        values = status_values(messages[-1])
+        return values["state"] == "OK" and float(values["tracking_error"]) < 1e-5
+
+    assert ros.spin_until(settled, timeout=30.0)
+    ros.spin_for(0.2)
+    _, camera_1 = simulated_camera(stack.simulator)
+    commanded = pin.exp3(0.1 * axis * (stream.stopped - stream.first)) @ camera_0
+    error = float(np.linalg.norm(pin.log3(commanded @ camera_1.T)))
+    print(f"camera {error:.2e} rad from the commanded turn ({stream.stopped - stream.first} s)")
+    assert error < 1e-3
+    odom = stack.streams["odom"].messages
+    deviation = max(attitude_deviation(_odom_rotation(odom[0]), _odom_rotation(m)) for m in odom)
+    assert math.degrees(deviation) < 1e-3

@@ -42,6 +42,7 @@ class ControllerState(StrEnum):
     SINGULAR_REGION = "SINGULAR_REGION"  # [WARN] sigma_min(J-bar) < epsilon
     JOINT_LIMIT = "JOINT_LIMIT"  # [WARN] a joint position limit slows or stops the motion
     INVALID_COMMAND = "INVALID_COMMAND"  # [ERROR] the newest command was rejected
+    STATE_GAP = "STATE_GAP"  # [WARN] joint_states / base_odom late: held still until fresh
     STALE_STATE = "STALE_STATE"  # [ERROR] joint_states / base_odom too old: zero velocity
     CONFLICTING_STATE = "CONFLICTING_STATE"  # [ERROR] several joint_states sources: zero
     CLOCK_FAULT = "CLOCK_FAULT"  # [ERROR] /clock went back, jumped or has two sources: zero

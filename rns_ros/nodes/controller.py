@@ -122,10 +122,6 @@ from rns_ros.nodes.runner import publish_last, run_node
 RESYNC_TOLERANCE = 0.2
 #: joint_states older than this [s] are used as they are, not extrapolated.
 MAX_PREDICTION_AGE = 0.1
-#: A joint state older than this many control periods (and than STATE_GAP_FLOOR [s]) at a tick
-#: is a gap in the state stream, ridden through up to state_timeout and logged (throttled).
-STATE_GAP_PERIODS = 3
-STATE_GAP_FLOOR = 0.05
 #: Inputs: only the newest message matters; best effort also matches reliable publishers.
 INPUT_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: cmd_twist under await_commands: best effort (matches the operators' best-effort publishers),
@@ -398,22 +394,29 @@ class ControllerNode(Node):
     def _discontinuity(self, theta: np.ndarray, stamp: int) -> str | None:
         """Why ``theta`` (stamped ``stamp`` [ns]) cannot follow from the previous sample, or None.
 
-        The previous sample moved on by the stamp difference (clipped to [0, MAX_PREDICTION_AGE])
-        at its rates predicts this one within far less than ``state_jump_tolerance`` while the arm
-        moves smoothly; a reset, a re-homed robot or a second source does not.
+        Between two samples each joint moved from the previous angle toward where its previous
+        rate takes it over the stamp difference (clipped to [0, MAX_PREDICTION_AGE]) or toward
+        the reference this controller commanded meanwhile (through a gap in the stream it
+        drives the arm on, then holds it), or stayed: a sample within ``state_jump_tolerance``
+        of the range those span follows; a reset, a re-homed robot or a second source does not.
         """
         dt = (stamp - self._theta_stamp) * 1e-9
-        predicted = self._theta
+        low = high = self._theta
         if self._theta_rate is not None:
-            predicted = predicted + min(max(dt, 0.0), MAX_PREDICTION_AGE) * self._theta_rate
-        error = np.abs(theta - predicted)
+            moved = self._theta + min(max(dt, 0.0), MAX_PREDICTION_AGE) * self._theta_rate
+            low, high = np.minimum(low, moved), np.maximum(high, moved)
+        reference = self.controller.reference_positions
+        if reference is not None:
+            low, high = np.minimum(low, reference), np.maximum(high, reference)
+        error = np.maximum(low - theta, theta - high)
         joint = int(np.argmax(error))
         if error[joint] <= self._params["state_jump_tolerance"]:
             return None
         return (
             f"joint_states jumped: {self.robot.joint_names[joint]} {theta[joint]:.4g} rad where "
-            f"{predicted[joint]:.4g} rad was predicted (state_jump_tolerance "
-            f"{self._params['state_jump_tolerance']} rad)"
+            f"[{low[joint]:.4g}, {high[joint]:.4g}] rad was reachable from the previous sample "
+            "and the reference "
+            f"(state_jump_tolerance {self._params['state_jump_tolerance']} rad)"
         )
 
     def _on_odom(self, data: bytes) -> None:
@@ -493,7 +496,10 @@ class ControllerNode(Node):
         if self._requests.paused:
             self._hold_still(ControllerState.PAUSED, "~/pause: resume with false", at=tick)
             return
-        self._note_state_gap(now)
+        gap = self._state_gap(now)
+        if gap is not None:
+            self._hold_still(ControllerState.STATE_GAP, gap, at=tick)
+            return
         theta, hold = self._plan(tick)
         state = self._sampled_state(theta)
         goal = self._requests.goal_command(state.camera.rotation, now)
@@ -581,17 +587,22 @@ class ControllerNode(Node):
             )
         return tracked.correction
 
-    def _note_state_gap(self, now: float) -> None:
-        """Log (throttled) a joint state older than a few periods at a tick ``now`` [s]: a gap
-        in the state stream shorter than state_timeout, served on the newest state (moved on by
-        the outputs since, up to MAX_PREDICTION_AGE) instead of stopping the arm."""
-        age = now - self._state_received
-        if age > max(STATE_GAP_PERIODS * self._period, STATE_GAP_FLOOR):
-            self.get_logger().warn(
-                f"joint_states {age:.3f} s old: ridden through on the newest state (the arm "
-                f"stops at state_timeout {self._params['state_timeout']} s)",
-                throttle_duration_sec=5.0,
-            )
+    def _state_gap(self, now: float) -> str | None:
+        """Why the arm is held at a tick ``now`` [s] (input clock): joint_states or base_odom
+        older than ``state_hold_age``, beyond what the prediction can bridge (a law evaluated
+        on an old configuration turns the base); None when both are fresh. The operator's
+        commanded attitude runs on meanwhile, and the arm catches up once the state is fresh."""
+        ages = {"joint_states": now - self._state_received}
+        if self._odom_received is not None:
+            ages["base_odom"] = now - self._odom_received
+        topic, age = max(ages.items(), key=lambda item: item[1])
+        limit = self._params["state_hold_age"]
+        if age <= limit:
+            return None
+        return (
+            f"{topic} {age:.3f} s old (state_hold_age {limit} s): held until fresh "
+            f"(STALE_STATE at state_timeout {self._params['state_timeout']} s)"
+        )
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. While the arm
@@ -667,11 +678,16 @@ class ControllerNode(Node):
         angles and ramps the command up. ``at``: the tick's instant [ns] (its output is stamped
         ``output_lead`` later, as a tick's is); None: now. ``publish`` False: the stop was
         published already."""
-        if self._reporter.last_state is not state and state is not ControllerState.PAUSED:
+        if state is ControllerState.STATE_GAP:
+            self.get_logger().warn(f"{state.value}: {detail}", throttle_duration_sec=5.0)
+        elif self._reporter.last_state is not state and state is not ControllerState.PAUSED:
             self.get_logger().error(f"{state.value}: {detail}; joints commanded to rest")
         self._limit_stop.end()
         self._gate.stop()
-        self._tracking.stop(self._input_clock.now())
+        if state not in (ControllerState.STATE_GAP, ControllerState.STALE_STATE):
+            # a gap in the state stream holds the arm but not the operator: the commanded
+            # attitude runs on and the arm catches up when the state is fresh again
+            self._tracking.stop(self._input_clock.now())
         self._stopped = True
         self._served = None
         if publish:

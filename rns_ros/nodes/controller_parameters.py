@@ -8,11 +8,11 @@ from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
 from rns_ros.control.command_tracking import TrackingSettings
 from rns_ros.control.controller import ControllerSettings, HoldCorrection, TwistFrame
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
-from rns_ros.control.watchdog import DEFAULT_MAX_CLOCK_JUMP
 from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
     JOINTS,
+    MAX_CLOCK_JUMP,
     MODEL_CONFIG,
     OUTPUT_INTERFACE,
     WORLD_FRAME,
@@ -131,10 +131,19 @@ PARAMETERS = (
         read_only=False,
     ),
     ParameterSpec(
+        "state_hold_age",
+        0.1,
+        "joint_states or base_odom older than this hold the arm (STATE_GAP, zero velocity) "
+        "until fresh",
+        "[s]",
+        0.005,
+        10.0,
+        read_only=False,
+    ),
+    ParameterSpec(
         "state_timeout",
         0.25,
-        "joint_states or base_odom older than this stop the arm (STALE_STATE); shorter gaps "
-        "are ridden through",
+        "joint_states or base_odom older than this: STALE_STATE (error), the arm held",
         "[s]",
         0.005,
         10.0,
@@ -262,14 +271,7 @@ PARAMETERS = (
         read_only=False,
     ),
     CLOCK_TIMEOUT,
-    ParameterSpec(
-        "max_clock_jump",
-        DEFAULT_MAX_CLOCK_JUMP,
-        "use_sim_time: a /clock reading this far forward, or any back, stops the arm (CLOCK_FAULT)",
-        "[s]",
-        1e-3,
-        3600.0,
-    ),
+    MAX_CLOCK_JUMP,
     ParameterSpec(
         "max_reference_error",
         DEFAULT_MAX_REFERENCE_ERROR,

@@ -19,6 +19,7 @@ contiguous) raises :class:`TemplateError`, and the caller publishes messages the
 
 from __future__ import annotations
 
+import math
 import struct
 from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
@@ -326,9 +327,13 @@ class JointStateReader(_NamedStreamReader):
 
 class TrajectoryFields(NamedTuple):
     """The fields of a trajectory_msgs/JointTrajectory that the simulator reads: ``stamp``
-    (sec, nanosec), ``names``, ``points`` (how many), and the first point's
-    ``positions``, ``velocities``, ``accelerations`` (read-only float64, each (0,) or
-    (len(names),); all (0,) without points)."""
+    (sec, nanosec), ``names``, ``points`` (how many), the first point's ``positions``,
+    ``velocities``, ``accelerations`` (read-only float64, each (0,) or (len(names),); all (0,)
+    without points), and ``velocity_end`` [s]: the time after the stamp at which the first
+    point's velocity ends, the time_from_start of the first later point whose velocities are
+    empty or all zero (the streamed shape of :func:`rns_ros.nodes.robot_io.streamed_trajectory`:
+    point 1 at two periods, where joint_trajectory_controller has the arm at rest);
+    ``math.inf`` when no later point is (a one-point trajectory)."""
 
     stamp: tuple[int, int]
     names: tuple[str, ...]
@@ -336,17 +341,70 @@ class TrajectoryFields(NamedTuple):
     positions: np.ndarray
     velocities: np.ndarray
     accelerations: np.ndarray
+    velocity_end: float
 
 
 class JointTrajectoryReader(_NamedStreamReader):
     """:class:`TrajectoryFields` of serialized trajectory_msgs/JointTrajectory messages of one
     stream."""
 
+    def __call__(self, data: bytes) -> TrajectoryFields:
+        """The fields of ``data``: read from the bytes, or by rclpy when they are not plain
+        little-endian CDR.
+
+        Raises:
+            MalformedMessageError: plain little-endian CDR the parser declines (cut or corrupt:
+                rclpy would fill the points it cannot read with defaults, and a cut streamed
+                trajectory would lose its point at rest), or bytes rclpy cannot read.
+        """
+        fields = self.parse(data)
+        if fields is not None:
+            return fields
+        if _cursor(data) is not None:
+            raise MalformedMessageError(
+                f"{len(data)} bytes that are not a JointTrajectory (cut or corrupt CDR)"
+            )
+        return self._from_message(data)
+
     def _rest(self, cursor, stamp, names) -> TrajectoryFields:
         points = cursor.u32()
-        first = (cursor.doubles(), cursor.doubles(), cursor.doubles()) if points else ()
         empty = np.empty(0)
-        return TrajectoryFields(stamp, names, points, *(first or (empty,) * 3))
+        first, velocity_end = (empty,) * 3, math.inf
+        if points:
+            first = (cursor.doubles(), cursor.doubles(), cursor.doubles())
+            cursor.doubles()  # effort
+            cursor.stamp()  # time_from_start (a Duration: the layout of a Time)
+        # every later point is walked, so a message cut anywhere is declined (rclpy rejects it)
+        for _ in range(1, points):
+            at_rest, (sec, nanosec) = self._later_point(cursor)
+            if at_rest and velocity_end == math.inf:
+                velocity_end = sec + 1e-9 * nanosec
+        return TrajectoryFields(stamp, names, points, *first, velocity_end)
+
+    @staticmethod
+    def _later_point(cursor: _Cursor) -> tuple[bool, tuple[int, int]]:
+        """Past a trajectory_msgs/JointTrajectoryPoint (positions, velocities, accelerations,
+        effort: float64 sequences; time_from_start: int32 sec, uint32 nanosec) at ``cursor``:
+        (its velocities are empty or all zero, time_from_start (sec, nanosec)); the arrays are
+        not read. Walked inline: a cursor call per field doubled the reader's time."""
+        data, offset, size = cursor.data, cursor.offset, len(cursor.data)
+        at_rest = True
+        for field in range(4):
+            offset += -(offset - 4) % 4
+            (count,) = _U32.unpack_from(data, offset)
+            offset += 4
+            if count:
+                offset += -(offset - 4) % 8
+                start, offset = offset, offset + 8 * count
+                if offset > size:
+                    raise ValueError("array beyond the message")
+                if field == 1 and data[start:offset].strip(b"\x00"):  # not all +0.0
+                    values = np.frombuffer(data, dtype="<f8", count=count, offset=start)
+                    at_rest = not values.any()  # -0.0 is zero too
+        offset += -(offset - 4) % 4
+        time_from_start = _STAMP.unpack_from(data, offset)
+        cursor.offset = offset + 8
+        return at_rest, time_from_start
 
     def _from_message(self, data: bytes) -> TrajectoryFields:
         return trajectory_fields(deserialize_or_reject(data, JointTrajectory))
@@ -456,6 +514,12 @@ def trajectory_fields(message: JointTrajectory) -> TrajectoryFields:
     """The :class:`TrajectoryFields` of a deserialized message."""
     stamp = message.header.stamp
     first = message.points[0] if message.points else JointTrajectoryPoint()
+    at_rest = (
+        point.time_from_start
+        for point in message.points[1:]
+        if not np.any(np.asarray(point.velocities, dtype=float))
+    )
+    end = next(at_rest, None)
     return TrajectoryFields(
         (stamp.sec, stamp.nanosec),
         tuple(message.joint_names),
@@ -464,6 +528,7 @@ def trajectory_fields(message: JointTrajectory) -> TrajectoryFields:
             np.asarray(values, dtype=float)
             for values in (first.positions, first.velocities, first.accelerations)
         ),
+        math.inf if end is None else end.sec + 1e-9 * end.nanosec,
     )
 
 

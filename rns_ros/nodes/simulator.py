@@ -216,6 +216,7 @@ class SimulatorNode(Node):
                 self._reset()
             self._commands.expire_stale()
             self._commands.start_pending()
+            self._commands.stop_at_trajectory_end()
             try:
                 self.simulator.step()
             except SimulationDivergedError as exc:

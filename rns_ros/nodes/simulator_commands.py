@@ -1,5 +1,6 @@
 """Command intake of rns_simulator's free-floating modes: joint_references / joint_velocities
-and wheel_torque checked and handed to the simulator, the reset hold, stale commands."""
+and wheel_torque checked and handed to the simulator, the reset hold, trajectories that end at
+rest, stale commands."""
 
 from __future__ import annotations
 
@@ -43,6 +44,13 @@ MAX_GRID_AGE = 1.0
 #: After ~/reset, a JointTrajectory starting this close to the reset angles [rad] ends the
 #: reset hold (a resynchronized controller); the hold otherwise lasts ``reset_hold``.
 RESET_MATCH_TOLERANCE = 0.01
+#: A trajectory's velocity ends at the first step that starts no more than this many steps
+#: before its end, and a step that starts no more than that after it takes back no motion
+#: (simulated times are sums of steps: 20 steps of 1 ms may fall just short of 0.02 s).
+END_TOLERANCE_STEPS = 1e-3
+#: Wall time [s] between two logs of trajectories that ended at rest with no newer one (each
+#: stop is logged at most once; a late controller can cause one every period).
+ENDED_LOG_PERIOD = 5.0
 
 
 @dataclass
@@ -93,10 +101,16 @@ class CommandIntake:
         self._reset_hold = params["reset_hold"]
         self.command_timeout = params["command_timeout"]
         # JointTrajectories stamped ahead (sim time), in stamp order: (stamp [s], positions,
-        # velocities, accelerations), each the reference from the first step at its stamp. A
-        # controller ticking side by side can send the next before the simulation reached the
-        # stamp of the previous one: both wait.
+        # velocities, accelerations, velocity_end [s]), each the reference from the first step
+        # at its stamp. A controller ticking side by side can send the next before the
+        # simulation reached the stamp of the previous one: both wait.
         self._pending: list[tuple] = []
+        # the reference's velocity ends (the joints stop) at this simulated time [s], its
+        # trajectory's velocity_end [s] after the instant it started; inf: held until the next
+        # command or command_timeout
+        self._motion_end = math.inf
+        self._velocity_end = math.inf
+        self.ended_at_rest = 0  # trajectories that ended at rest with no newer command
         self._stale_logged = False
         self._hold_until = -math.inf  # simulated time [s] before which commands are ignored
         self.hold_logged = False
@@ -188,7 +202,13 @@ class CommandIntake:
         if self._ignoring_commands(command.positions):
             return
         stamp = msg.stamp[0] + 1e-9 * msg.stamp[1]
-        self._accept(command.positions, command.velocities, command.accelerations, stamp)
+        self._accept(
+            command.positions,
+            command.velocities,
+            command.accelerations,
+            stamp,
+            msg.velocity_end,
+        )
 
     def _on_velocities(self, msg: Float64MultiArray) -> None:
         if self._ignoring_commands():
@@ -269,20 +289,32 @@ class CommandIntake:
                 return True
         return False
 
-    def _accept(self, positions, velocities, accelerations, stamp: float | None = None) -> None:
+    def _accept(
+        self,
+        positions,
+        velocities,
+        accelerations,
+        stamp: float | None = None,
+        velocity_end: float = math.inf,
+    ) -> None:
+        """Hand a checked command to the simulator: positions [rad], velocities [rad/s],
+        accelerations [rad/s^2] (each (n,) or None), header ``stamp`` [s] (None: none) and the
+        time [s] after it at which its velocity ends (a trajectory at rest there,
+        :class:`rns_ros.nodes.cdr.TrajectoryFields`; inf: held)."""
         with self._lock:
             if self._blocked():
                 return  # changed since the check: the command is stale now
             if self._ahead(stamp):
                 # a newer command replaces those waiting for its stamp or a later one
                 waiting = [command for command in self._pending if command[0] < stamp]
-                waiting.append((stamp, positions, velocities, accelerations))
+                waiting.append((stamp, positions, velocities, accelerations, velocity_end))
                 self._pending = waiting[-MAX_PENDING:]
             else:
                 self._pending = []  # a newer command replaces those still waiting
-                self.simulator.set_reference(
-                    positions, velocities, accelerations, since=self._lateness(stamp)
-                )
+                since = self._lateness(stamp)
+                self.simulator.set_reference(positions, velocities, accelerations, since=since)
+                # a late one started at its stamp: its end counts from there too
+                self._started(self.simulator.time - since, velocity_end)
             self._pacer.command_received(self.command_anchor(stamp))
             self._stale_logged = False
             self._pacer.paused_since = None
@@ -362,6 +394,7 @@ class CommandIntake:
     def reset(self) -> None:
         """The simulation was reset: no command, the reset hold starts."""
         self._pending = []
+        self._motion_end = math.inf
         self._hold_until = self.simulator.time + self._reset_hold
         self._last_wheel_command = None
 
@@ -372,8 +405,43 @@ class CommandIntake:
         due = [command for command in self._pending if command[0] <= starts]
         if due:
             self._pending = self._pending[len(due) :]
-            _, positions, velocities, accelerations = due[-1]
+            _, positions, velocities, accelerations, velocity_end = due[-1]
             self.simulator.set_reference(positions, velocities, accelerations)
+            self._started(self.simulator.time, velocity_end)
+
+    def _started(self, start: float, velocity_end: float) -> None:
+        """The reference just set acts from simulated time ``start`` [s]; its velocity ends
+        ``velocity_end`` [s] later (clipped at 0; inf: held)."""
+        self._velocity_end = velocity_end
+        self._motion_end = start + max(velocity_end, 0.0)
+
+    def stop_at_trajectory_end(self) -> None:
+        """Stop the joints once the simulation reaches the end of the reference's velocity (a
+        streamed trajectory's point at rest, 2T after its stamp) with no newer command, as a
+        joint_trajectory_controller plays that trajectory: zero velocity, the reference
+        positions left where the motion took them. A step that starts after the end (a
+        command that came later than its end, caught up) takes back the motion past it
+        (kinematic mode: the same catch-up as a late command). Logged (throttled), naming the
+        time after the stamp. Called before each step, after :meth:`start_pending`. Caller
+        holds the lock."""
+        now, tolerance = self.simulator.time, END_TOLERANCE_STEPS * self.simulator.dt
+        if now < self._motion_end - tolerance:
+            return
+        overdue = now - self._motion_end
+        overdue = overdue if overdue > tolerance else 0.0  # rounding is no motion to take back
+        self._motion_end = math.inf
+        reference = self.simulator.reference
+        if not reference.velocities.any():
+            return  # at rest already
+        self.simulator.set_reference(
+            reference.positions - overdue * reference.velocities, since=overdue
+        )
+        self.ended_at_rest += 1
+        self._logger.warn(
+            f"joint_references ended at rest {self._velocity_end:.3f} s after its stamp with no "
+            f"newer one: joints stopped (the controller is late; {self.ended_at_rest} so far)",
+            throttle_duration_sec=ENDED_LOG_PERIOD,
+        )
 
     def expire_stale(self) -> None:
         """Commands older than ``command_timeout``: wheel motors off, joints stopped (logged
@@ -409,6 +477,7 @@ class CommandIntake:
         ages = self._stale_ages(pacer.last_command, pacer.command_sim_time, waiting)
         if ages is not None:
             self.simulator.set_reference(velocities=np.zeros(self.robot.n))
+            self._motion_end = math.inf
             pacer.last_command = None
             if not self._stale_logged:
                 self._logger.warn(f"joint command {self._ages_text(*ages)}: stopping the joints")

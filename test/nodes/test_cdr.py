@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+import struct
+
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
@@ -18,6 +21,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from rns_ros.nodes.cdr import (
     JointStateReader,
     JointTrajectoryReader,
+    MalformedMessageError,
     SerializedTemplate,
     TemplateError,
     clock_template,
@@ -34,7 +38,11 @@ from rns_ros.nodes.cdr import (
     twist_stamped_template,
     wrench_template,
 )
-from rns_ros.nodes.robot_io import TRAJECTORY_DELIVERY_MARGIN, streamed_trajectory
+from rns_ros.nodes.robot_io import (
+    TRAJECTORY_DELIVERY_MARGIN,
+    duration_msg,
+    streamed_trajectory,
+)
 
 # names and frame ids of any length (the padding after them varies) and any character a ROS
 # string can hold (not NUL: rclpy cuts a string there)
@@ -189,28 +197,171 @@ def test_joint_state_reader_reuses_a_repeated_name_list_and_sees_a_new_one():
     assert longer.names == ("a", "c", "d")
 
 
-@settings(max_examples=60, deadline=None)
-@given(names=NAMES, stamp=STAMPS, points=st.integers(0, 3), data=st.data())
+#: A point's velocities: random, none, all zero, all -0.0 (zero too).
+VELOCITY_KINDS = st.sampled_from(["random", "empty", "zero", "negative_zero"])
+
+
+def _point_velocities(draw, kind: str, size: int) -> list[float]:
+    if kind == "random":
+        return _values(draw, size).tolist()
+    return {"empty": [], "zero": [0.0] * size, "negative_zero": [-0.0] * size}[kind]
+
+
+def _assert_same_trajectory_fields(fields, expected) -> None:
+    assert fields[:3] == expected[:3]
+    for got, want in zip(fields[3:6], expected[3:6], strict=True):
+        assert np.array_equal(got, want)
+    assert fields.velocity_end == expected.velocity_end
+
+
+@settings(max_examples=80, deadline=None)
+@given(names=NAMES, stamp=STAMPS, points=st.integers(0, 4), data=st.data())
 def test_trajectory_reader_agrees_with_rclpy(names, stamp, points, data):
     msg = JointTrajectory(joint_names=names)
     msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
     for _ in range(points):
         sizes = data.draw(st.tuples(*[st.integers(0, 8)] * 4))
-        msg.points.append(
-            JointTrajectoryPoint(
-                **{
-                    field: _values(data.draw, size).tolist()
-                    for field, size in zip(
-                        ("positions", "velocities", "accelerations", "effort"), sizes, strict=True
-                    )
-                }
+        fields = dict(
+            zip(
+                ("positions", "accelerations", "effort"),
+                (_values(data.draw, size).tolist() for size in sizes[1:]),
+                strict=True,
             )
         )
+        fields["velocities"] = _point_velocities(data.draw, data.draw(VELOCITY_KINDS), sizes[0])
+        point = JointTrajectoryPoint(**fields)
+        point.time_from_start.sec, point.time_from_start.nanosec = data.draw(STAMPS)
+        msg.points.append(point)
     fields = JointTrajectoryReader().parse(serialize_message(msg))
     expected = trajectory_fields(msg)
-    assert fields[:3] == expected[:3]
-    for got, want in zip(fields[3:], expected[3:], strict=True):
-        assert np.array_equal(got, want)
+    _assert_same_trajectory_fields(fields, expected)
+    at_rest = [p for p in msg.points[1:] if not any(p.velocities)]
+    if at_rest:
+        end = at_rest[0].time_from_start
+        assert fields.velocity_end == end.sec + 1e-9 * end.nanosec
+    else:
+        assert fields.velocity_end == math.inf
+
+
+def _streamed(stamp=(12, 340_000_000), horizon=0.02, n=7):
+    """Our streamed shape (robot_io.streamed_trajectory): point 1 at ``horizon`` [s]."""
+    return streamed_trajectory(
+        Time(sec=stamp[0], nanosec=stamp[1]),
+        [f"joint_{i}" for i in range(1, n + 1)],
+        np.linspace(-1.0, 1.0, n),
+        np.linspace(0.1, 0.3, n),
+        horizon,
+    )
+
+
+@pytest.mark.parametrize("horizon", [0.02, 0.002, 0.2, 1.5])
+def test_a_streamed_trajectory_ends_its_velocity_at_point_1_on_both_paths(horizon):
+    """The fast parser and rclpy's deserialization agree: point 0's velocity ends at point 1's
+    time_from_start (two periods); the pre-serialized template says the same."""
+    msg = _streamed(horizon=horizon)
+    data = serialize_message(msg)
+    fields = JointTrajectoryReader().parse(data)
+    _assert_same_trajectory_fields(fields, trajectory_fields(msg))
+    assert fields.velocity_end == pytest.approx(horizon, abs=1e-9)
+    assert np.array_equal(fields.velocities, msg.points[0].velocities)
+    template = joint_trajectory_template(list(msg.joint_names), horizon)
+    serialized = template.serialize(
+        {
+            "positions": msg.points[0].positions,
+            "velocities": msg.points[0].velocities,
+            "end_positions": msg.points[1].positions,
+        },
+        (12, 340_000_000),
+    )
+    _assert_same_trajectory_fields(JointTrajectoryReader().parse(serialized), fields)
+
+
+def test_a_one_point_trajectory_holds_its_velocity_on_both_paths():
+    msg = JointTrajectory(
+        joint_names=["a", "b"],
+        points=[JointTrajectoryPoint(positions=[1.0, 2.0], velocities=[0.1, -0.2])],
+    )
+    fields = JointTrajectoryReader().parse(serialize_message(msg))
+    _assert_same_trajectory_fields(fields, trajectory_fields(msg))
+    assert fields.velocity_end == math.inf
+    # a later point that still moves does not end it either
+    moving = JointTrajectoryPoint(positions=[1.1, 1.9], velocities=[0.1, -0.2])
+    moving.time_from_start = duration_msg(0.5)
+    msg.points.append(moving)
+    fields = JointTrajectoryReader().parse(serialize_message(msg))
+    _assert_same_trajectory_fields(fields, trajectory_fields(msg))
+    assert fields.velocity_end == math.inf
+    # an empty trajectory: no velocity to end
+    empty = JointTrajectory(joint_names=["a"])
+    fields = JointTrajectoryReader().parse(serialize_message(empty))
+    _assert_same_trajectory_fields(fields, trajectory_fields(empty))
+    assert fields.points == 0
+    assert fields.velocity_end == math.inf
+
+
+def _big_endian_trajectory(msg: JointTrajectory) -> bytes:
+    """``msg`` in big-endian CDR (rclpy writes little-endian only on this machine)."""
+    out = bytearray(b"\x00\x00\x00\x00")  # CDR_BE
+
+    def align(size):
+        out.extend(b"\x00" * (-(len(out) - 4) % size))
+
+    def u32(value):
+        align(4)
+        out.extend(struct.pack(">I", value))
+
+    def string(text):
+        raw = text.encode() + b"\x00"
+        u32(len(raw))
+        out.extend(raw)
+
+    def doubles(values):
+        u32(len(values))
+        if len(values):
+            align(8)
+            out.extend(struct.pack(f">{len(values)}d", *values))
+
+    out.extend(struct.pack(">iI", msg.header.stamp.sec, msg.header.stamp.nanosec))
+    string(msg.header.frame_id)
+    u32(len(msg.joint_names))
+    for name in msg.joint_names:
+        string(name)
+    u32(len(msg.points))
+    for point in msg.points:
+        for values in (point.positions, point.velocities, point.accelerations, point.effort):
+            doubles(values)
+        align(4)
+        out.extend(struct.pack(">iI", point.time_from_start.sec, point.time_from_start.nanosec))
+    return bytes(out)
+
+
+def test_a_big_endian_trajectory_is_read_through_rclpy_with_its_velocity_end():
+    msg = _streamed()
+    big = _big_endian_trajectory(msg)
+    reader = JointTrajectoryReader()
+    assert reader.parse(big) is None  # the parser takes little-endian CDR only
+    fields = reader(big)
+    _assert_same_trajectory_fields(fields, JointTrajectoryReader().parse(serialize_message(msg)))
+    assert fields.velocity_end == pytest.approx(0.02, abs=1e-9)
+
+
+def test_a_cut_streamed_trajectory_is_rejected_never_misread():
+    """Cut anywhere before its last byte (the last point's time_from_start), a streamed
+    trajectory is declined by the parser and rejected by the reader as a MalformedMessageError,
+    never another exception. (rclpy would read some cuts, its missing points left at their
+    defaults: a trajectory that lost its point at rest.) rclpy's buffer may end in spare
+    bytes: a cut there reads right."""
+    data = serialize_message(_streamed())
+    whole = JointTrajectoryReader().parse(data)
+    last = struct.pack("<iI", *divmod(round(TRAJECTORY_DELIVERY_MARGIN * 1e9), 10**9))
+    end = data.rindex(last) + len(last)
+    for cut in range(len(data)):
+        if cut < end:
+            assert JointTrajectoryReader().parse(data[:cut]) is None, cut
+            with pytest.raises(MalformedMessageError, match="not a JointTrajectory"):
+                JointTrajectoryReader()(data[:cut])
+        else:
+            _assert_same_trajectory_fields(JointTrajectoryReader()(data[:cut]), whole)
 
 
 @settings(max_examples=40, deadline=None)

@@ -15,7 +15,7 @@ from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from rns_testing import Recorder
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -28,6 +28,7 @@ from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import base_twist_from_momentum
 from rns_ros.nodes.lockstep import LOCKSTEP_PATIENCE
+from rns_ros.nodes.robot_io import streamed_trajectory
 from rns_ros.nodes.runner import stop_worker
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
@@ -997,3 +998,136 @@ def test_publish_tf_false_leaves_tf_to_a_robot_state_publisher(ros):
     ros.spin_until(lambda: len(joints.messages) > 20, 10.0)
     assert len(joints.messages) > 20
     assert tf.messages == []
+
+
+# --- a streamed trajectory ends at rest, as joint_trajectory_controller plays it --------------
+
+#: Control period T [s] of the streamed trajectories below: point 1 (at rest) at 2T.
+PERIOD = 0.01
+#: Joint rates [rad/s] of point 0 (within the 0.5 rad/s URDF limits).
+RATES = 0.05 * np.array([1.0, -2.0, 1.5, 3.0, -2.5, 2.0, 1.0])
+
+
+def _stepped_simulator(ros, lockstep_period: float = 1.0, **overrides) -> SimulatorNode:
+    """A simulator on /clock whose steps the test takes (``node.advance()``), so every time is
+    simulated. ``lockstep_period`` 1 s (longer than the motions here) makes a command's age
+    simulated time too (the test's own steps ignore the pauses); off lockstep the age is wall
+    time, on a clock that stands still here."""
+    overrides = {"publish_clock": True, "lockstep_period": lockstep_period, **overrides}
+    parameters = [Parameter(name, value=value) for name, value in overrides.items()]
+    node = ros.add(
+        SimulatorNode(context=ros.context, parameter_overrides=parameters, wall_clock=lambda: 0.0)
+    )
+    stop_worker(node._thread, node._stop, node._command_arrived)
+    assert not node._thread.is_alive()
+    return node
+
+
+def _send_streamed(node, stamp: float, rates=RATES):
+    """rns_controller's JointTrajectory of one period, stamped ``stamp`` [s] (simulated), from
+    the current angles, through the simulator's raw-bytes subscription callback."""
+    msg = streamed_trajectory(
+        stamp_from_seconds(stamp), JOINTS, node.simulator.q[7:].copy(), rates, 2 * PERIOD
+    )
+    node._commands._on_trajectory(serialize_message(msg))
+
+
+def _angles(node, steps: int) -> np.ndarray:
+    """Joint angles [rad] (steps + 1, n): now and after each of ``steps`` steps."""
+    angles = [node.simulator.q[7:].copy()]
+    for _ in range(steps):
+        assert node.advance() is not None
+        angles.append(node.simulator.q[7:].copy())
+    return np.array(angles)
+
+
+#: A step that turns a joint by less [rad] leaves it still (the rounding of simulated times).
+STILL = 1e-12
+
+
+def _last_moving_step(angles: np.ndarray) -> int:
+    """The number of steps after which the joints stood still (to the end of ``angles``)."""
+    moved = np.abs(np.diff(angles, axis=0)).max(axis=1) > STILL
+    return int(np.flatnonzero(moved)[-1]) + 1 if moved.any() else 0
+
+
+def test_a_streamed_trajectory_ends_at_rest_and_a_one_point_one_is_held(ros):
+    """Our streamed shape (point 0: theta, theta_dot; point 1 at 2T, no velocities; point 2 at
+    0.25 s at rest) and no newer command: the joints move by theta_dot 2T, exactly (kinematic
+    mode), and stay there, as behind joint_trajectory_controller; logged once. A one-point
+    trajectory (another sender's) keeps its velocity until command_timeout."""
+    node = _stepped_simulator(ros, command_timeout=0.5)
+    probe = ros.probe()
+    warnings = _rosout_errors(probe, level=Log.WARN)
+    dt = node.simulator.dt
+    _send_streamed(node, node.simulator.time)
+    angles = _angles(node, 60)
+    assert _last_moving_step(angles) == round(2 * PERIOD / dt)
+    np.testing.assert_allclose(angles[-1] - angles[0], 2 * PERIOD * RATES, rtol=0, atol=1e-12)
+    assert not np.any(node.simulator.v[6:])
+    assert not np.any(node.simulator.reference.velocities)
+    assert node._commands.ended_at_rest == 1
+    assert ros.spin_until(lambda: any("ended at rest" in w for w in warnings), timeout=5.0)
+    (line,) = [w for w in warnings if "ended at rest" in w]
+    assert "joint_references ended at rest 0.020 s after its stamp" in line
+
+    held = _trajectory(RATES, positions=node.simulator.q[7:].copy())
+    held.header.stamp = stamp_from_seconds(node.simulator.time)
+    node._commands._on_trajectory(serialize_message(held))
+    angles = _angles(node, 700)
+    moving = _last_moving_step(angles)
+    print(f"one-point trajectory: moved for {moving * dt:.3f} s")
+    assert moving * dt == pytest.approx(0.5, abs=1.5 * dt)  # command_timeout, simulated
+    np.testing.assert_allclose(angles[-1] - angles[0], moving * dt * RATES, atol=1e-12)
+    assert node._commands.ended_at_rest == 1
+
+
+@pytest.mark.parametrize(
+    ("offset", "still_for", "moves_after"),
+    [
+        (-0.005, 0, 15),  # late: caught up, the end counts from the stamp (2T - 5 ms on)
+        (-0.03, 0, 1),  # later than its end (within MAX_CATCH_UP): theta_dot 2T in one step
+        (0.005, 5, 25),  # stamped ahead (lockstep side by side): from its stamp, 2T on
+    ],
+    ids=["late", "past-its-end", "ahead"],
+)
+@pytest.mark.parametrize("lockstep_period", [1.0, 0.0], ids=["lockstep", "free"])
+def test_a_streamed_trajectory_ends_at_rest_2T_after_its_stamp(
+    ros, offset, still_for, moves_after, lockstep_period
+):
+    """Kinematic mode, a streamed trajectory stamped ``offset`` [s] from the simulated time and
+    no newer one: late, it makes up the motion it missed and stops 2T after its stamp; past
+    its end on arrival, it moves theta_dot 2T at once, as joint_trajectory_controller samples
+    it at rest at point 1; stamped ahead, it waits for its stamp and stops 2T after it. The
+    joints end theta_dot 2T from where they stood, exactly. In lockstep or not."""
+    node = _stepped_simulator(ros, lockstep_period)
+    _send_streamed(node, node.simulator.time + offset)
+    angles = _angles(node, 60)
+    assert _last_moving_step(angles) == moves_after
+    assert _last_moving_step(angles[: still_for + 1]) == 0  # nothing before its stamp
+    np.testing.assert_allclose(angles[-1] - angles[0], 2 * PERIOD * RATES, rtol=0, atol=1e-12)
+    assert not np.any(node.simulator.reference.velocities)
+    assert node._commands.ended_at_rest == 1
+
+
+def test_a_streamed_trajectory_ends_at_rest_in_dynamic_mode(ros):
+    """Dynamic mode: the servo's reference moves at theta_dot for 2T, then stands at point 1's
+    positions (theta + 2T theta_dot) at zero velocity; the joints settle there."""
+    node = _stepped_simulator(ros, mode="dynamic")
+    dt = node.simulator.dt
+    start = node.simulator.q[7:].copy()
+    _send_streamed(node, node.simulator.time)
+    references = []
+    for _ in range(round(2 * PERIOD / dt) + 5):
+        node.advance()
+        references.append(node.simulator.reference)
+    # the velocity ends before the step that starts at 2T
+    moving = [bool(np.any(reference.velocities)) for reference in references]
+    assert moving == [True] * round(2 * PERIOD / dt) + [False] * 5
+    end = start + 2 * PERIOD * RATES  # point 1
+    np.testing.assert_allclose(references[-1].positions, end, rtol=0, atol=1e-12)
+    _angles(node, 1000)
+    print(f"settled within {np.abs(node.simulator.q[7:] - end).max():.2e} rad of point 1")
+    np.testing.assert_allclose(node.simulator.q[7:], end, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(node.simulator.v[6:], 0.0, atol=1e-6)
+    assert node._commands.ended_at_rest == 1

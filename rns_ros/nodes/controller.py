@@ -8,7 +8,9 @@ period instant /clock passes (:class:`rns_ros.nodes.clock_ticks.ClockTicks`), it
 that lead later; there ``await_commands`` also puts the operator in the lockstep: twists wait for
 their stamps and each tick for the twist in force (:class:`rns_ros.control.ticks.AwaitedTicks`).
 Parameters: :mod:`rns_ros.nodes.controller_parameters`; status:
-:mod:`rns_ros.nodes.controller_status`.
+:mod:`rns_ros.nodes.controller_status`; the operator's twists and the attitude they add up to:
+:mod:`rns_ros.nodes.controller_commands`; the measured state and its watchdogs:
+:mod:`rns_ros.nodes.controller_inputs`.
 
 Subscribes:
     cmd_twist     geometry_msgs/TwistStamped (``twist_stamped: true``) or geometry_msgs/Twist;
@@ -49,17 +51,14 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 
 from rns_ros.control.command_bounds import BoundedCommand, CommandBounds
-from rns_ros.control.command_tracking import CommandedAttitude
 from rns_ros.control.controller import (
     ControllerSettings,
     ControllerStep,
@@ -67,29 +66,23 @@ from rns_ros.control.controller import (
     TwistFrame,
     angular_velocity_in_world,
 )
-from rns_ros.control.prediction import OutputTiming, predict_joint_angles
+from rns_ros.control.prediction import OutputTiming
 from rns_ros.control.teleop import (
     CommandGate,
     ControllerState,
     GateOutput,
     TwistCommand,
     twist_frame_ids,
-    validate_twist,
 )
-from rns_ros.control.ticks import AwaitedTicks, ServedTick, TickInstants, next_tick_in
+from rns_ros.control.ticks import ServedTick, TickInstants, next_tick_in
 from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import ExtraJointsReport, match_joint_state
-from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes import controller_parameters
-from rns_ros.nodes.cdr import (
-    JointStateReader,
-    MalformedMessageError,
-    TwistFields,
-    read_odometry,
-    read_twist_stamped,
-)
+from rns_ros.nodes.cdr import JointStateReader, MalformedMessageError, TwistFields, read_odometry
 from rns_ros.nodes.clock_ticks import ClockTicks
+from rns_ros.nodes.controller_commands import INPUT_QOS, CommandTracking, OperatorTwists
+from rns_ros.nodes.controller_inputs import MAX_PREDICTION_AGE, MeasuredState
 from rns_ros.nodes.controller_output import JointOutput
 from rns_ros.nodes.controller_parameters import (
     NODE_NAME,
@@ -102,39 +95,26 @@ from rns_ros.nodes.controller_parameters import (
 from rns_ros.nodes.controller_requests import OperatorRequests, goal_settings
 from rns_ros.nodes.controller_status import (
     DIAGNOSTICS_PERIOD,
-    TWISTS_RECEIVED,
     InputPublishers,
     JointLimitStop,
     StatusReporter,
     joint_limit_text,
     step_values,
 )
-from rns_ros.nodes.input_clock import InputClock, awaited_commands
+from rns_ros.nodes.input_clock import InputClock
 from rns_ros.nodes.parameters import (
     declare_parameters,
     load_node_model,
     sim_time_change_refused,
 )
-from rns_ros.nodes.robot_io import base_pose, measured_state_problem
+from rns_ros.nodes.robot_io import base_pose
 from rns_ros.nodes.runner import publish_last, run_node
 
 #: Measured and integrated angles further apart than this [rad] restart the reference.
 RESYNC_TOLERANCE = 0.2
-#: joint_states older than this [s] are used as they are, not extrapolated.
-MAX_PREDICTION_AGE = 0.1
-#: Inputs: only the newest message matters; best effort also matches reliable publishers.
-INPUT_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
-#: cmd_twist under await_commands: best effort (matches the operators' best-effort publishers),
-#: deep enough for the samples an operator publishes ahead (each is one instant of its
-#: profile: none may be overwritten before it is read).
-SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: Shortest interval between two ticks when commands are served at once [s]: a command flood
 #: cannot make the controller compute faster than this; a change within it waits for the tick.
 MIN_TICK_INTERVAL = 1e-3
-NS_PER_S = 1_000_000_000  # nanoseconds per second (message stamps)
-#: Gate states in which the camera follows the integral of the commanded rate (a fresh
-#: command); in the others nothing is tracked and the tracking restarts at the camera.
-TRACKED_STATES = (ControllerState.OK, ControllerState.RAMPING, ControllerState.SPEED_LIMITED)
 
 
 class ControllerNode(Node):
@@ -150,22 +130,12 @@ class ControllerNode(Node):
             self.robot, params["world_frame"], params["default_twist_frame"]
         )
         self._gate = command_gate(params, self._frames)
-        # the camera attitude the operator's rates add up to, and the last gap to it [rad]
-        self._tracking = CommandedAttitude(tracking_settings(params))
-        self._tracking_error = 0.0
+        # the camera attitude the operator's rates add up to, and the last gap to it
+        self._tracking = CommandTracking(self, tracking_settings(params))
         self._requests = OperatorRequests(
             self, params["world_frame"], goal_settings(params), self._gate.reject
         )
-        # the newest measured state: joint angles [rad] and rates [rad/s] (n,), their stamp
-        # [ns]; the base pose in world (identity until base_odom)
-        self._theta: np.ndarray | None = None
-        self._theta_rate: np.ndarray | None = None
-        self._theta_stamp: int | None = None
-        self._base_position = np.zeros(3)
-        self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
-        # input watchdogs: receipt times [s] on the input clock (simulated time under
-        # use_sim_time), a discontinuity seen in joint_states; the monotonic receipt time of
-        # the newest joint state [s] (output_lead's catch-up, the /clock watch)
+        # input watchdogs judge ages on the input clock (simulated time under use_sim_time)
         self._input_clock = InputClock(
             self,
             params["clock_timeout"],
@@ -173,10 +143,8 @@ class ControllerNode(Node):
             on_clock_fault=self._on_clock_fault,
             max_clock_jump=params["max_clock_jump"],
         )
-        self._state_received = -np.inf
-        self._state_received_wall = -np.inf
-        self._odom_received: float | None = None
-        self._jump: str | None = None
+        # the newest joint state and base pose, their receipt times, a jump seen in joint_states
+        self._measured = MeasuredState(self.robot.joint_names, self._input_clock)
         self._stopped = True  # the last output was zero velocity: the next one ramps up
         self._resync = False  # the reference restarts at the measured angles this tick
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
@@ -190,8 +158,20 @@ class ControllerNode(Node):
         # would land while a lockstep simulator runs on, so ticks stay on the period grid
         self._immediate = params["immediate_reaction"] and not self._sim_time
         self._instants = TickInstants(self._period, self._lead)
-        self._awaited = self._awaited_ticks(params)
-        self._create_inputs(params)
+        self._reporter = StatusReporter(self, self.robot.name)  # the intakes report into it
+        self._twists = OperatorTwists(
+            self,
+            params,
+            self._lead,
+            self._frames,
+            self._input_clock,
+            self._reporter,
+            on_command=self._take_command,
+            reject=self._gate.reject,
+            serve_ready=self._serve_ready,
+        )
+        self._awaited = self._twists.awaited  # None without await_commands
+        self._create_state_inputs()
         self._joint_output = JointOutput(
             self,
             params["output_interface"],
@@ -202,10 +182,9 @@ class ControllerNode(Node):
             bounds=CommandBounds.of(self.robot, params["max_reference_error"]),
         )
         self._output = self._joint_output.publisher  # destroy_node waits for its acks
-        self._reporter = StatusReporter(self, self.robot.name)
         self._limit_stop = JointLimitStop(self._period)
         self._sources = InputPublishers(
-            self, self._topics, self._command_type, self._output.topic_name
+            self, self._topics, self._twists.message_type, self._output.topic_name
         )
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -221,31 +200,9 @@ class ControllerNode(Node):
             f"({params['hold_correction']} hold); waiting for {self._topics['joint_states']}"
         )
 
-    def _awaited_ticks(self, params: dict) -> AwaitedTicks[TwistFields] | None:
-        """await_commands: ticks wait for the twist in force, at most command_timeout of wall
-        time after the operator's last sample; None when not used."""
-        if not params["await_commands"]:
-            return None
-        if not (self._lead and params["twist_stamped"]):
-            self.get_logger().warn(
-                "await_commands needs use_sim_time, output_lead > 0 and twist_stamped: not used"
-            )
-            return None
-        return awaited_commands(self, params["command_timeout"], self._on_await_timeout)
-
-    def _create_inputs(self, params: dict) -> None:
-        """cmd_twist, joint_states and base_odom subscriptions."""
-        self._command_type = TwistStamped if params["twist_stamped"] else Twist
-        if params["twist_stamped"]:
-            # awaited twists are each one sample: none may be overwritten before it is read
-            twist_qos = INPUT_QOS if self._awaited is None else SCHEDULED_COMMAND_QOS
-            self.create_subscription(
-                TwistStamped, "cmd_twist", self._on_stamped, twist_qos, raw=True
-            )
-        else:
-            self.create_subscription(Twist, "cmd_twist", self._on_twist, INPUT_QOS)
-        # taken serialized: reading the few fields used from the bytes (rns_ros.nodes.cdr) is
-        # cheaper than rclpy building the message
+    def _create_state_inputs(self) -> None:
+        """joint_states and base_odom subscriptions, taken serialized: reading the few fields
+        used from the bytes (rns_ros.nodes.cdr) is cheaper than rclpy building the message."""
         self._clock_type = self.get_clock().clock_type
         self._joint_state_reader = JointStateReader()
         self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
@@ -254,7 +211,8 @@ class ControllerNode(Node):
         )
         self.create_subscription(Odometry, "base_odom", self._on_odom, INPUT_QOS, raw=True)
         self._topics = {
-            name: self.resolve_topic_name(name) for name in ("cmd_twist", "joint_states")
+            "cmd_twist": self._twists.topic,
+            "joint_states": self.resolve_topic_name("joint_states"),
         }
 
     def _start_ticks(self) -> None:
@@ -269,84 +227,27 @@ class ControllerNode(Node):
         else:
             self._timer = self.create_timer(self._period, self._on_tick)
 
+    # the newest measured sample (None until the first joint state), read here and by tests
+    @property
+    def _theta(self) -> np.ndarray | None:
+        return self._measured.theta
+
+    @property
+    def _theta_stamp(self) -> int | None:
+        return None if self._measured.joints is None else self._measured.joints.stamp
+
+    @property
+    def _state_received(self) -> float:
+        return self._measured.state_received
+
     # --- inputs ---------------------------------------------------------------------------------
-    def _on_stamped(self, data: bytes) -> None:
-        try:
-            fields = read_twist_stamped(data)
-        except MalformedMessageError as exc:
-            self._reporter.reject(self._topics["cmd_twist"], exc)
-            return
-        self._reporter.count(TWISTS_RECEIVED)
-        if self._awaited is None:
-            self._take_twist(fields.angular, fields.linear, fields.frame_id, fields.stamp)
-            return
-        sec, nanosec = fields.stamp
-        moving = any(value != 0.0 for value in (*fields.angular, *fields.linear))
-        dropped = self._awaited.schedule.dropped
-        ready = self._awaited.push(sec * NS_PER_S + nanosec, fields, moving)
-        if self._awaited.schedule.dropped > dropped:
-            self.get_logger().warn(
-                "too many cmd_twist stamped ahead are waiting for their stamps: the oldest was "
-                "dropped (stamps far ahead of the clock?)",
-                throttle_duration_sec=1.0,
-            )
-        self._serve_ready(ready)
-
-    def _on_await_timeout(self) -> None:
-        """await_commands: no twist came for command_timeout (wall clock) while ticks waited:
-        the operator stalled or its stream ended on a motion; serve with the newest (the gate
-        then stops a stale command as usual)."""
-        waiting = self._awaited.oldest_waiting
-        if waiting is not None:
-            self.get_logger().warn(
-                f"no cmd_twist stamped at or after {waiting * 1e-9:.3f} s within "
-                f"command_timeout ({self._params['command_timeout']} s wall clock): served "
-                "with the newest one",
-                throttle_duration_sec=1.0,
-            )
-        self._serve_ready(self._awaited.give_up())
-
-    def _on_twist(self, msg: Twist) -> None:
-        self._reporter.count(TWISTS_RECEIVED)
-        a, v = msg.angular, msg.linear
-        self._take_twist([a.x, a.y, a.z], [v.x, v.y, v.z], "")
-
-    def _take_twist(
-        self, angular, linear, frame_id: str, stamp: tuple[int, int] | None = None
-    ) -> None:
-        """An operator twist: ``angular`` [rad/s] and ``linear`` [m/s] (3,) in ``frame_id``,
-        stamped ``stamp`` (sec, nanosec) on the sender's clock (None or zero: unstamped, its
-        receipt time counts)."""
-        try:
-            command = validate_twist(
-                angular,
-                linear,
-                frame_id,
-                self._frames,
-                self._params["max_angular_speed"],
-                self._input_clock.now(),
-            )
-        except InputError as exc:
-            self._gate.reject(str(exc))
-            self.get_logger().error(f"rejected cmd_twist: {exc}", throttle_duration_sec=1.0)
-            return
-        if command.requested_speed is not None:
-            self.get_logger().warn(
-                f"cmd_twist |angular| {command.requested_speed:.4g} rad/s is over "
-                f"max_angular_speed {self._params['max_angular_speed']:.4g} rad/s: scaled to it "
-                "(axis kept)",
-                throttle_duration_sec=1.0,
-            )
+    def _take_command(self, command: TwistCommand, stamp: float) -> None:
+        """A valid operator twist stamped ``stamp`` [s] (the sender's clock, else its receipt):
+        the gate, the camera goal and the commanded attitude take it; with immediate_reaction
+        a change of the output is served at once."""
         self._gate.accept(command)
         self._requests.twist_taken(command)
-        seconds = None if stamp is None else stamp[0] + 1e-9 * stamp[1]
-        self._tracking.take(
-            command.angular,
-            command.frame,
-            seconds or command.received,
-            command.received,
-            rotation_from_quaternion(self._base_orientation),
-        )
+        self._tracking.take(command, stamp, self._measured.base_orientation)
         if self._immediate and self._changes_output(command):
             now = time.monotonic()
             if now - self._instants.last_wall >= MIN_TICK_INTERVAL:
@@ -383,40 +284,12 @@ class ControllerNode(Node):
             return
         sec, nanosec = fields.stamp
         stamp = Time(seconds=sec, nanoseconds=nanosec, clock_type=self._clock_type).nanoseconds
-        if self._theta is not None and self._jump is None:
-            self._jump = self._discontinuity(command.positions, stamp)
-        self._theta = command.positions
-        self._theta_rate = command.velocities
-        self._theta_stamp = stamp
-        self._state_received = self._input_clock.receipt_time(stamp * 1e-9)
-        self._state_received_wall = time.monotonic()
-
-    def _discontinuity(self, theta: np.ndarray, stamp: int) -> str | None:
-        """Why ``theta`` (stamped ``stamp`` [ns]) cannot follow from the previous sample, or None.
-
-        Between two samples each joint moved from the previous angle toward where its previous
-        rate takes it over the stamp difference (clipped to [0, MAX_PREDICTION_AGE]) or toward
-        the reference this controller commanded meanwhile (through a gap in the stream it
-        drives the arm on, then holds it), or stayed: a sample within ``state_jump_tolerance``
-        of the range those span follows; a reset, a re-homed robot or a second source does not.
-        """
-        dt = (stamp - self._theta_stamp) * 1e-9
-        low = high = self._theta
-        if self._theta_rate is not None:
-            moved = self._theta + min(max(dt, 0.0), MAX_PREDICTION_AGE) * self._theta_rate
-            low, high = np.minimum(low, moved), np.maximum(high, moved)
-        reference = self.controller.reference_positions
-        if reference is not None:
-            low, high = np.minimum(low, reference), np.maximum(high, reference)
-        error = np.maximum(low - theta, theta - high)
-        joint = int(np.argmax(error))
-        if error[joint] <= self._params["state_jump_tolerance"]:
-            return None
-        return (
-            f"joint_states jumped: {self.robot.joint_names[joint]} {theta[joint]:.4g} rad where "
-            f"[{low[joint]:.4g}, {high[joint]:.4g}] rad was reachable from the previous sample "
-            "and the reference "
-            f"(state_jump_tolerance {self._params['state_jump_tolerance']} rad)"
+        self._measured.take_joint_state(
+            command.positions,
+            command.velocities,
+            stamp,
+            self.controller.reference_positions,
+            self._params["state_jump_tolerance"],
         )
 
     def _on_odom(self, data: bytes) -> None:
@@ -427,9 +300,8 @@ class ControllerNode(Node):
             return
         pose = base_pose(fields.pose)
         if pose is not None:
-            self._base_position, self._base_orientation = pose
             sec, nanosec = fields.stamp
-            self._odom_received = self._input_clock.receipt_time(sec + 1e-9 * nanosec)
+            self._measured.take_base_pose(*pose, sec + 1e-9 * nanosec)
 
     # --- control period -------------------------------------------------------------------------
     def _on_tick(self) -> None:
@@ -458,7 +330,9 @@ class ControllerNode(Node):
     def _lead_instant(self, tick: int) -> int | None:
         """With ``output_lead``: the instant [ns] to serve for the /clock tick ``tick`` [ns], or
         None to skip it (:meth:`TickInstants.lead_instant`)."""
-        instant = self._instants.lead_instant(tick, self._theta_stamp, self._state_received_wall)
+        instant = self._instants.lead_instant(
+            tick, self._theta_stamp, self._measured.state_received_wall
+        )
         if instant is not None and instant != tick:
             # the simulation ran on without this controller (after a reset or a dropped
             # command it runs in real time until commands come back; a patience step)
@@ -473,7 +347,7 @@ class ControllerNode(Node):
         """await_commands: the ticks whose twist in force is known, each after its twists."""
         for tick in ticks:
             for fields in tick.commands:
-                self._take_twist(fields.angular, fields.linear, fields.frame_id, fields.stamp)
+                self._twists.take(fields.angular, fields.linear, fields.frame_id, fields.stamp)
             self._serve_tick(tick.instant)
 
     def _serve_tick(self, tick: int) -> None:
@@ -488,15 +362,20 @@ class ControllerNode(Node):
         if held is not None and not self.controller.end_hold(held):
             self._lost_hold(held)
         now = self._input_clock.now()
-        self._drop_future_receipts(now)
-        fault = self._input_fault(now)
+        self._measured.drop_future_receipts(now)
+        fault = self._measured.fault(
+            now,
+            self._sources.state_publishers,
+            self._topics["joint_states"],
+            self._params["state_timeout"],
+        )
         if fault is not None:
             self._hold_still(*fault, at=tick)
             return
         if self._requests.paused:
             self._hold_still(ControllerState.PAUSED, "~/pause: resume with false", at=tick)
             return
-        gap = self._state_gap(now)
+        gap = self._measured.gap(now, self._params["state_hold_age"], self._params["state_timeout"])
         if gap is not None:
             self._hold_still(ControllerState.STATE_GAP, gap, at=tick)
             return
@@ -514,7 +393,9 @@ class ControllerNode(Node):
             self.controller.resync(state)
         self._served = (gate.angular, gate.frame)
         omega = angular_velocity_in_world(state, gate.angular, gate.frame)
-        omega = omega + self._tracking_correction(state, gate, goal is not None, now)
+        omega = omega + self._tracking.correction(
+            state.camera.rotation, gate.state, goal is not None, now, self._lead
+        )
         step = self.controller.step(state, omega, hold)
         self._stopped = gate.stopped
         velocities = np.zeros(self.robot.n) if gate.stopped else step.joint_velocity
@@ -535,7 +416,7 @@ class ControllerNode(Node):
             detail,
             lambda: {
                 **step_values(self.controller.settings.method.value, step, gate),
-                "tracking_error": self._tracking_error,
+                "tracking_error": self._tracking.error,
                 **self._requests.values(),
             },
         )
@@ -545,14 +426,16 @@ class ControllerNode(Node):
         jump in joint_states the reference and the wrist reference restart there."""
         state = FreeFloatingState.compute(
             self.robot,
-            self.robot.configuration(theta, self._base_position, self._base_orientation),
+            self.robot.configuration(
+                theta, self._measured.base_position, self._measured.base_orientation
+            ),
         )
-        if self._jump is not None:
+        jump = self._measured.take_jump()
+        if jump is not None:
             self.get_logger().warn(
-                f"{self._jump}: reference and wrist reference restarted at the measured pose, "
+                f"{jump}: reference and wrist reference restarted at the measured pose, "
                 "command ramps up from rest"
             )
-            self._jump = None
             self._gate.stop()
             self._tracking.stop(self._input_clock.now())
             self._stopped = True
@@ -560,57 +443,13 @@ class ControllerNode(Node):
             self.controller.reset(state)
         return state
 
-    def _tracking_correction(
-        self, state: FreeFloatingState, gate: GateOutput, goal: bool, now: float
-    ) -> np.ndarray:
-        """omega_corr [rad/s] (3,), world axes, toward the camera attitude the operator's rates
-        add up to (:class:`CommandedAttitude`) at the instant the output acts (``now`` [s] on
-        the input clock plus output_lead); zero and not tracked while the gate does not follow
-        a fresh command or a camera goal drives the camera. The tracking restarts at the
-        measured camera when the gate follows again."""
-        if goal or gate.state not in TRACKED_STATES:
-            self._tracking.stop(now)
-            self._tracking_error = 0.0
-            return np.zeros(3)
-        at = now + self._lead
-        if not self._tracking.active:
-            self._tracking.restart(state.camera.rotation, at)
-        tracked = self._tracking.step(state.camera.rotation, at)
-        self._tracking_error = tracked.error
-        if tracked.restarted:
-            self.get_logger().warn(
-                f"the camera is {np.degrees(tracked.error):.3g} deg from the attitude the "
-                f"commands add up to (tracking_max_error "
-                f"{np.degrees(self._params['tracking_max_error']):.3g} deg: a joint limit or a "
-                "singular region): the commanded attitude restarts at the camera",
-                throttle_duration_sec=1.0,
-            )
-        return tracked.correction
-
-    def _state_gap(self, now: float) -> str | None:
-        """Why the arm is held at a tick ``now`` [s] (input clock): joint_states or base_odom
-        older than ``state_hold_age``, beyond what the prediction can bridge (a law evaluated
-        on an old configuration turns the base); None when both are fresh. The operator's
-        commanded attitude runs on meanwhile, and the arm catches up once the state is fresh."""
-        ages = {"joint_states": now - self._state_received}
-        if self._odom_received is not None:
-            ages["base_odom"] = now - self._odom_received
-        topic, age = max(ages.items(), key=lambda item: item[1])
-        limit = self._params["state_hold_age"]
-        if age <= limit:
-            return None
-        return (
-            f"{topic} {age:.3f} s old (state_hold_age {limit} s): held until fresh "
-            f"(STALE_STATE at state_timeout {self._params['state_timeout']} s)"
-        )
-
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. While the arm
         moves, no joint state came for as long either (a dead simulator) and no tick waits for
         the operator's twist (that wait has its own watchdog), stop it here: the sim-time
         ticks that would stop it have stopped too."""
         waiting = self._awaited is not None and self._awaited.oldest_waiting is not None
-        quiet = time.monotonic() - self._state_received_wall
+        quiet = self._measured.wall_quiet()
         if self._theta is None or self._stopped or waiting or quiet < self._input_clock.timeout:
             return
         self._hold_still(
@@ -645,26 +484,6 @@ class ControllerNode(Node):
             throttle_duration_sec=5.0,
         )
         self._resync = True
-
-    def _drop_future_receipts(self, now: float) -> None:
-        """Receipt times later than ``now`` [s] (noted on a clock that then went back) become
-        ``now``: the watchdogs age them from here instead of never."""
-        self._state_received = min(self._state_received, now)
-        if self._odom_received is not None:
-            self._odom_received = min(self._odom_received, now)
-
-    def _input_fault(self, now: float) -> tuple[ControllerState, str] | None:
-        """(state, detail) when the measured state cannot be trusted: stale or two sources;
-        ``now`` [s] on the input clock."""
-        problem = measured_state_problem(
-            now,
-            self._sources.state_publishers,
-            self._topics["joint_states"],
-            self._state_received,
-            self._odom_received,
-            self._params["state_timeout"],
-        )
-        return None if problem is None else (ControllerState(problem[0]), problem[1])
 
     def _hold_still(
         self,
@@ -718,23 +537,13 @@ class ControllerNode(Node):
             hold = next_tick_in(self._timer.time_until_next_call(), self._period)
         if hold is not None and not 0.0 < hold <= self.controller.max_hold:
             hold = None  # not a time the next tick can be from: the period
-        theta = self._theta
-        if self._theta_rate is None or self._stopped:
-            return theta, hold
-        seconds, stamp = now * 1e-9, self._theta_stamp * 1e-9
-        if not -self._lead <= seconds - stamp < MAX_PREDICTION_AGE:
-            return theta, hold  # clocks disagree or the state is stale: do not extrapolate
+        if self._stopped:
+            return self._theta, hold
         timing = OutputTiming(
             latency=self._lead if self._sim_time else self._params["output_latency"],
             plant_period=self._params["plant_period"],
         )
-        start = predict_joint_angles(
-            theta, self._theta_rate, stamp, seconds, self._joint_output.recent, timing
-        )
-        if hold is not None:
-            ends = timing.acting_time(seconds + hold, stamp)
-            hold = ends - start.acting_time if ends > start.acting_time else None
-        return start.theta, hold
+        return self._measured.output_start(now, hold, self._lead, timing, self._joint_output.recent)
 
     def _controller_state(
         self, step: ControllerStep, gate: GateOutput, state: FreeFloatingState, hold: float
@@ -803,6 +612,8 @@ class ControllerNode(Node):
         self._requests.goal.settings = goal_settings(self._params)
         self._tracking.settings = tracking_settings(self._params)
         self._input_clock.set_clock_timeout(self._params["clock_timeout"])
+        self._twists.max_angular_speed = self._params["max_angular_speed"]
+        self._twists.command_timeout = self._params["command_timeout"]
 
     def _configured(self, parameters) -> tuple[dict, ControllerSettings, CommandGate]:
         """(parameter values, law settings, command gate) with ``parameters`` set.

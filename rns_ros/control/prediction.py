@@ -18,6 +18,10 @@ Between t_s and a_k the plant runs at the rate it had at t_s until the first of 
 own outputs published after t_s takes effect, then at each later output from its acting time on:
 
     theta(a_k) = theta_s + integral_{t_s}^{a_k} theta_dot_applied(tau) dtau.
+
+A plant that ends each output at rest after a horizon h (a streamed JointTrajectory: 2 T; the
+position interface: T) holds still from a + h on when the next output is late; the rate
+measured at t_s ends at t_s + h at the latest.
 """
 
 from __future__ import annotations
@@ -51,10 +55,13 @@ class OutputTiming(NamedTuple):
     Attributes:
         latency: publish to receipt by the plant, l [s], >= 0.
         plant_period: the plant's update period p [s], >= 0; 0: it acts on receipt.
+        horizon: h, how long one output acts without a newer one before the plant holds
+            still [s], > 0; inf: until the next one.
     """
 
     latency: float = 0.0
     plant_period: float = 0.0
+    horizon: float = math.inf
 
     def acting_time(self, published: float, grid_origin: float) -> float:
         """a = first plant update at or after ``published`` + latency, on the update grid
@@ -110,9 +117,9 @@ def predict_joint_angles(
     velocity = np.asarray(rate, dtype=float)
     since = stamp
     for starts, output_velocity in reversed(later):
-        predicted += (starts - since) * velocity
+        predicted += max(min(starts, since + timing.horizon) - since, 0.0) * velocity
         velocity, since = output_velocity, starts
-    predicted += (target - since) * velocity
+    predicted += max(min(target, since + timing.horizon) - since, 0.0) * velocity
     return Prediction(predicted, target)
 
 

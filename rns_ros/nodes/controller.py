@@ -542,6 +542,7 @@ class ControllerNode(Node):
         timing = OutputTiming(
             latency=self._lead if self._sim_time else self._params["output_latency"],
             plant_period=self._params["plant_period"],
+            horizon=self._joint_output.command.acting_horizon,
         )
         return self._measured.output_start(now, hold, self._lead, timing, self._joint_output.recent)
 

@@ -45,6 +45,11 @@ NS_PER_S = 1_000_000_000  # nanoseconds per second (message stamps)
 #: Gate states in which the camera follows the integral of the commanded rate (a fresh
 #: command); in the others nothing is tracked and the tracking restarts at the camera.
 TRACKED_STATES = (ControllerState.OK, ControllerState.RAMPING, ControllerState.SPEED_LIMITED)
+#: Gate states in which the commanded attitude runs on without a correction: a stale command
+#: (a stream delayed or thinned out on a loaded machine, whose stamps still tell what was
+#: commanded, each for at most command_timeout) is stopped, and the camera catches up once
+#: commands are fresh again.
+COASTING_STATES = (ControllerState.DECELERATING, ControllerState.IDLE)
 
 
 class OperatorTwists:
@@ -223,9 +228,13 @@ class CommandTracking:
     ) -> np.ndarray:
         """omega_corr [rad/s] (3,), world axes, that turns the camera (``camera_rotation``
         (3, 3) in world) toward the commanded attitude at the instant the output acts (``now``
-        [s] on the input clock plus ``lead`` [s]); zero and not tracked while the gate
-        (``gate_state``) does not follow a fresh command or a camera ``goal`` drives the
-        camera. The tracking restarts at the measured camera when the gate follows again."""
+        [s] on the input clock plus ``lead`` [s]); zero while the gate (``gate_state``) stops a
+        stale command (the commanded attitude runs on), zero and not tracked while the command
+        is rejected or a camera ``goal`` drives the camera: the tracking then restarts at the
+        measured camera when the gate follows again."""
+        if gate_state in COASTING_STATES and not goal:
+            self.error = 0.0
+            return np.zeros(3)
         if goal or gate_state not in TRACKED_STATES:
             self.attitude.stop(now)
             self.error = 0.0

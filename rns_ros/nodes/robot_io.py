@@ -148,6 +148,12 @@ class JointCommand:
         self.joint_names = list(joint_names)
         self.period = period
         self.horizon = trajectory_horizon(period)
+        #: how long one command acts without a newer one before the plant holds still [s]: a
+        #: trajectory ends at rest at its horizon, a position target is reached after a
+        #: period, a velocity is held (until the plant's own timeout)
+        self.acting_horizon = {"trajectory": self.horizon, "position": period}.get(
+            interface, math.inf
+        )
         #: time_from_start [s] of a streamed trajectory's last point (at rest)
         self.end = trajectory_end(self.horizon)
         # data[order[i]] is model joint i (ros2_control's forward_command_controller order)

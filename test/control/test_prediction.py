@@ -89,3 +89,25 @@ def test_prediction_is_the_integral_of_the_applied_rate(stamp, age, latency, per
     np.testing.assert_allclose(result.theta, expected, atol=1e-5)
     assert result.acting_time >= now + latency - 1e-9
     assert result.acting_time < now + latency + period + 1e-9
+
+
+def test_a_plant_that_ends_each_output_at_rest_holds_still_after_its_horizon():
+    """A streamed trajectory ends at rest 2 T after it acts: when the next output is late the
+    plant stands still, and so does the prediction (the brute-force integral of the applied
+    rate, which is zero past each output's end)."""
+    theta, rate = np.array([0.3, -0.1]), np.array([0.4, -0.2])
+    v1 = np.array([0.5, 0.1])
+    horizon = 0.02
+    timing = OutputTiming(horizon=horizon)
+    outputs = [PublishedOutput(2.005, v1)]
+    result = predict_joint_angles(theta, rate, 2.0, 2.090, outputs, timing)
+    expected = theta + 0.005 * rate + horizon * v1  # v1 from 2.005 to 2.025, then at rest
+    np.testing.assert_allclose(result.theta, expected, atol=1e-12)
+    # the measured rate ends too: no output for 90 ms after the stamp
+    alone = predict_joint_angles(theta, rate, 2.0, 2.090, [], timing)
+    np.testing.assert_allclose(alone.theta, theta + horizon * rate, atol=1e-12)
+    # outputs on time: the horizon changes nothing
+    on_time = [PublishedOutput(2.005 + 0.01 * k, v1) for k in range(9)]
+    held = predict_joint_angles(theta, rate, 2.0, 2.090, on_time, timing)
+    free = predict_joint_angles(theta, rate, 2.0, 2.090, on_time, OutputTiming())
+    np.testing.assert_allclose(held.theta, free.theta, atol=1e-12)

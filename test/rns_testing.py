@@ -209,3 +209,16 @@ def simulated_camera(simulator):
     data = robot.model.createData()
     pin.framesForwardKinematics(robot.model, data, state.q)
     return state.time, data.oMf[robot.camera_frame_id].rotation.copy()
+
+
+def assert_commands_bounded(commands, robot, near: float) -> None:
+    """Every joint command of ``commands``, (measured angles [rad] (n,), commanded positions
+    [rad] (n,)) pairs, is finite, within ``robot``'s URDF position limits and within ``near``
+    [rad] of the angles measured when it was received."""
+    assert commands
+    for measured, command in commands:
+        assert np.all(np.isfinite(command))
+        assert np.all(command >= robot.lower_limits)
+        assert np.all(command <= robot.upper_limits)
+        worst = np.abs(command - measured).max()
+        assert worst <= near, f"command {worst:.4g} rad from the measured angles"

@@ -22,6 +22,7 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.node import Node
 
 from rns_ros.control.controller import TwistFrame
+from rns_ros.control.watchdog import DEFAULT_MAX_CLOCK_JUMP
 from rns_ros.core.commands import joint_order
 from rns_ros.core.errors import ConfigError, InputError
 
@@ -140,6 +141,16 @@ CLOCK_TIMEOUT = ParameterSpec(
     0.05,
     60.0,
     read_only=False,
+)
+#: Under use_sim_time, what a /clock that cannot be trusted is (rns_ros.nodes.input_clock,
+#: ClockJumps): a reading this far forward, any reading back, or two publishers.
+MAX_CLOCK_JUMP = ParameterSpec(
+    "max_clock_jump",
+    DEFAULT_MAX_CLOCK_JUMP,
+    "use_sim_time: a /clock reading this far forward, or any back, stops the arm (CLOCK_FAULT)",
+    "[s]",
+    1e-3,
+    3600.0,
 )
 #: frame_id of twists in the base and camera frames (nodes that send TwistStamped); empty: the
 #: frames of ``model_config``'s model (its base link and camera frame).

@@ -1,123 +1,99 @@
 """rns_ptp: reactionless point-to-point motion of the arm (thesis chapter 4).
 
-The planner is :func:`rns_ros.control.ptp.plan_ptp` (and :func:`plan_deployment`); this node only
-converts messages, plans a goal in a worker thread and plays the plan back once per period from an
-executor timer, with exactly rns_controller's output contract (either drives the same simulator).
+The planner is :func:`rns_ros.control.ptp.plan_ptp` (and :func:`plan_deployment`); this node
+converts messages, plans a goal in a worker thread (:mod:`rns_ros.nodes.ptp_planning`) and plays
+the plan back once per period from an executor timer (:mod:`rns_ros.control.ptp_playback`), with
+exactly rns_controller's output contract (either drives the same simulator). Status:
+:mod:`rns_ros.nodes.ptp_status`; parameters: :mod:`rns_ros.nodes.ptp_parameters`; states and
+gaps in detail: docs/nodes/rns_ptp.md.
 
 Subscribes:
-    ptp_goal      sensor_msgs/JointState: target positions matched by joint name; joints the goal
-                  does not name keep their measured value. A goal whose name list is exactly
-                  ``["deploy"]`` (positions ignored) runs the full reactionless deployment
-                  (plan_deployment) from the measured configuration. A new goal replaces the
-                  current plan: the arm stops and the goal is planned from the measured state.
-    joint_states  sensor_msgs/JointState (matched by joint name); watched: older than
-                  ``state_timeout`` (receipt time) stops the arm and holds the plan (HOLDING);
-                  fresh input resumes it on its path (:mod:`rns_ros.control.ptp_playback`) or,
-                  with the arm moved off the path, replans to the same goal; no fresh input for
-                  ``state_loss_timeout`` abandons it (STALE_STATE). Ages are simulated time
-                  under ``use_sim_time`` (:class:`InputClock`), where a /clock that stands still
-                  for ``clock_timeout`` of wall time with no joint state meanwhile (a dead
-                  simulator) holds the arm the same way, and abandons the plan after
-                  ``state_loss_timeout`` of wall time without a joint state; else monotonic
-                  wall time.
-    base_odom     nav_msgs/Odometry (base pose, for the predicted coupling momentum; watched like
+    ptp_goal      sensor_msgs/JointState: target positions matched by joint name (the others
+                  keep their measured value), or the name list ``["deploy"]``: the full
+                  reactionless deployment. A new goal replaces the current plan.
+    joint_states  sensor_msgs/JointState (matched by joint name); older than ``state_timeout``
+                  holds the plan (HOLDING: zero velocity, plan clock frozen); fresh input resumes
+                  it on its path (or replans to the same goal off it); none for
+                  ``state_loss_timeout`` abandons it (STALE_STATE). Ages are simulated time under
+                  ``use_sim_time`` (:class:`InputClock`), where a /clock that stands still for
+                  ``clock_timeout`` of wall time also holds the plan, and one that goes back,
+                  jumps beyond ``max_clock_jump`` or has two publishers holds it as CLOCK_FAULT
+                  until it runs forward from one publisher again (abandoned after
+                  ``state_loss_timeout`` of wall time). Ticks more than a few periods apart hold
+                  the plan too: its clock never leaps with the node's.
+    base_odom     nav_msgs/Odometry (base pose, for the coupling momentum; watched like
                   joint_states once it has arrived)
-Publishes (only while a plan plays, plus one zero-velocity message at each stop):
-    joint_references  trajectory_msgs/JointTrajectory (``output_interface: trajectory``), with
-                      ``plan_output: tick`` one per period, stamped at the tick: point 0 = plan at
-                      the tick and its rate at mid-period, point 1 two periods on, at rest
-                      (rns_controller's shape); with ``plan_output: whole`` the whole plan once
-                      when it starts (samples every ``plan_sample_period`` at most, phase ends
-                      included, the last at rest), then per-period messages only to cancel
-                      or to hold, and the rest of the plan as one message at a resume; or
-    joint_velocities  std_msgs/Float64MultiArray in the order of ``joints``
-                      (``output_interface: velocity``), or
-    joint_positions   std_msgs/Float64MultiArray, the plan at the end of the period, in that order
-                      (``output_interface: position``)
-    ~/status          diagnostic_msgs/DiagnosticArray every period: state, method, phase,
-                      progress, predicted coupling momentum, folds reached, plan notes
+Publishes (while a plan plays, plus one zero-velocity message at each stop; every joint command
+within the URDF limits and ``max_reference_error`` of the measured angles,
+:mod:`rns_ros.control.command_bounds`):
+    joint_references  trajectory_msgs/JointTrajectory (``output_interface: trajectory``): with
+                      ``plan_output: tick`` one per period (rns_controller's shape); with
+                      ``whole`` the plan once (refused, INVALID_GOAL, with a sample outside the
+                      URDF limits or its first beyond max_reference_error), per-period messages
+                      only to cancel or hold, the rest of the plan at a resume; or
+    joint_velocities  std_msgs/Float64MultiArray in the order of ``joints`` (``velocity``), or
+    joint_positions   the plan at the end of the period, in that order (``position``)
+    ~/status          diagnostic_msgs/DiagnosticArray every period (:mod:`ptp_status`)
     /diagnostics      the newest status at 1 Hz (wall clock)
 Service:
     ~/cancel      std_srvs/Trigger: the playback rate ramps from 1 to 0 at ``cancel_deceleration``
-                  (theta_dot scaled by the rate keeps the path: reactionless phases stay
-                  reactionless), then IDLE
+                  (the path is kept: reactionless phases stay reactionless), then IDLE
 """
 
 from __future__ import annotations
 
-import math
-import threading
 import time
 
 import numpy as np
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
+from rns_ros.control.command_bounds import BoundedCommand, CommandBounds, bound_joint_command
 from rns_ros.control.ptp import PtpMethod, PtpSettings
-from rns_ros.control.ptp_phases import plan_deployment
-from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.control.ptp_playback import PlanPlayback, PlaybackMode
-from rns_ros.control.ptp_sampling import PlanSamples, sample_plan
-from rns_ros.core import FreeFloatingState
-from rns_ros.core.commands import ExtraJointsReport, match_joint_state, partial_joint_goal
-from rns_ros.core.errors import ConfigError, InputError, RnsError
-from rns_ros.core.validation import Choice
+from rns_ros.core.commands import ExtraJointsReport, match_joint_state
+from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.nodes import ptp_parameters
 from rns_ros.nodes.cdr import odometry_fields
 from rns_ros.nodes.input_clock import InputClock
-from rns_ros.nodes.parameters import declare_parameters, from_parameters, load_node_model
-from rns_ros.nodes.robot_io import (
-    JointCommand,
-    base_pose,
-    measured_state_problem,
-    plan_trajectory,
+from rns_ros.nodes.parameters import (
+    declare_parameters,
+    from_parameters,
+    load_node_model,
+    sim_time_change_refused,
 )
+from rns_ros.nodes.ptp_planning import DEPLOY_GOAL, GoalIntake, PtpPlanning
+from rns_ros.nodes.ptp_status import (
+    ACTIVE,
+    DIAGNOSTICS_PERIOD,
+    FAULTS,
+    PLAYING,
+    PtpState,
+    PtpStatus,
+    coupling_momentum,
+    plan_values,
+)
+from rns_ros.nodes.robot_io import JointCommand, base_pose, measured_state_problem
 from rns_ros.nodes.runner import publish_last, run_node
-from rns_ros.nodes.status import CommanderWatch, level_rank, node_names, status_text
 
-#: A goal whose JointState name list is exactly this runs the full reactionless deployment.
-DEPLOY_GOAL = ["deploy"]
 #: A plan resumes after a hold on a joint state received this many periods after the stop: the
 #: arm at rest, not still slowing down from the last command.
 RESUME_PERIODS = 2.0
-#: Period of the /diagnostics publication [s] (wall clock).
-DIAGNOSTICS_PERIOD = 1.0
+#: Ticks at most max(MAX_TICK_GAP_PERIODS T, MAX_TICK_GAP_FLOOR) [-], [s] apart advance the plan
+#: clock by their interval: a busy executor fires a tick up to ~3 T late. A longer interval is a
+#: clock that jumped (less than max_clock_jump) or a node that stalled: the arm did not follow a
+#: plan clock that leapt, so the plan advances by the bound at most and is held there.
+MAX_TICK_GAP_PERIODS = 5.0
+MAX_TICK_GAP_FLOOR = 0.05
+__all__ = ["DEPLOY_GOAL", "PtpNode", "PtpState", "main"]
 
 
-class PtpState(Choice):
-    WAITING_FOR_STATE = "WAITING_FOR_STATE"
-    IDLE = "IDLE"
-    PLANNING = "PLANNING"
-    MOVING = "MOVING"
-    CANCELLING = "CANCELLING"
-    HOLDING = "HOLDING"
-    SETTLING = "SETTLING"
-    DONE = "DONE"
-    GOAL_MISSED = "GOAL_MISSED"
-    INVALID_GOAL = "INVALID_GOAL"
-    STALE_STATE = "STALE_STATE"
-    CONFLICTING_STATE = "CONFLICTING_STATE"
-
-
-STATE_LEVELS = {
-    PtpState.WAITING_FOR_STATE: DiagnosticStatus.WARN,
-    PtpState.HOLDING: DiagnosticStatus.WARN,
-    PtpState.INVALID_GOAL: DiagnosticStatus.ERROR,
-    PtpState.GOAL_MISSED: DiagnosticStatus.ERROR,
-    PtpState.STALE_STATE: DiagnosticStatus.ERROR,
-    PtpState.CONFLICTING_STATE: DiagnosticStatus.ERROR,
-}
-
-#: States in which each tick commands the joints from the plan.
-PLAYING = (PtpState.MOVING, PtpState.CANCELLING)
-
-
-class PtpNode(Node):
+class PtpNode(GoalIntake, Node):
     """ROS 2 wrapper of the point-to-point planner (see the module docstring)."""
 
     def __init__(self, **node_kwargs) -> None:
@@ -127,14 +103,24 @@ class PtpNode(Node):
         self.method = PtpMethod.parse(params["method"])
         self.settings = from_parameters(PtpSettings, params)
         self._period = 1.0 / params["rate"]
+        self._max_gap = max(MAX_TICK_GAP_PERIODS * self._period, MAX_TICK_GAP_FLOOR)
         if params["state_loss_timeout"] < params["state_timeout"]:
             raise ConfigError(
                 f"state_loss_timeout {params['state_loss_timeout']} s must be >= state_timeout "
                 f"{params['state_timeout']} s (the input is stale before it is lost)"
             )
+        self._bounds = CommandBounds.of(self.robot, params["max_reference_error"])
         self._theta: np.ndarray | None = None
         self._base_position = np.zeros(3)
         self._base_orientation = np.array([0.0, 0.0, 0.0, 1.0])
+        # created before the tick timer: its jump callback runs before the timer's
+        self._input_clock = InputClock(
+            self,
+            params["clock_timeout"],
+            self._on_clock_stopped,
+            on_clock_fault=self._on_clock_fault,
+            max_clock_jump=params["max_clock_jump"],
+        )
         # receipt times [s] on the input clock (simulated time under use_sim_time); the
         # monotonic receipt time of the newest joint state [s] (the /clock watch)
         self._state_received = -np.inf
@@ -145,32 +131,26 @@ class PtpNode(Node):
         self.plan = None
         self._playback: PlanPlayback | None = None
         self._last_clock: float | None = None
-        # HOLDING: the state, detail and input-clock time [s] of the hold (what fresh input
-        # returns to)
+        # HOLDING / CLOCK_FAULT: the state, detail and input-clock time [s] of the hold (what
+        # the node returns to); what the hold did; the monotonic time a clock fault began [s]
         self._held: tuple[PtpState, str, float] | None = None
         self._hold_note = ""
+        self._clock_fault_began = 0.0
         self._mode = PtpState.WAITING_FOR_STATE
         self._detail = ""
-        self._rejected = ""  # why the newest goal was rejected (shown while not moving)
-        # planning in one worker thread at a time: goals are numbered, only the newest result
-        # is taken; a goal that comes while it plans waits as the newest request (flooded
-        # goals replace each other there instead of starting threads)
-        self._lock = threading.Lock()
-        self._generation = 0
-        self._request: tuple[int, np.ndarray, np.ndarray | None] | None = None
-        self._planner_busy = False
-        # (goal, plan, input-clock time it was ready [s]): compared with state receipt times
-        self._planned: tuple[int, object, float] | None = None
-        self._last_status: DiagnosticStatus | None = None
+        self.planning = PtpPlanning(
+            self.robot,
+            self.method,
+            self.settings,
+            self._input_clock.now,
+            lambda text: self.get_logger().info(text, throttle_duration_sec=1.0),
+        )
         # the graph, read once a second: joint_states sources (other joint commanders: the
         # commander watch made with the output below)
         self._state_publishers: list[str] = []
         self._velocities = np.zeros(self.robot.n)  # last published theta_dot [rad/s]
-        # (goal, input-clock time of the stop [s]): compared with state receipt times
-        self._deferred: tuple[JointState, float] | None = None
         # SETTLING: the plan's last sample [rad] (n,) and when it was played [s, input clock]
         self._settle_from: tuple[np.ndarray, float] | None = None
-        self._input_clock = InputClock(self, params["clock_timeout"], self._on_clock_stopped)
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         self.create_subscription(JointState, "ptp_goal", self._on_goal, QoSProfile(depth=10))
@@ -181,8 +161,11 @@ class PtpNode(Node):
         self._command = JointCommand(
             params["output_interface"], self.robot.joint_names, params["joints"], self._period
         )
+        # [s] a command holds its velocities: to a trajectory's point 1, else one period
+        trajectory = params["output_interface"] == "trajectory"
+        self._horizon = self._command.horizon if trajectory else self._period
         self._whole = params["plan_output"] == "whole"
-        if self._whole and params["output_interface"] != "trajectory":
+        if self._whole and not trajectory:
             raise ConfigError(
                 "plan_output 'whole' sends one JointTrajectory: it needs output_interface "
                 f"'trajectory', not {params['output_interface']!r}"
@@ -190,18 +173,9 @@ class PtpNode(Node):
         self._output = self.create_publisher(
             self._command.message_type, self._command.topic, QoSProfile(depth=1)
         )
-        self._output_topic = self._output.topic_name
-        self._commander_watch = CommanderWatch(
-            self,
-            self._output_topic,
-            "only one of rns_controller / rns_ptp may command the joints at a time",
-            publishes=True,
-        )
-        self._status = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
-        self._diagnostics = self.create_publisher(
-            DiagnosticArray, "/diagnostics", QoSProfile(depth=10)
-        )
+        self._status = PtpStatus(self, self.robot.name, self._output.topic_name)
         self.create_service(Trigger, "~/cancel", self._on_cancel)
+        self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.create_timer(self._period, self._on_tick)
         self.create_timer(
@@ -241,130 +215,33 @@ class PtpNode(Node):
             sec, nanosec = fields.stamp
             self._odom_received = self._input_clock.receipt_time(sec + 1e-9 * nanosec)
 
-    def _on_goal(self, msg: JointState) -> None:
-        fault = self._fault(self._input_clock.now())
-        if self._theta is None or fault is not None:
-            self._reject(fault[1] if fault is not None else "no joint_states yet")
-            return
-        theta = self._theta.copy()
-        try:
-            goal = None if list(msg.name) == DEPLOY_GOAL else self.goal_positions(msg, theta)
-        except InputError as exc:
-            self._reject(str(exc))
-            return
-        self._rejected = ""
-        with self._lock:
-            self._generation += 1  # a plan still being computed for an older goal is dropped
-            self._planned = None
-        if self._deferred is not None:  # still stopping for an earlier goal: this one replaces it
-            self._deferred = (msg, self._deferred[1])
-            return
-        if self.plan is not None and self._mode in PLAYING:
-            # the arm moves: stop it and plan from where it comes to rest, sampled by a joint
-            # state received after the stop (joint_states lag by up to a publish period)
-            self.get_logger().info("new goal: the current motion stops and is replaced")
-            self._stop_output()
-            self.plan = None
-            self._deferred = (msg, self._input_clock.now())
-            self._mode, self._detail = PtpState.PLANNING, "stopping for the new goal"
-            return
-        self._start_planning(theta, goal)
-
-    def _start_planning(self, theta: np.ndarray, goal: np.ndarray | None) -> None:
-        self.plan, self._playback, self._held = None, None, None
-        self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
-        with self._lock:
-            self._generation += 1
-            self._request = (self._generation, theta, goal)
-            if self._planner_busy:
-                self.get_logger().info(
-                    "a plan for an earlier goal is still being computed: the newest goal is "
-                    "planned next (goals in between are dropped)",
-                    throttle_duration_sec=1.0,
-                )
-                return
-            self._planner_busy = True
-        threading.Thread(target=self._planner, daemon=True, name="rns_ptp_plan").start()
-
-    def _planner(self) -> None:
-        """The planning thread: plans the newest request until none is left."""
-        while True:
-            with self._lock:
-                request, self._request = self._request, None
-                if request is None:
-                    self._planner_busy = False
-                    return
-            self._plan(*request)
-
-    def goal_positions(self, msg: JointState, theta: np.ndarray) -> np.ndarray:
-        """The goal configuration: the named joints at their positions, the others at ``theta``
-        (:func:`rns_ros.core.commands.partial_joint_goal`; raises its InputError)."""
-        robot = self.robot
-        return partial_joint_goal(
-            msg.name, msg.position, robot.joint_names, theta, robot.lower_limits, robot.upper_limits
-        )
-
-    def _plan(self, generation: int, theta: np.ndarray, goal: np.ndarray | None) -> None:
-        try:
-            if goal is None:
-                result = plan_deployment(self.robot, theta, self.settings)
-            else:
-                result = plan_ptp(self.robot, theta, goal, self.method, self.settings)
-        except RnsError as exc:
-            result = exc
-        except Exception as exc:  # a planner bug must not kill the node silently
-            result = InputError(f"planning failed: {type(exc).__name__}: {exc}")
-        with self._lock:
-            if generation == self._generation:
-                self._planned = (generation, result, self._input_clock.now())
-
-    def _reject(self, reason: str) -> None:
-        self.get_logger().error(f"rejected ptp_goal: {reason}")
-        self._rejected = reason
-        if self._mode not in (*PLAYING, PtpState.PLANNING, PtpState.HOLDING):
-            self._mode, self._detail = PtpState.INVALID_GOAL, reason
-
-    def _on_cancel(self, _request, response):
-        if self._mode is PtpState.MOVING:
-            self._playback.cancel()
-            self._mode, self._detail = PtpState.CANCELLING, "decelerating on the path"
-            response.success, response.message = True, "decelerating to rest on the path"
-        elif self._mode is PtpState.HOLDING and self._held[0] is PtpState.MOVING:
-            self._playback.cancel()  # held at rest on the path: the plan ends there
-            self._held = (PtpState.CANCELLING, *self._held[1:])
-            response.success = True
-            response.message = "held at rest on the path (stale input): the plan ends there"
-        elif self._mode is PtpState.PLANNING:
-            with self._lock:
-                self._generation += 1
-                self._planned = None
-                self._request = None  # a goal waiting for the planner too
-            self._deferred = None
-            self._mode, self._detail = PtpState.IDLE, "planning cancelled"
-            response.success, response.message = True, "planning cancelled; the arm is at rest"
-        else:
-            response.success = False
-            response.message = f"nothing to cancel ({self._mode.value})"
-        return response
-
     # --- playback period ------------------------------------------------------------------------
     def _on_tick(self) -> None:
         clock_now = self.get_clock().now().nanoseconds * 1e-9
-        elapsed = 0.0 if self._last_clock is None else max(clock_now - self._last_clock, 0.0)
+        gap = None if self._last_clock is None else clock_now - self._last_clock
         self._last_clock = clock_now
         if self._theta is None:
             self._publish_status(PtpState.WAITING_FOR_STATE, f"waiting for {self._state_topic}")
             return
+        clock_fault = self._input_clock.clock_fault()
+        if clock_fault is not None:
+            self._hold_clock_fault(clock_fault)
+            self._publish_status(self._mode, self._detail)
+            return
         now = self._input_clock.now()
+        self._drop_future_times(now)
+        if self._mode is PtpState.CLOCK_FAULT:
+            self._clock_trusted(now)
+        # the plan clock advances by at most the bound between two ticks
+        elapsed = 0.0 if gap is None else min(max(gap, 0.0), self._max_gap)
         fault = self._fault(now)
         loss = self._params["state_loss_timeout"]
         planning = self._mode is PtpState.PLANNING
         if fault is not None and planning:
             # planning holds the GIL and may starve the executor; the arm is at rest
-            with self._lock:
-                ready = self._planned[2] if self._planned is not None else None
-            if self._deferred is not None:
-                ready = self._deferred[1]
+            ready = self.planning.ready_time()
+            if self.planning.deferred is not None:
+                ready = self.planning.deferred[1]
             if ready is None or now - ready < loss:
                 self._publish_status(self._mode, f"{self._detail} (waiting: {fault[1]})")
                 return
@@ -385,6 +262,14 @@ class PtpNode(Node):
             self._mode, self._detail = state, text
             self._publish_status(self._mode, text)
             return
+        if gap is not None and not 0.0 <= gap <= self._max_gap and self._mode in PLAYING:
+            self._hold(
+                f"{gap:.4g} s between two ticks, outside [0, {self._max_gap:.3g}] s (the clock "
+                "jumped or the node stalled)",
+                elapsed,
+            )
+            self._publish_status(self._mode, self._detail)
+            return
         if self._mode is PtpState.HOLDING:
             if not self._end_hold(now):
                 self._publish_status(self._mode, self._detail)
@@ -392,8 +277,8 @@ class PtpNode(Node):
             elapsed = 0.0  # the arm stood still since the hold: the playback goes on from here
         if self._mode in FAULTS or self._mode is PtpState.WAITING_FOR_STATE:
             self._mode, self._detail = PtpState.IDLE, ""
-        if self._mode is PtpState.PLANNING and self._deferred is not None:
-            self._start_deferred(now)
+        if self._mode is PtpState.PLANNING and self.planning.deferred is not None:
+            self._start_deferred()
         if self._mode is PtpState.PLANNING:
             self._take_plan()
             if self._mode is PtpState.MOVING:
@@ -412,14 +297,24 @@ class PtpNode(Node):
             age = max(age, now - self._odom_received)
         return age
 
-    def _hold(self, text: str, elapsed: float) -> None:
-        """A stale input (``text`` says which): a moving arm stops at the plan's sample where
-        the last command, ``elapsed`` [s] ago, brought it (zero velocity; the playback rate
-        r = 0, s frozen: the path is kept); HOLDING until fresh input or state_loss_timeout."""
-        loss = self._params["state_loss_timeout"]
-        if self._mode is PtpState.HOLDING:
-            self._detail = f"{text}; {self._hold_note}"
-            return
+    def _drop_future_times(self, now: float) -> None:
+        """Input-clock times later than ``now`` [s] (noted on a clock that then went back)
+        become ``now``: the watchdogs age them from here instead of never, and what waits for
+        a joint state after them waits for the next one."""
+        self._state_received = min(self._state_received, now)
+        if self._odom_received is not None:
+            self._odom_received = min(self._odom_received, now)
+        if self._settle_from is not None:
+            self._settle_from = (self._settle_from[0], min(self._settle_from[1], now))
+        if self._held is not None:
+            self._held = (*self._held[:2], min(self._held[2], now))
+        self.planning.clip_times(now)
+
+    def _stop_on_path(self, elapsed: float) -> str:
+        """Stop the arm where the plan stands: a moving arm at the plan's sample where the last
+        command, ``elapsed`` [s] ago, brought it (zero velocity; the playback rate r = 0, s
+        frozen: the path is kept). The state before it is kept to return to. Returns what was
+        done (one line)."""
         self._held = (self._mode, self._detail, self._input_clock.now())
         if self._mode in PLAYING:
             step = self._playback.hold(elapsed)
@@ -432,9 +327,57 @@ class PtpNode(Node):
             what = "the plan has played; the goal check waits for fresh input"
         else:
             what = "the arm is at rest; back to " + self._mode.value + " when fresh"
-        self.get_logger().warn(f"{text}: {what} (abandoned after state_loss_timeout {loss} s)")
         self._hold_note = what
+        return what
+
+    def _hold(self, text: str, elapsed: float) -> None:
+        """A stale input or a leap of the clock (``text`` says which): the arm stops on the
+        path (:meth:`_stop_on_path`); HOLDING until fresh input or state_loss_timeout."""
+        if self._mode is PtpState.HOLDING:
+            self._detail = f"{text}; {self._hold_note}"
+            return
+        what = self._stop_on_path(elapsed)
+        loss = self._params["state_loss_timeout"]
+        self.get_logger().warn(f"{text}: {what} (abandoned after state_loss_timeout {loss} s)")
         self._mode, self._detail = PtpState.HOLDING, f"{text}; {what}"
+
+    def _hold_clock_fault(self, text: str) -> None:
+        """use_sim_time: simulated time cannot be trusted (``text``: why, and who publishes
+        /clock). The arm stops on the path as on a stale input, at the sample one period past
+        the last command (how long it acted, no clock difference can tell), with one error
+        line; CLOCK_FAULT until the clock can be trusted again. After state_loss_timeout of
+        wall time in the fault a motion or planning is abandoned."""
+        if self._mode is not PtpState.CLOCK_FAULT:
+            self._clock_fault_began = time.monotonic()
+            if self._mode is PtpState.HOLDING:
+                what = self._hold_note  # held already: the state before it is kept
+            else:
+                what = self._stop_on_path(self._period)
+            self.get_logger().error(f"{PtpState.CLOCK_FAULT.value}: {text}; {what}")
+            self._mode = PtpState.CLOCK_FAULT
+        lasted = time.monotonic() - self._clock_fault_began
+        loss = self._params["state_loss_timeout"]
+        if lasted > loss and self._held is not None and self._held[0] in ACTIVE:
+            self._hold_note = (
+                f"the plan was abandoned after {lasted:.3g} s of an untrusted clock "
+                f"(state_loss_timeout {loss} s wall time)"
+            )
+            self.get_logger().error(f"{text}: {self._hold_note}")
+            self._abandon()
+        self._detail = f"{text}; {self._hold_note}"
+
+    def _clock_trusted(self, now: float) -> None:
+        """The clock runs forward from one publisher again (``now`` [s]): the node holds as on
+        a stale input that turned fresh (HOLDING, from ``now``), and goes back to its state, or
+        resumes the plan, on a joint state received after that; IDLE when the plan was
+        abandoned meanwhile."""
+        if self._held is None:
+            self._mode, self._detail = PtpState.IDLE, "the clock is trusted again; at rest"
+        else:
+            self._held = (*self._held[:2], now)
+            self._mode = PtpState.HOLDING
+            self._detail = f"the clock is trusted again; {self._hold_note}"
+        self.get_logger().info(f"/clock runs forward from one publisher again: {self._detail}")
 
     def _end_hold(self, now: float) -> bool:
         """Fresh input after a hold: True when the node goes on at this tick (a plan resumed
@@ -478,45 +421,25 @@ class PtpNode(Node):
             self._publish_plan(playback.resumed_samples(self._params["plan_sample_period"]))
         return True
 
-    def _settle(self, now: float) -> None:
-        """After the plan's last sample: DONE once every measured joint is within
-        goal_tolerance [rad] of it; GOAL_MISSED when one is not settle_timeout [s] (input clock,
-        ``now``) after the end (a simulator that refused the motion, an arm that stalled):
-        success is never reported for a motion that was not made."""
-        goal, ended = self._settle_from
-        error = np.abs(self._theta - goal)
-        joint = int(np.argmax(error))
-        if error[joint] <= self._params["goal_tolerance"]:
-            self._mode, self._detail = (
-                PtpState.DONE,
-                f"goal reached (within {error[joint]:.2g} rad)",
-            )
-            self.get_logger().info(self._detail)
-        elif now - ended > self._params["settle_timeout"]:
-            self._mode = PtpState.GOAL_MISSED
-            self._detail = (
-                f"{self.robot.joint_names[joint]} is {error[joint]:.3g} rad from the goal "
-                f"{self._params['settle_timeout']} s after the plan ended (goal_tolerance "
-                f"{self._params['goal_tolerance']} rad): the arm did not follow the plan"
-            )
-            self.get_logger().error(self._detail)
-
     def _abandon(self) -> None:
         """Zero velocity; the plan, a deferred goal and a plan being computed are dropped."""
         self._stop_output()
         self.plan, self._playback, self._held = None, None, None
-        self._deferred = None
-        with self._lock:
-            self._generation += 1
-            self._planned = None
-            self._request = None  # a goal waiting for the planner too
+        self.planning.drop()
 
     def _on_clock_stopped(self, still: float) -> None:
         """use_sim_time: /clock has stood still for ``still`` [s] of wall time. When no joint
         state came for as long either (a dead simulator), a motion is held here as on a stale
         state, and abandoned once no joint state came for state_loss_timeout of wall time; the
         status is published from here: the sim-time playback timer that would do it has
-        stopped too. An arm at rest is left as it is."""
+        stopped too. An arm at rest is left as it is; a clock fault goes on, abandoned after
+        state_loss_timeout of wall time."""
+        if self._mode is PtpState.CLOCK_FAULT:
+            fault = self._input_clock.clock_fault()
+            if fault is not None:  # else the next tick finds the clock trusted
+                self._hold_clock_fault(fault)
+                self._publish_status(self._mode, self._detail)
+            return
         quiet = time.monotonic() - self._state_received_wall
         if quiet < self._input_clock.timeout:
             return
@@ -525,7 +448,7 @@ class PtpNode(Node):
             f"{self._params['clock_timeout']} s wall time)"
         )
         loss = self._params["state_loss_timeout"]
-        active = (PtpState.MOVING, PtpState.CANCELLING, PtpState.PLANNING, PtpState.HOLDING)
+        active = (*ACTIVE, PtpState.HOLDING)
         if self._mode in active and quiet > loss:
             text = f"{text}; no joint_states for {quiet:.3f} s (state_loss_timeout {loss} s)"
             abandoned = "; the plan is abandoned" if self.plan is not None else ""
@@ -537,7 +460,8 @@ class PtpNode(Node):
         elif self._mode in active and self._mode is not PtpState.PLANNING:
             clock_now = self.get_clock().now().nanoseconds * 1e-9
             last, self._last_clock = self._last_clock, clock_now
-            self._hold(text, 0.0 if last is None else max(clock_now - last, 0.0))
+            gap = 0.0 if last is None else clock_now - last
+            self._hold(text, min(max(gap, 0.0), self._max_gap))
         elif self._mode is PtpState.PLANNING:  # the arm is at rest: planning goes on
             self._publish_status(self._mode, f"{self._detail} (waiting: {text})")
             return
@@ -549,6 +473,22 @@ class PtpNode(Node):
             )
         self._publish_status(self._mode, self._detail)
 
+    def _on_clock_fault(self, text: str) -> None:
+        """use_sim_time: a clock fault begins (``text``: why, and who publishes /clock),
+        reported by the jump callback or the wall-clock graph check: the arm is held now, also
+        when no tick comes (a /clock that stands still after it)."""
+        if self._theta is None:
+            return  # nothing commanded yet
+        self._hold_clock_fault(text)
+        self._publish_status(self._mode, self._detail)
+
+    # --- parameters -----------------------------------------------------------------------------
+    def _validate_parameters(self, parameters) -> SetParametersResult:
+        """On set: refuse a change of use_sim_time (the node keeps the clock it started with)
+        and run-time values their spec refuses; the reason names what is wrong."""
+        refused = sim_time_change_refused(self, parameters) or ptp_parameters.refused(parameters)
+        return SetParametersResult(successful=refused is None, reason=refused or "")
+
     def _apply_parameters(self, parameters) -> None:
         """After a set: the run-time parameters (clock_timeout) take their new values."""
         for parameter in parameters:
@@ -556,50 +496,7 @@ class PtpNode(Node):
                 self._params["clock_timeout"] = parameter.value
                 self._input_clock.set_clock_timeout(parameter.value)
 
-    def _start_deferred(self, now: float) -> None:
-        """Plan the goal that arrived during a motion once a joint state received at least two
-        periods after the stop shows where the arm came to rest."""
-        msg, stopped = self._deferred
-        if self._state_received < stopped + 2.0 * self._period:
-            return
-        self._deferred = None
-        theta = self._theta.copy()
-        try:  # joints the goal does not name keep the angles where the arm stopped
-            goal = None if list(msg.name) == DEPLOY_GOAL else self.goal_positions(msg, theta)
-        except InputError as exc:
-            self._mode = PtpState.IDLE
-            self._reject(str(exc))
-            return
-        self._start_planning(theta, goal)
-
-    def _take_plan(self) -> None:
-        with self._lock:
-            planned = self._planned
-            # a plan starts only on a joint state received after it was ready: the planning
-            # thread holds the GIL, and the last state before it may be close to stale already
-            if planned is None or self._state_received < planned[2]:
-                return
-            self._planned = None
-        result = planned[1]
-        if isinstance(result, RnsError):
-            self._mode = PtpState.IDLE  # nothing moves; _reject reports INVALID_GOAL
-            self._reject(str(result))
-            return
-        self.plan = result
-        self._playback = PlanPlayback(
-            result,
-            self._period,
-            self._params["resume_acceleration"],
-            self._params["cancel_deceleration"],
-        )
-        self._mode = PtpState.MOVING
-        self._detail = f"{result.method} plan of {result.duration:.3g} s"
-        for note in result.notes:
-            self.get_logger().info(f"plan: {note}")
-        self.get_logger().info(f"moving: {self._detail}")
-        if self._whole:
-            self._publish_plan(sample_plan(result, self._params["plan_sample_period"]))
-
+    # --- playback ------------------------------------------------------------------------------
     def _play(self, elapsed: float) -> None:
         """One tick of the playback, ``elapsed`` [s] after the last (node clock): the plan at s
         and r_mid theta_dot_plan(s_mid), held over the period (reactionless over the hold)."""
@@ -640,123 +537,59 @@ class PtpNode(Node):
         )
         return None if problem is None else (PtpState(problem[0]), problem[1])
 
+    # --- output ---------------------------------------------------------------------------------
     def _stop_output(self) -> None:
         if self._theta is not None:
             self._publish_output(self._theta, np.zeros(self.robot.n))
 
-    def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> None:
-        self._velocities = velocities
-        stamp = self.get_clock().now().to_msg()
-        self._output.publish(self._command.message(stamp, positions, velocities))
-
-    def _publish_plan(self, samples: PlanSamples) -> None:
-        """plan_output whole: ``samples`` (of a plan from its start, :func:`sample_plan`, or of
-        its rest after a hold, :meth:`PlanPlayback.resumed_samples`) as one JointTrajectory
-        stamped now (the playback clock goes on from this tick)."""
-        if not (np.isfinite(samples.theta).all() and np.isfinite(samples.theta_dot).all()):
-            self._abandon()
-            self._mode, self._detail = PtpState.INVALID_GOAL, "the plan gave a non-finite sample"
-            self.get_logger().error(self._detail)
-            return
-        self._velocities = samples.theta_dot[0]
-        stamp = self.get_clock().now().to_msg()
-        self._output.publish(
-            plan_trajectory(
-                stamp, self.robot.joint_names, samples.t, samples.theta, samples.theta_dot
+    def _publish_output(self, positions: np.ndarray, velocities: np.ndarray) -> BoundedCommand:
+        """One joint command, ``positions`` [rad] and ``velocities`` [rad/s] (n,) held from
+        now, within the URDF limits and max_reference_error of the measured angles (a NaN/Inf
+        in it as a stop; :func:`bound_joint_command`). Returns what was published."""
+        measured = self._theta if self._theta is not None else np.full(self.robot.n, np.nan)
+        sent = bound_joint_command(positions, velocities, measured, self._bounds, self._horizon)
+        if sent.clipped_joint is not None:
+            joint = sent.clipped_joint
+            low, high = self._bounds.box(measured)
+            self.get_logger().warn(
+                f"joint command clipped: {self.robot.joint_names[joint]} "
+                f"{positions[joint]:.6g} rad is outside [{low[joint]:.6g}, {high[joint]:.6g}] "
+                "rad (URDF limits, max_reference_error "
+                f"{self._params['max_reference_error']} rad of the measured angle)",
+                throttle_duration_sec=1.0,
             )
-        )
-        self.get_logger().info(f"plan sent whole: {samples.t.size} points")
+        self._velocities = sent.velocities
+        stamp = self.get_clock().now().to_msg()
+        self._output.publish(self._command.message(stamp, sent.positions, sent.velocities))
+        return sent
 
     # --- status ---------------------------------------------------------------------------------
-    def _values(self, state: PtpState) -> dict:
-        values = {"method": self.method.value}
-        plan, playback = self.plan, self._playback
-        moving = state in PLAYING
-        if plan is not None:
-            s = playback.s if playback is not None else 0.0
-            reference = plan.sample(s)
-            on_path = moving or (state is PtpState.HOLDING and reference.phase != "done")
-            values["plan_method"] = str(plan.method)
-            values["phase"] = reference.phase if on_path else "done"
-            values["progress"] = float(reference.progress)
-            values["duration"] = float(plan.duration)
-            values["playback_rate"] = playback.rate if moving else 0.0
-            folds = [
-                f"{p.name}: {math.degrees(p.fold_reached):.4g} deg"
-                for p in plan.phases
-                if p.fold_reached is not None
-            ]
-            values["fold_reached"] = ", ".join(folds) if folds else "none"
-            values["notes"] = "; ".join(plan.notes) if plan.notes else "none"
-        momentum = 0.0
-        if moving and self._theta is not None:
-            state_ff = FreeFloatingState.compute(
-                self.robot,
-                self.robot.configuration(self._theta, self._base_position, self._base_orientation),
-            )
-            momentum = float(
-                np.linalg.norm(state_ff.coupling_angular_momentum_matrix @ self._velocities)
-            )
-        values["coupling_momentum"] = momentum
-        if self._rejected:
-            values["rejected_goal"] = self._rejected
-        return values
-
     def _publish_status(self, state: PtpState, detail: str) -> None:
-        level = STATE_LEVELS.get(state, DiagnosticStatus.OK)
-        message = f"{state.value}: {detail}" if detail else state.value
-        if self._rejected and state is not PtpState.INVALID_GOAL:
-            message += f"; last goal rejected: {self._rejected}"
-        commanders = self._commander_watch.others
-        if commanders:
-            level = max(level, DiagnosticStatus.WARN, key=level_rank)
-            message += (
-                f"; {', '.join(commanders)} also publish(es) on {self._output_topic}: "
-                "run only one of rns_controller / rns_ptp"
+        momentum = 0.0
+        if state in PLAYING and self._theta is not None:
+            momentum = coupling_momentum(
+                self.robot,
+                self._theta,
+                self._base_position,
+                self._base_orientation,
+                self._velocities,
             )
-        status = DiagnosticStatus(
-            level=level,
-            name=f"{self.get_name()}: point-to-point motion",
-            message=message,
-            hardware_id=self.robot.name,
-            values=[
-                KeyValue(key=key, value=status_text(value))
-                for key, value in {"state": state.value, **self._values(state)}.items()
-            ],
+        values = plan_values(
+            state, self.method, self.plan, self._playback, momentum, self._status.rejected
         )
-        self._last_status = status
-        msg = DiagnosticArray(status=[status])
-        msg.header.stamp = self.get_clock().now().to_msg()
-        self._status.publish(msg)
+        self._status.publish(state, detail, values)
 
     def _on_diagnostics(self) -> None:
-        self._check_graph()
-        if self._last_status is None:
-            return
-        msg = DiagnosticArray(status=[self._last_status])
-        msg.header.stamp = self.get_clock().now().to_msg()
-        self._diagnostics.publish(msg)
-
-    def _check_graph(self) -> None:
-        """Who publishes joint_states (more than one source is a fault: the plan would start
-        from one robot's angles and the watchdog be fed by another) and who else commands the
-        joints on our output topic (reported: two commanders make the arm jerk between them)."""
-        self._state_publishers = node_names(
-            info
-            for info in self.get_publishers_info_by_topic(self._state_topic)
-            if info.topic_type == "sensor_msgs/msg/JointState"
-        )
-        self._commander_watch.check()
+        """Once a second (wall clock): the graph (joint_states sources: more than one is a
+        fault; other commanders: reported), then the newest status on /diagnostics."""
+        self._state_publishers = self._status.check_graph(self._state_topic)
+        self._status.publish_diagnostics()
 
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""
         if self._theta is not None:
             publish_last(self, self._stop_output, "zero velocity", acked_by=self._output)
         super().destroy_node()
-
-
-#: States in which the measured state cannot be trusted (zero output, the plan abandoned).
-FAULTS = (PtpState.STALE_STATE, PtpState.CONFLICTING_STATE)
 
 
 def main(args=None) -> int:

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import replace
 
+from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
 from rns_ros.control.ptp import PtpMethod
+from rns_ros.core.errors import ConfigError
 from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
     JOINTS,
+    MAX_CLOCK_JUMP,
     MODEL_CONFIG,
     OUTPUT_INTERFACE,
     WORLD_FRAME,
@@ -96,6 +100,19 @@ PARAMETERS = (
         description="use_sim_time: /clock standing still this long (wall time) with no "
         "joint_states holds the arm (HOLDING)",
     ),
+    replace(
+        MAX_CLOCK_JUMP,
+        description="use_sim_time: a /clock reading this far forward, any back, or two /clock "
+        "publishers hold the arm (CLOCK_FAULT)",
+    ),
+    ParameterSpec(
+        "max_reference_error",
+        DEFAULT_MAX_REFERENCE_ERROR,
+        "Commanded positions stay within this of the measured angles (and within the URDF limits)",
+        "[rad]",
+        0.01,
+        10.0,
+    ),
     ParameterSpec(
         "goal_tolerance",
         0.01,
@@ -144,3 +161,16 @@ PARAMETERS = (
     WORLD_FRAME,
 )
 SPECS = specs_by_name(PARAMETERS)
+
+
+def refused(parameters: Iterable) -> str | None:
+    """Why a run-time change of ``parameters`` (an on-set callback's list) is refused: the
+    first value its spec refuses (ConfigError's text); None when every one passes."""
+    for parameter in parameters:
+        spec = SPECS.get(parameter.name)
+        if spec is not None:
+            try:
+                spec.check(parameter.value)
+            except ConfigError as exc:
+                return str(exc)
+    return None

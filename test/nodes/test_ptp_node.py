@@ -21,10 +21,13 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from rns_ros.analysis.ptp_runs import run_plan
+from rns_ros.control.command_bounds import CommandBounds
 from rns_ros.control.ptp_planner import plan_ptp
+from rns_ros.control.ptp_sampling import PlanSamples, sample_plan
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.ptp import PtpNode, PtpState
+from rns_ros.nodes.ptp_planning import whole_plan_problem
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.nodes.simulator_parameters import SATELLITE_OBSERVATION_RAD
 
@@ -544,6 +547,63 @@ def test_a_gap_in_joint_states_holds_the_deployment_and_it_resumes_on_its_path(r
     assert math.degrees(dds) < 0.01
 
 
+def _whole_samples(robot, settings) -> PlanSamples:
+    """A joint_space plan from START by SMALL_STEP, sampled as plan_output whole sends it."""
+    plan = plan_ptp(robot, START, START + SMALL_STEP, "joint_space", settings)
+    return sample_plan(plan, 0.25)
+
+
+def _with_sample(samples: PlanSamples, k: int, joint: int, theta: float) -> PlanSamples:
+    """``samples`` with joint ``joint`` of sample ``k`` at ``theta`` [rad]."""
+    changed = samples.theta.copy()
+    changed[k, joint] = theta
+    return PlanSamples(t=samples.t, theta=changed, theta_dot=samples.theta_dot)
+
+
+def test_a_whole_plan_is_checked_against_the_urdf_limits_and_the_measured_angles(ros):
+    """Every sample within the URDF position and velocity limits, and the first within
+    max_reference_error of the measured angles; the reason names the joint and the value."""
+    node = _node(ros, PtpNode, plan_output="whole")
+    robot, names = node.robot, node.robot.joint_names
+    bounds = CommandBounds.of(robot, 0.25)
+    samples = _whole_samples(robot, node.settings)
+    assert whole_plan_problem(samples, bounds, START, names) is None
+    outside = _with_sample(samples, 2, 1, robot.upper_limits[1] + 0.1)
+    problem = whole_plan_problem(outside, bounds, START, names)
+    assert "joint_2 at" in problem
+    assert "outside its URDF limits" in problem
+    fast = PlanSamples(samples.t, samples.theta, samples.theta_dot.copy())
+    fast.theta_dot[1, 3] = 2.0 * robot.velocity_limits[3]
+    assert "beyond its URDF velocity limit" in whole_plan_problem(fast, bounds, START, names)
+    away = START + np.array([0.0, 0.0, 0.0, 0.4, 0.0, 0.0, 0.0])
+    problem = whole_plan_problem(samples, bounds, away, names)
+    assert "first point puts joint_4" in problem
+    assert "max_reference_error 0.25 rad" in problem
+    nan = _with_sample(samples, 1, 0, math.nan)
+    assert "non-finite" in whole_plan_problem(nan, bounds, START, names)
+
+
+def test_a_whole_plan_with_a_sample_outside_the_limits_is_refused_and_not_sent(ros):
+    """rns_ptp with plan_output whole refuses to send a plan one of whose samples lies outside
+    the URDF limits (a joint_trajectory_controller would play it to there): INVALID_GOAL, the
+    arm commanded to rest where it stands, no multi-point trajectory published."""
+    node = _node(ros, PtpNode, plan_output="whole")
+    references = Recorder(ros.probe(), JointTrajectory, "joint_references")
+    node._theta = START.copy()
+    samples = _whole_samples(node.robot, node.settings)
+    bad = _with_sample(samples, 3, 4, node.robot.lower_limits[4] - 0.05)
+    assert node._publish_plan(bad) is False
+    assert node._mode is PtpState.INVALID_GOAL
+    assert "joint_5" in node._detail
+    assert "outside its URDF limits" in node._detail
+    assert ros.spin_until(lambda: references.messages, timeout=10.0)
+    ros.spin_for(0.2)
+    for msg in references.messages:  # the stop: one streamed trajectory where the arm stands
+        assert len(msg.points) == 3
+        np.testing.assert_array_equal(msg.points[0].positions, START)
+        assert not np.any(msg.points[0].velocities)
+
+
 def test_velocity_interface_and_a_planned_closed_loop_method(ros):
     """output_interface velocity (joints reversed at both ends) with inverse_jacobian, which is
     integrated offline while the node reports PLANNING; the arm ends at the plan's goal (open
@@ -900,13 +960,13 @@ def test_a_goal_flood_plans_one_goal_at_a_time_and_the_newest_wins(ros):
     the one planned and played."""
     stack = _stack(ros, method="joint_space", duration=0.5)
     ptp = stack.ptp
-    plan = ptp._plan
+    compute = ptp.planning.compute
 
     def slow_plan(*args):
         time.sleep(0.2)
-        plan(*args)
+        compute(*args)
 
-    ptp._plan = slow_plan
+    ptp.planning.compute = slow_plan
     assert stack.run_until(lambda: ptp._theta is not None, timeout=10.0)
     start = ptp._theta.copy()
     planners = []

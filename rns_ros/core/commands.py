@@ -52,7 +52,7 @@ def joint_order(names: Sequence[str], model_joints: Sequence[str]) -> np.ndarray
             names (listed, at most MAX_LISTED of each).
     """
     check_name_count(len(names), model_joints)
-    return _cached_order(tuple(names), tuple(model_joints))
+    return _cached_order(tuple(names), tuple(model_joints), False)[0]
 
 
 def check_name_count(count: int, model_joints: Sequence[str]) -> None:
@@ -81,25 +81,33 @@ def _duplicated(names: Sequence[str]) -> list[str]:
     return sorted(name for name, count in Counter(names).items() if count > 1)
 
 
-@functools.lru_cache(maxsize=16)
-def _cached_order(names: tuple[str, ...], model_joints: tuple[str, ...]) -> np.ndarray:
-    named = set(names)
-    unknown = sorted(named - set(model_joints))
+@functools.lru_cache(maxsize=32)
+def _cached_order(
+    names: tuple[str, ...], model_joints: tuple[str, ...], extras_allowed: bool
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    """(read-only index array p with values[p[i]] for model joint i, the names that are not
+    model joints in message order); those are an error unless ``extras_allowed``.
+
+    Raises:
+        InputError: unknown (unless allowed), missing or duplicated joints, all listed.
+    """
+    model, named = set(model_joints), set(names)
+    extras = tuple(dict.fromkeys(name for name in names if name not in model))
     missing = [joint for joint in model_joints if joint not in named]
-    duplicated = _duplicated(names)
+    duplicated = [name for name in _duplicated(names) if not extras_allowed or name in model]
     problems = []
-    if unknown:
-        problems.append(f"unknown joints {listed(unknown)}")
+    if extras and not extras_allowed:
+        problems.append(f"unknown joints {listed(sorted(extras))}")
     if missing:
         problems.append(f"missing joints {listed(missing)}")
     if duplicated:
         problems.append(f"duplicated joints {listed(duplicated)}")
     if problems:
         raise InputError("; ".join(problems) + f" (model joints: {list(model_joints)})")
-    index = {name: i for i, name in enumerate(names)}
+    index = {name: i for i, name in enumerate(names) if name in model}
     order = np.array([index[joint] for joint in model_joints])
     order.flags.writeable = False
-    return order
+    return order, extras
 
 
 def _field(
@@ -169,28 +177,7 @@ def joint_state_order(
         InputError: missing model joints, or a model joint named twice (listed, at most
             MAX_LISTED of each).
     """
-    return _cached_state_order(tuple(names), tuple(model_joints))
-
-
-@functools.lru_cache(maxsize=16)
-def _cached_state_order(
-    names: tuple[str, ...], model_joints: tuple[str, ...]
-) -> tuple[np.ndarray, tuple[str, ...]]:
-    model, named = set(model_joints), set(names)
-    missing = [joint for joint in model_joints if joint not in named]
-    duplicated = [name for name in _duplicated(names) if name in model]
-    problems = []
-    if missing:
-        problems.append(f"missing joints {listed(missing)}")
-    if duplicated:
-        problems.append(f"duplicated joints {listed(duplicated)}")
-    if problems:
-        raise InputError("; ".join(problems) + f" (model joints: {list(model_joints)})")
-    index = {name: i for i, name in enumerate(names) if name in model}
-    order = np.array([index[joint] for joint in model_joints])
-    order.flags.writeable = False
-    extras = tuple(dict.fromkeys(name for name in names if name not in model))
-    return order, extras
+    return _cached_order(tuple(names), tuple(model_joints), True)
 
 
 def match_joint_state(

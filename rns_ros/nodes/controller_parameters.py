@@ -4,7 +4,6 @@ they configure."""
 from __future__ import annotations
 
 from rns_ros.control.camera_law import ControlGains, Method
-from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
 from rns_ros.control.command_tracking import TrackingSettings
 from rns_ros.control.controller import ControllerSettings, HoldCorrection, TwistFrame
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
@@ -13,6 +12,7 @@ from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
     JOINTS,
     MAX_CLOCK_JUMP,
+    MAX_REFERENCE_ERROR,
     MODEL_CONFIG,
     OUTPUT_INTERFACE,
     WORLD_FRAME,
@@ -272,14 +272,7 @@ PARAMETERS = (
     ),
     CLOCK_TIMEOUT,
     MAX_CLOCK_JUMP,
-    ParameterSpec(
-        "max_reference_error",
-        DEFAULT_MAX_REFERENCE_ERROR,
-        "Commanded positions stay within this of the measured angles (and within the URDF limits)",
-        "[rad]",
-        0.01,
-        10.0,
-    ),
+    MAX_REFERENCE_ERROR,
     OUTPUT_INTERFACE,
     JOINTS,
     WORLD_FRAME,

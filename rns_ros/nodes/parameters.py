@@ -21,6 +21,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.node import Node
 
+from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.watchdog import DEFAULT_MAX_CLOCK_JUMP
 from rns_ros.core.commands import joint_order
@@ -151,6 +152,15 @@ MAX_CLOCK_JUMP = ParameterSpec(
     "[s]",
     1e-3,
     3600.0,
+)
+#: Joint command bound of the nodes that command the joints (rns_ros.control.command_bounds).
+MAX_REFERENCE_ERROR = ParameterSpec(
+    "max_reference_error",
+    DEFAULT_MAX_REFERENCE_ERROR,
+    "Commanded positions stay within this of the measured angles (and within the URDF limits)",
+    "[rad]",
+    0.01,
+    10.0,
 )
 #: frame_id of twists in the base and camera frames (nodes that send TwistStamped); empty: the
 #: frames of ``model_config``'s model (its base link and camera frame).

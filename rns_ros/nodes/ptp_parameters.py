@@ -5,13 +5,13 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import replace
 
-from rns_ros.control.command_bounds import DEFAULT_MAX_REFERENCE_ERROR
 from rns_ros.control.ptp import PtpMethod
 from rns_ros.core.errors import ConfigError
 from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
     JOINTS,
     MAX_CLOCK_JUMP,
+    MAX_REFERENCE_ERROR,
     MODEL_CONFIG,
     OUTPUT_INTERFACE,
     WORLD_FRAME,
@@ -105,14 +105,7 @@ PARAMETERS = (
         description="use_sim_time: a /clock reading this far forward, any back, or two /clock "
         "publishers hold the arm (CLOCK_FAULT)",
     ),
-    ParameterSpec(
-        "max_reference_error",
-        DEFAULT_MAX_REFERENCE_ERROR,
-        "Commanded positions stay within this of the measured angles (and within the URDF limits)",
-        "[rad]",
-        0.01,
-        10.0,
-    ),
+    MAX_REFERENCE_ERROR,
     ParameterSpec(
         "goal_tolerance",
         0.01,

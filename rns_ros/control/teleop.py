@@ -176,6 +176,11 @@ class GateOutput:
     detail: str
 
 
+#: A command received at most this long [s] after the gate's ``now`` is fresh, not from a clock
+#: that went back: times summed in floats (periods, key-repeat grids) differ by ~1e-15 s.
+RECEIPT_SLACK = 1e-6
+
+
 class CommandGate:
     """Newest valid command, with receipt-time timeout and bounded ramps.
 
@@ -239,8 +244,9 @@ class CommandGate:
             return GateOutput(zero, zero, self._default_frame, state, True, detail)
         age = now - command.received
         wanted = float(np.linalg.norm(command.angular))
-        # received after now: the clock went back since, and its age is unknown (stale)
-        if self._rejection is None and 0.0 <= age <= self.timeout:
+        # received after now: the clock went back since, and its age is unknown (stale); a
+        # receipt within RECEIPT_SLACK after now is the rounding of times summed in floats
+        if self._rejection is None and -RECEIPT_SLACK <= age <= self.timeout:
             return self._follow(command, wanted, period)
         if wanted > 0.0:
             self._speed = max(0.0, min(self._speed, wanted) - self.deceleration * period)

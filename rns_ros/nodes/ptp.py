@@ -165,6 +165,11 @@ class PtpNode(GoalIntake, Node):
         trajectory = params["output_interface"] == "trajectory"
         self._horizon = self._command.horizon if trajectory else self._period
         self._whole = params["plan_output"] == "whole"
+        # what the plant plays between two ticks at most [s]: one streamed command until it
+        # ends at rest; a whole plan plays on by itself
+        self._played = (
+            self._max_gap if self._whole else min(self._command.acting_horizon, self._max_gap)
+        )
         if self._whole and not trajectory:
             raise ConfigError(
                 "plan_output 'whole' sends one JointTrajectory: it needs output_interface "
@@ -232,8 +237,9 @@ class PtpNode(GoalIntake, Node):
         self._drop_future_times(now)
         if self._mode is PtpState.CLOCK_FAULT:
             self._clock_trusted(now)
-        # the plan clock advances by at most the bound between two ticks
-        elapsed = 0.0 if gap is None else min(max(gap, 0.0), self._max_gap)
+        # the plan clock advances by what the plant played since the last tick: a late tick
+        # on a loaded machine finds the arm at rest where the last command ended
+        elapsed = 0.0 if gap is None else min(max(gap, 0.0), self._played)
         fault = self._fault(now)
         loss = self._params["state_loss_timeout"]
         planning = self._mode is PtpState.PLANNING
@@ -262,7 +268,7 @@ class PtpNode(GoalIntake, Node):
             self._mode, self._detail = state, text
             self._publish_status(self._mode, text)
             return
-        if gap is not None and not 0.0 <= gap <= self._max_gap and self._mode in PLAYING:
+        if gap is not None and self._mode in PLAYING and self._clock_jumped(gap):
             self._hold(
                 f"{gap:.4g} s between two ticks, outside [0, {self._max_gap:.3g}] s (the clock "
                 "jumped or the node stalled)",
@@ -288,6 +294,13 @@ class PtpNode(GoalIntake, Node):
         elif self._mode is PtpState.SETTLING:
             self._settle(now)
         self._publish_status(self._mode, self._detail)
+
+    def _clock_jumped(self, gap: float) -> bool:
+        """True when two ticks ``gap`` [s] apart (node clock) cannot be a late tick: the clock
+        went back, or under use_sim_time moved on by more than the bound (a lockstep
+        simulation waits for its nodes, so only another clock makes such a gap). On the wall
+        clock a late tick is a loaded machine: the plan clock takes what the plant played."""
+        return gap < 0.0 or (self._input_clock.sim_time and gap > self._max_gap)
 
     def _input_age(self, now: float) -> float:
         """Age [s] at ``now`` (input clock) of the older of joint_states and base_odom (once

@@ -1010,3 +1010,17 @@ def test_done_only_once_the_measured_angles_reach_the_goal(ros):
     states = {status_values(m)["state"] for m in status.messages}
     assert "DONE" not in states
     assert "SETTLING" in states
+
+
+def test_a_late_tick_on_the_wall_clock_advances_the_plan_by_what_the_plant_played(ros):
+    """On the wall clock a tick 0.2 s late is a loaded machine, not a clock fault: no hold, and
+    the plan clock advances by what one streamed trajectory plays before it ends at rest (2 T),
+    so the arm stays on the path. Under use_sim_time such a gap is a clock that jumped, and a
+    clock that goes back is one anywhere."""
+    wall = _node(ros, PtpNode)
+    assert not wall._clock_jumped(0.2)
+    assert wall._clock_jumped(-0.01)
+    assert wall._played == pytest.approx(2 * PERIOD)
+    sim = ros.add(PtpNode, {"use_sim_time": True}, name="rns_ptp_sim")
+    assert sim._clock_jumped(0.2)
+    assert not sim._clock_jumped(PERIOD)

@@ -183,13 +183,17 @@ class GoalIntake:
     planning: PtpPlanning
 
     def _on_goal(self, msg: JointState) -> None:
-        """A goal: refused while the input or the clock cannot be trusted, or when it is not
-        one (INVALID_GOAL, or noted while a motion goes on); else planned from the measured
-        angles, after stopping the arm when it moves."""
+        """A goal: refused while the clock cannot be trusted, with two state sources, or when
+        it is not one (INVALID_GOAL, or noted while a motion goes on); else planned from the
+        measured angles, after stopping the arm when it moves. While the input is late (a
+        loaded machine) it waits, like a goal that stops a motion, for a fresh joint state
+        (at most ``state_loss_timeout``)."""
+        now = self._input_clock.now()
         fault = self._input_clock.clock_fault()
-        if fault is None:
-            stale = self._fault(self._input_clock.now())
-            fault = None if stale is None else stale[1]
+        problem = None if fault is not None else self._fault(now)
+        late = problem is not None and problem[0] is PtpState.STALE_STATE
+        if fault is None and problem is not None and not late:
+            fault = problem[1]
         if self._theta is None or fault is not None:
             self._reject(fault if fault is not None else "no joint_states yet")
             return
@@ -201,6 +205,14 @@ class GoalIntake:
             return
         self._status.rejected = ""
         self.planning.supersede()
+        if late and self.planning.deferred is None:
+            self.get_logger().info(f"new goal while {problem[1]}: planned once the state is fresh")
+            if self.plan is not None and self._mode in PLAYING:
+                self._stop_output()
+            self.plan, self._playback, self._held = None, None, None
+            self.planning.deferred = (msg, now)
+            self._mode, self._detail = PtpState.PLANNING, "waiting for a fresh state"
+            return
         if self.planning.deferred is not None:
             # still stopping for an earlier goal: this one replaces it
             self.planning.deferred = (msg, self.planning.deferred[1])

@@ -876,12 +876,6 @@ def test_sim_time_a_state_stale_for_state_loss_timeout_abandons_the_plan(ros):
     held = _first_stamp(stack, "HOLDING")
     assert 0.25 <= held - last_state <= 0.25 + 2 * STEP
     assert stack.ptp.plan is plan
-    _send(stack, JOINTS, START)  # refused while the input is stale; the hold goes on
-    for _ in range(5):
-        stack.step(state=False)
-    assert _state(stack) == "HOLDING"
-    assert "joint_states" in status_values(stack.status.messages[-1])["rejected_goal"]
-    assert stack.ptp.plan is plan
     count = len(stack.references.messages)
     assert stack.step_until(lambda: _state(stack) == "STALE_STATE", state=False)
     lost = _first_stamp(stack, "STALE_STATE")
@@ -1024,3 +1018,29 @@ def test_a_late_tick_on_the_wall_clock_advances_the_plan_by_what_the_plant_playe
     sim = ros.add(PtpNode, {"use_sim_time": True}, name="rns_ptp_sim")
     assert sim._clock_jumped(0.2)
     assert not sim._clock_jumped(PERIOD)
+
+
+def test_sim_time_a_goal_sent_while_the_input_is_late_waits_for_a_fresh_state(ros):
+    """A loaded machine delays joint_states: a goal that comes during the hold is not refused;
+    it replaces the held plan and is planned from the first fresh state (PLANNING "waiting for
+    a fresh state", then MOVING from the measured angles)."""
+    stack = _sim_time_stack(ros, state_timeout=0.25, state_loss_timeout=5.0, clock_timeout=30.0)
+    held = stack.ptp.plan
+    assert stack.step_until(lambda: _state(stack) == "HOLDING", state=False)
+    goal = START.copy()
+    goal[0] += 0.2
+    _send(stack, JOINTS, goal)
+    for _ in range(5):
+        stack.step(state=False)
+    values = status_values(stack.status.messages[-1])
+    assert values["state"] == "PLANNING"
+    assert "waiting for a fresh state" in stack.status.messages[-1].status[0].message
+    assert "rejected_goal" not in values
+    assert stack.ptp.plan is None
+    assert np.all(_velocities(stack) == 0.0)
+    assert stack.step_until(lambda: _state(stack) == "MOVING")
+    assert stack.ptp.plan is not held
+    np.testing.assert_allclose(stack.ptp.plan.sample(0.0).theta, START, atol=1e-9)
+    np.testing.assert_allclose(
+        stack.ptp.plan.sample(stack.ptp.plan.duration).theta, goal, atol=1e-6
+    )

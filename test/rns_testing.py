@@ -222,3 +222,11 @@ def assert_commands_bounded(commands, robot, near: float) -> None:
         assert np.all(command <= robot.upper_limits)
         worst = np.abs(command - measured).max()
         assert worst <= near, f"command {worst:.4g} rad from the measured angles"
+
+
+def assert_one_clock_fault_logged(capfd) -> None:
+    """The node's log (stderr captured by ``capfd``) has exactly one CLOCK_FAULT error line and
+    blames no stale state: the clock, not joint_states, is named."""
+    log = capfd.readouterr().err
+    assert log.count("CLOCK_FAULT:") == 1, log
+    assert "STALE_STATE" not in log

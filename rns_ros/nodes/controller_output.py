@@ -50,8 +50,6 @@ class JointOutput:
         self._keep = keep
         self.bounds = bounds
         self.command = JointCommand(interface, joint_names, joints, period)
-        # [s] the command holds its velocities for: to a trajectory's point 1, else one period
-        self._horizon = self.command.horizon if interface == "trajectory" else period
         self.publisher = node.create_publisher(
             self.command.message_type, self.command.topic, QoSProfile(depth=1)
         )
@@ -78,7 +76,9 @@ class JointOutput:
         becomes a stop), planned at ``planned`` [ns] on the node clock and stamped ``lead`` [s]
         later (a plant acting from the stamp starts it there). :attr:`recent` keeps ``planned``
         and the velocities published. Returns what was published."""
-        bounded = bound_joint_command(positions, velocities, measured, self.bounds, self._horizon)
+        bounded = bound_joint_command(
+            positions, velocities, measured, self.bounds, self.command.bound_horizon
+        )
         positions, velocities = bounded.positions, bounded.velocities
         stamp_ns = planned + round(lead * 1e9)
         seconds = planned * 1e-9

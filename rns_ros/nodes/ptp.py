@@ -161,9 +161,7 @@ class PtpNode(GoalIntake, Node):
         self._command = JointCommand(
             params["output_interface"], self.robot.joint_names, params["joints"], self._period
         )
-        # [s] a command holds its velocities: to a trajectory's point 1, else one period
         trajectory = params["output_interface"] == "trajectory"
-        self._horizon = self._command.horizon if trajectory else self._period
         self._whole = params["plan_output"] == "whole"
         # what the plant plays between two ticks at most [s]: one streamed command until it
         # ends at rest; a whole plan plays on by itself
@@ -560,7 +558,9 @@ class PtpNode(GoalIntake, Node):
         now, within the URDF limits and max_reference_error of the measured angles (a NaN/Inf
         in it as a stop; :func:`bound_joint_command`). Returns what was published."""
         measured = self._theta if self._theta is not None else np.full(self.robot.n, np.nan)
-        sent = bound_joint_command(positions, velocities, measured, self._bounds, self._horizon)
+        sent = bound_joint_command(
+            positions, velocities, measured, self._bounds, self._command.bound_horizon
+        )
         if sent.clipped_joint is not None:
             joint = sent.clipped_joint
             low, high = self._bounds.box(measured)

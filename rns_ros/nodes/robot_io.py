@@ -148,6 +148,9 @@ class JointCommand:
         self.joint_names = list(joint_names)
         self.period = period
         self.horizon = trajectory_horizon(period)
+        #: how long the command holds its velocities [s], the horizon its positions are bounded
+        #: over: to a trajectory's point 1, else one period
+        self.bound_horizon = self.horizon if interface == "trajectory" else period
         #: how long one command acts without a newer one before the plant holds still [s]: a
         #: trajectory ends at rest at its horizon, a position target is reached after a
         #: period, a velocity is held (until the plant's own timeout)

@@ -159,7 +159,8 @@ def test_the_spacenav_twist_stream_turns_the_camera_through_the_controller(ros):
     its z axis: plain Twist on spacenav/twist, reliable depth 10, ~32 Hz (one message per
     static_count_threshold ms), angular z = angular_scale/z at full deflection. The controller
     started with the same file and the remap of the file's comment turns the camera about its
-    own z at that rate of simulated time; the base stays within the DLS level."""
+    own z at that rate of simulated time once it has caught up with the attitude the commands add
+    up to; the base stays within the DLS level."""
 
     config = REPO / "config" / "spacenav.yaml"
     driver = yaml.safe_load(config.read_text())["spacenav"]["ros__parameters"]
@@ -180,6 +181,13 @@ def test_the_spacenav_twist_stream_turns_the_camera_through_the_controller(ros):
     probe.create_timer(0.031, lambda: spacenav.publish(twist))
     assert ros.spin_until(
         lambda: status.messages and status_values(status.messages[-1])["state"] == "OK",
+        timeout=10.0,
+    )
+    # The start ramps the joint speed up; the controller then closes the gap between the camera
+    # and the attitude the commands add up to (tracking_gain), after which the camera turns at
+    # the commanded rate itself.
+    assert ros.spin_until(
+        lambda: float(status_values(status.messages[-1]).get("tracking_error", "inf")) < 2e-3,
         timeout=10.0,
     )
 

@@ -122,10 +122,14 @@ class QuinticLine:
         s, s_dot = quintic(t, self.duration)
         return self.start + s * self.delta, s_dot * self.delta
 
-    def command(self, t: float, theta: np.ndarray, gain: float) -> np.ndarray:
-        """theta_dot_ref + k (theta_ref - theta) [rad/s] (n,) at ``t`` [s] for ``theta``."""
-        theta_ref, theta_dot_ref = self(t)
-        return theta_dot_ref + gain * (theta_ref - theta)
+    def angles(self, t: float) -> np.ndarray:
+        """theta_ref(t) [rad] (n,)."""
+        return self(t)[0]
+
+    def track(self, t, theta, error, rate, gain) -> np.ndarray:
+        """r theta_dot_ref(t) + k e [rad/s] (n,): the reference rate scaled by ``rate`` r [-]
+        plus ``gain`` k [1/s] times the position ``error`` e [rad] (n,) (``theta`` unused)."""
+        return rate * self(t)[1] + gain * error
 
 
 class PathSegment:
@@ -165,17 +169,17 @@ class PathSegment:
         """d sigma / dt [rad/s] at time ``t``."""
         return self._sigma(t)[1]
 
-    def command(self, t: float, theta: np.ndarray, gain: float) -> np.ndarray:
-        """(sigma_dot + k n . (theta_ref - theta)) n(theta) [rad/s] (n,) at ``t`` [s]: the
-        arc-length form of eq. (4.18), the error projected on the path tangent; exactly
-        reactionless at the measured ``theta``."""
-        theta_ref, _ = self(t)
+    def angles(self, t: float) -> np.ndarray:
+        """theta_ref(t) [rad] (n,), the path at time ``t`` [s]."""
+        return self.path.at(self._sigma(t)[0])[0]
+
+    def track(self, t, theta, error, rate, gain) -> np.ndarray:
+        """(r sigma_dot(t) + k n . e) n [rad/s] (n,), n = n(``theta``) the unit null vector at
+        the arm's angles ``theta`` [rad] (n,): the arc-length form of eq. (4.18) with the
+        rate scaled by ``rate`` r [-] and the position ``error`` e [rad] (n,) projected on the
+        path tangent (gain k [1/s]); exactly reactionless at ``theta``."""
         n = self.direction(theta, t)
-        speed = self.speed(t)
-        if speed < 0.0:
-            n = -n
-        beta = abs(speed) + gain * float(n @ (theta_ref - theta))
-        return beta * n
+        return (rate * self.speed(t) + gain * float(n @ error)) * n
 
 
 class StoredTrajectory:
@@ -195,10 +199,14 @@ class StoredTrajectory:
         rate = (1.0 - u) * self.rates[k] + u * self.rates[k + 1]
         return theta, rate
 
-    def command(self, t: float, theta: np.ndarray, gain: float) -> np.ndarray:
-        """theta_dot_ref + k (theta_ref - theta) [rad/s] (n,) at ``t`` [s] for ``theta``."""
-        theta_ref, theta_dot_ref = self(t)
-        return theta_dot_ref + gain * (theta_ref - theta)
+    def angles(self, t: float) -> np.ndarray:
+        """theta_ref(t) [rad] (n,)."""
+        return self(t)[0]
+
+    def track(self, t, theta, error, rate, gain) -> np.ndarray:
+        """r theta_dot_ref(t) + k e [rad/s] (n,): the reference rate scaled by ``rate`` r [-]
+        plus ``gain`` k [1/s] times the position ``error`` e [rad] (n,) (``theta`` unused)."""
+        return rate * self(t)[1] + gain * error
 
 
 class PtpPlan:
@@ -261,7 +269,24 @@ class PtpPlan:
         t, phase, segment = self._locate(t)
         if t >= self.duration:
             return np.zeros_like(theta)
-        return segment.command(t - phase.start, theta, self.elbow_gain)
+        local = t - phase.start
+        return segment.track(local, theta, segment.angles(local) - theta, 1.0, self.elbow_gain)
+
+    def track(self, t: float, theta, error, rate: float) -> np.ndarray:
+        """Joint velocity [rad/s] (n,) at plan time ``t`` [s] (clipped to [0, duration]) for
+        an arm at ``theta`` [rad] (n,) that is ``error`` e [rad] (n,) behind the plan, at the
+        playback rate ``rate`` r [-]: r theta_dot_ref + k e, or in a reactionless phase
+        (r sigma_dot + k n . e) n(theta), reactionless at ``theta`` (eq. 4.18, k =
+        ``elbow_gain``). :meth:`command` is this at r = 1 with e = theta_ref(t) - theta."""
+        t, phase, segment = self._locate(t)
+        theta = np.asarray(theta, dtype=float)
+        error = np.asarray(error, dtype=float)
+        return segment.track(t - phase.start, theta, error, rate, self.elbow_gain)
+
+    def angles(self, t: float) -> np.ndarray:
+        """theta_ref(t) [rad] (n,) at ``t`` [s] (clipped to [0, duration])."""
+        t, phase, segment = self._locate(t)
+        return np.asarray(segment.angles(t - phase.start), dtype=float)
 
     def is_reactionless(self, t: float) -> bool:
         """Whether the phase at time ``t`` [s] is reactionless."""

@@ -12,11 +12,22 @@ playing (after a resume), falls to 0 at ``deceleration`` [1/s] on a cancel, and 
 once on a hold (a stale input: the arm must stop now). Each tick gives the command to hold over
 the next period, theta_dot = r_mid theta_dot_plan(s_mid) at mid-period (the hold correction of
 the controller), and s advances by the integral of r over the time that command acted.
+
+Given the measured angles theta_m and their age a, a tick adds the plan's position feedback
+(eq. 4.18) on the error e = theta_plan(s_m) - theta_m, s_m the plan clock a seconds before the
+tick: a joint state compares with where the plan was when it was measured, so a late one does
+not read as a lag. The arm is predicted at mid-period as theta^ = theta_m + theta_plan(s_mid)
+- theta_plan(s_m), and the command is r_mid theta_dot_plan(s_mid) + k e, or in a reactionless
+phase (r_mid sigma_dot + k n . e) n(theta^): in the reaction null space of the arm itself, not
+only of the plan (:meth:`PtpPlan.track`). s advances by what the commands should have played,
+and the feedback makes up what a plant late or short on a command did not play. After the
+end, :meth:`settle` gives the same feedback towards the plan's last sample.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +49,9 @@ class PlaybackMode(Choice):
     ENDED = "ENDED"  # s reached the plan's end
     CANCELLED = "CANCELLED"  # at rest on the path after a cancel
 
+
+#: Ticks of plan-clock history kept to place a joint state's age (2.5 s at 100 Hz).
+HISTORY_TICKS = 256
 
 #: Modes in which the joints are at rest (zero velocity).
 AT_REST = (PlaybackMode.HOLDING, PlaybackMode.ENDED, PlaybackMode.CANCELLED)
@@ -102,11 +116,16 @@ class PlanPlayback:
         self.rate = 1.0
         self.mode = PlaybackMode.PLAYING
         self._slope = 0.0  # slope of r over the period since the last tick [1/s]
+        self._time = 0.0  # playback time [s]: the sum of the elapsed times given
+        # (playback time [s], s [s]) at the recent ticks, oldest first
+        self._history: deque[tuple[float, float]] = deque([(0.0, 0.0)], maxlen=HISTORY_TICKS)
 
-    def tick(self, elapsed: float) -> PlaybackStep:
+    def tick(self, elapsed: float, theta=None, age: float = 0.0) -> PlaybackStep:
         """The command for the period starting now, ``elapsed`` [s] >= 0 after the last tick
         (0 at the first tick and at the tick of a resume): over ``elapsed`` the last command
-        acted, so s advances by the integral of r over it."""
+        acted, so s advances by the integral of r over it. With the angles ``theta`` [rad] (n,)
+        measured ``age`` [s] >= 0 ago, theta_dot adds the plan's position feedback (module
+        docstring)."""
         if not (math.isfinite(elapsed) and elapsed >= 0.0):
             raise InputError(f"elapsed must be a finite number >= 0 s, got {elapsed!r}")
         if self.mode in AT_REST:
@@ -122,9 +141,13 @@ class PlanPlayback:
         self._slope = self.acceleration if playing else -self.deceleration
         rate_mid, to_mid = ramp(self.rate, self._slope, 0.5 * self.period)
         middle = self.plan.sample(min(self.s + to_mid, self.plan.duration))
+        if theta is None:
+            theta_dot = rate_mid * np.asarray(middle.theta_dot, dtype=float)
+        else:
+            theta_dot = self._tracked(self.s + to_mid, rate_mid, theta, self._s_at(age))
         return PlaybackStep(
             theta=np.asarray(self.plan.sample(self.s).theta, dtype=float),
-            theta_dot=rate_mid * np.asarray(middle.theta_dot, dtype=float),
+            theta_dot=theta_dot,
             s=self.s,
             rate=self.rate,
             mode=self.mode,
@@ -159,10 +182,44 @@ class PlanPlayback:
     def path_error(self, theta) -> float:
         """Largest |theta_i - theta_plan,i(s)| [rad] of the measured angles ``theta`` (n,)."""
         reference = self.plan.sample(self.s).theta
+        return float(np.abs(self._measured(theta) - reference).max())
+
+    def _s_at(self, age: float) -> float:
+        """s [s] ``age`` [s] >= 0 before the last tick, interpolated between ticks (held
+        before the oldest kept; a hold leaves s where it stopped)."""
+        if not (math.isfinite(age) and age >= 0.0):
+            raise InputError(f"age must be a finite number >= 0 s, got {age!r}")
+        when = self._time - age
+        later = next((i for i, (t, _) in enumerate(self._history) if t > when), None)
+        if later is None:
+            return self._history[-1][1]
+        if later == 0:
+            return self._history[0][1]
+        (t0, s0), (t1, s1) = self._history[later - 1], self._history[later]
+        return s0 + (s1 - s0) * (when - t0) / (t1 - t0)
+
+    def settle(self, theta) -> PlaybackStep:
+        """After the end (ENDED): the plan's last sample and the position feedback towards it
+        [rad/s] (n,) for the measured angles ``theta`` [rad] (n,) (module docstring)."""
+        if self.mode is not PlaybackMode.ENDED:
+            raise InputError(f"only an ended playback settles, not one {self.mode.value}")
+        step = self._at_rest()
+        end = self.plan.duration
+        return PlaybackStep(step.theta, self._tracked(end, 0.0, theta, end), step.s, 0.0, self.mode)
+
+    def _tracked(self, s_mid: float, rate_mid: float, theta, s_measured: float) -> np.ndarray:
+        """The command [rad/s] (n,) at mid-period plan time ``s_mid`` [s] for the angles
+        ``theta`` [rad] (n,) measured at plan time ``s_measured`` [s] (module docstring)."""
+        theta = self._measured(theta)
+        then = self.plan.angles(s_measured)
+        predicted = theta + self.plan.angles(s_mid) - then
+        return self.plan.track(min(s_mid, self.plan.duration), predicted, then - theta, rate_mid)
+
+    def _measured(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
-        if theta.shape != reference.shape:
-            raise InputError(f"theta must have shape {reference.shape}, got {theta.shape}")
-        return float(np.abs(theta - reference).max())
+        if theta.shape != self.plan.start.shape:
+            raise InputError(f"theta must have shape {self.plan.start.shape}, got {theta.shape}")
+        return theta
 
     def resume(self) -> None:
         """HOLDING -> PLAYING from r = 0: the next tick (``elapsed`` 0) starts the rise of r
@@ -170,6 +227,8 @@ class PlanPlayback:
         if self.mode is not PlaybackMode.HOLDING:
             raise InputError(f"only a held playback resumes, not one {self.mode.value}")
         self.mode = PlaybackMode.PLAYING
+        # the arm stood at s through the hold, which the playback time leaves out
+        self._history = deque([(self._time, self.s)], maxlen=HISTORY_TICKS)
 
     def resumed_samples(self, spacing: float) -> PlanSamples:
         """The rest of the plan from the held s, as played after :meth:`resume`: r rises from
@@ -209,6 +268,9 @@ class PlanPlayback:
     def _advance(self, elapsed: float) -> None:
         self.rate, covered = ramp(self.rate, self._slope, elapsed)
         self.s = min(self.s + covered, self.plan.duration)
+        self._time += elapsed
+        if elapsed > 0.0:
+            self._history.append((self._time, self.s))
 
     def _at_rest(self) -> PlaybackStep:
         theta = np.asarray(self.plan.sample(self.s).theta, dtype=float)

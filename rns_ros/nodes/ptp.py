@@ -335,6 +335,8 @@ class PtpNode(GoalIntake, Node):
                 "velocity); it resumes when fresh"
             )
         elif self._mode is PtpState.SETTLING:
+            if not self._whole:
+                self._stop_output()
             what = "the plan has played; the goal check waits for fresh input"
         else:
             what = "the arm is at rest; back to " + self._mode.value + " when fresh"
@@ -511,18 +513,25 @@ class PtpNode(GoalIntake, Node):
     def _play(self, elapsed: float) -> None:
         """One tick of the playback, ``elapsed`` [s] after the last (node clock): the plan at s
         and r_mid theta_dot_plan(s_mid), held over the period (reactionless over the hold)."""
-        step = self._playback.tick(elapsed)
+        if self._whole:
+            step = self._playback.tick(elapsed)
+        else:
+            age = max(self._input_clock.now() - self._state_received, 0.0)
+            step = self._playback.tick(elapsed, self._theta, age)
         if step.at_rest:
-            if not self._whole or self._mode is PtpState.CANCELLING:
+            if self._whole and self._mode is PtpState.CANCELLING:
                 # a whole plan ends at rest on its own; a cancelled one on this message
                 self._publish_output(step.theta, step.theta_dot)
             if step.mode is PlaybackMode.CANCELLED:
+                if not self._whole:
+                    self._publish_output(step.theta, step.theta_dot)
                 self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
                 self.get_logger().info(self._detail)
             else:
                 # DONE only once the measured angles are there (:meth:`_settle`)
                 self._mode, self._detail = PtpState.SETTLING, "plan played: checking the angles"
                 self._settle_from = (step.theta, self._input_clock.now())
+                self._settle_output(reached=None)
             return
         if not (np.all(np.isfinite(step.theta_dot)) and np.all(np.isfinite(step.theta))):
             self._stop_output()
@@ -549,6 +558,20 @@ class PtpNode(GoalIntake, Node):
         return None if problem is None else (PtpState(problem[0]), problem[1])
 
     # --- output ---------------------------------------------------------------------------------
+    def _settle_output(self, reached: bool | None) -> None:
+        """SETTLING, streamed output: the position feedback towards the plan's last sample
+        (``reached`` None: still settling), or at rest there (True, DONE) or where the arm
+        stands (False, GOAL_MISSED). A whole plan's controller settles it on its own."""
+        if self._whole or self._playback is None or self._theta is None:
+            return
+        if reached is None:
+            step = self._playback.settle(self._theta)
+            self._publish_output(step.theta, step.theta_dot)
+        elif reached:
+            self._publish_output(self._playback.settle(self._theta).theta, np.zeros(self.robot.n))
+        else:
+            self._stop_output()
+
     def _stop_output(self) -> None:
         if self._theta is not None:
             self._publish_output(self._theta, np.zeros(self.robot.n))

@@ -309,17 +309,22 @@ class GoalIntake:
         """After the plan's last sample: DONE once every measured joint is within
         goal_tolerance [rad] of it; GOAL_MISSED when one is not settle_timeout [s] (input clock,
         ``now``) after the end (a simulator that refused the motion, an arm that stalled):
-        success is never reported for a motion that was not made."""
+        success is never reported for a motion that was not made. Meanwhile a streamed plan's
+        position feedback brings the joints there (:meth:`_settle_output`)."""
         goal, ended = self._settle_from
         error = np.abs(self._theta - goal)
         joint = int(np.argmax(error))
         if error[joint] <= self._params["goal_tolerance"]:
+            self._settle_output(reached=True)
             self._mode, self._detail = (
                 PtpState.DONE,
                 f"goal reached (within {error[joint]:.2g} rad)",
             )
             self.get_logger().info(self._detail)
-        elif now - ended > self._params["settle_timeout"]:
+        elif now - ended <= self._params["settle_timeout"]:
+            self._settle_output(reached=None)
+        else:
+            self._settle_output(reached=False)
             self._mode = PtpState.GOAL_MISSED
             self._detail = (
                 f"{self.robot.joint_names[joint]} is {error[joint]:.3g} rad from the goal "

@@ -206,9 +206,93 @@ def test_bad_settings_name_the_value(arguments, message):
         PlanPlayback(_line(), **settings)
 
 
+def _short_plant(playback: PlanPlayback, share: float, feedback: bool, settle: float) -> list:
+    """Kinematic joints that play only ``share`` of each period's command (a plant late on
+    every command), with or without the position feedback; ``settle`` [s] of the settle
+    command after the end. Returns (theta [rad], step) per tick."""
+    theta = playback.plan.start.copy()
+    played = []
+    playback.tick(0.0)
+    step = playback.tick(0.0, theta) if feedback else playback.tick(0.0)
+    while True:
+        played.append((theta.copy(), step))
+        theta = theta + share * PERIOD * step.theta_dot
+        if step.at_rest:
+            break
+        step = playback.tick(PERIOD, theta) if feedback else playback.tick(PERIOD)
+    for _ in range(round(settle / PERIOD) if feedback else 0):
+        step = playback.settle(theta)
+        played.append((theta.copy(), step))
+        theta = theta + share * PERIOD * step.theta_dot
+    played.append((theta, step))
+    return played
+
+
+def test_a_plant_short_on_every_command_ends_on_the_goal_only_with_the_position_feedback():
+    """eq. (4.18) on a joint-space plan: a plant that plays 70 % of each command ends 30 % of
+    the way short open loop; with k (theta_plan(s) - theta) added and 1 s of settling it ends
+    within 1e-3 rad (e^-k t of the lag left at k = 5 /s)."""
+    plan = _line()
+    short = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    open_loop = _short_plant(short, 0.7, feedback=False, settle=0.0)[-1][0]
+    assert np.abs(open_loop - plan.goal).max() > 0.1
+    fed = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    closed = _short_plant(fed, 0.7, feedback=True, settle=1.0)[-1][0]
+    assert np.abs(closed - plan.goal).max() < 1e-3
+
+
+def test_the_feedback_in_a_reactionless_phase_stays_reactionless_at_the_measured_angles(
+    robot, relative_coupling
+):
+    """The deployment on a plant short on every command: the commands, feedback included,
+    are in the reaction null space (eq. 3.3) at the measured angles carried on along the plan
+    to mid-period, theta + theta_plan(s_mid) - theta_plan(s). Open loop the arm ends
+    a fifth of the path short; with the feedback along the path it ends at the path's end but
+    for the offset across the path the lag built up (only the tangent is corrected)."""
+    plan = plan_deployment(robot, STOWED)
+    short = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    assert np.abs(_short_plant(short, 0.8, False, 0.0)[-1][0] - plan.goal).max() > 0.1
+    playback = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    played = _short_plant(playback, 0.8, feedback=True, settle=1.0)
+    assert np.abs(played[-1][0] - plan.goal).max() < 5e-3
+    lagging = [(theta, step) for theta, step in played if np.linalg.norm(step.theta_dot) > 1e-3]
+    assert len(lagging) > 0.5 * len(played)
+    for theta, step in lagging[:: max(len(lagging) // 40, 1)]:
+        to_mid = ramp(step.rate, 2.0, 0.5 * PERIOD)[1] if step.mode is PlaybackMode.PLAYING else 0
+        predicted = theta + plan.angles(step.s + to_mid) - plan.angles(step.s)
+        assert relative_coupling(predicted, step.theta_dot) < 1e-9
+
+
+def test_a_late_joint_state_is_compared_with_the_plan_when_it_was_measured():
+    """Angles exactly on the plan 0.1 s before the tick, 0.1 s old: no feedback; read as new,
+    they would be a lag of 0.1 s of motion and add k times it."""
+    plan = _line()
+    playback = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    playback.tick(0.0)
+    _play(playback, 40)
+    then = plan.sample(playback.s).theta
+    _play(playback, 9)
+    plain = playback.tick(PERIOD)
+    fed = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    fed.tick(0.0)
+    _play(fed, 49)
+    on_time = fed.tick(PERIOD, then, age=0.1)
+    np.testing.assert_allclose(on_time.theta_dot, plain.theta_dot, atol=1e-12)
+    replay = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    replay.tick(0.0)
+    _play(replay, 49)
+    as_new = replay.tick(PERIOD, then, age=0.0)
+    lag = plan.sample(as_new.s).theta - then
+    np.testing.assert_allclose(as_new.theta_dot - plain.theta_dot, plan.elbow_gain * lag)
+
+
 def test_bad_elapsed_and_theta_are_refused():
     playback = PlanPlayback(_line(), PERIOD, acceleration=2.0, deceleration=2.0)
     with pytest.raises(InputError, match=r"elapsed must be a finite number >= 0 s, got -0.1"):
         playback.tick(-0.1)
     with pytest.raises(InputError, match=r"shape \(3,\)"):
         playback.path_error(np.zeros(7))
+    with pytest.raises(InputError, match=r"age must be a finite number >= 0 s, got -0.5"):
+        playback.tick(0.0, np.zeros(3), age=-0.5)
+    with pytest.raises(InputError, match=r"only an ended playback settles, not one PLAYING"):
+        playback.settle(np.zeros(3))

@@ -3,6 +3,7 @@
 
 Usage:  .venv/bin/python scripts/lab_run.py [--scenario teleop|ptp|clock|all] [--repeat N]
                                             [--load] [--domain-id 56] [--load-domain-id 57]
+                                            [--logs DIR] [--method NAME ...]
 
 Every node is its console script from .venv/bin/, started by hand in its own process group with
 a clean environment (PATH, HOME, ROS_*, RMW_IMPLEMENTATION=rmw_fastrtps_cpp: no
@@ -105,12 +106,20 @@ def ros_value(value) -> str:
 class Groups:
     """Processes started in their own process groups; :meth:`stop` ends every group."""
 
-    def __init__(self) -> None:
+    def __init__(self, log_dir: Path | None = None) -> None:
         self.processes: dict[subprocess.Popen, tuple[str, object]] = {}  # -> (name, log)
+        self.log_dir = log_dir
+        self.started = 0
 
     def start(self, name: str, argv: list[str], env: dict[str, str]) -> subprocess.Popen:
-        """Start ``argv`` as a new session (its own group), output to a temporary file."""
-        log = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - closed in stop()
+        """Start ``argv`` as a new session (its own group), output to a temporary file, or to
+        ``log_dir``/NNN-name.log when given (kept)."""
+        self.started += 1
+        if self.log_dir is None:
+            log = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - closed in stop()
+        else:
+            path = self.log_dir / f"{self.started:03d}-{name}.log"
+            log = path.open("w+")
         process = subprocess.Popen(
             argv, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
         )
@@ -515,6 +524,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--load", action="store_true", help="busy loops + a second stack beside")
     parser.add_argument("--domain-id", type=int, default=56, help="ROS_DOMAIN_ID of the stack")
     parser.add_argument("--load-domain-id", type=int, default=57, help="of the second stack")
+    parser.add_argument("--logs", type=Path, help="keep each node's output in this folder")
+    parser.add_argument("--method", action="append", help="only this method (repeatable)")
     args = parser.parse_args(argv)
     if args.repeat < 1:
         error(f"--repeat must be >= 1, got {args.repeat}")
@@ -557,7 +568,9 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.update({key: env[key] for key in env if key.startswith(("ROS_", "RMW_"))})
     signal.signal(signal.SIGTERM, signal.default_int_handler)  # cleanup as on Ctrl-C
     scenarios = list(SCENARIOS) if args.scenario == "all" else [args.scenario]
-    load, stack = Groups(), Groups()
+    if args.logs is not None:
+        args.logs.mkdir(parents=True, exist_ok=True)
+    load, stack = Groups(), Groups(args.logs)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # Ctrl-C: KeyboardInterrupt
     probe = Probe(load_model(default_model_config()))
     print(
@@ -574,7 +587,7 @@ def main(argv: list[str] | None = None) -> int:
             start_load(load, args.load_domain_id)
         for scenario in scenarios:
             rows, begin = [], time.monotonic()
-            for method in methods(scenario):
+            for method in [m for m in methods(scenario) if m in (args.method or [m])]:
                 for run in range(1, args.repeat + 1):
                     rows.append(run_once(probe, stack, env, scenario, method, run))
                     print(f"  {scenario}: {rows[-1]}", flush=True)

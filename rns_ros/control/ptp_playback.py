@@ -16,10 +16,13 @@ the controller), and s advances by the integral of r over the time that command 
 Given the measured angles theta_m and their age a, a tick adds the plan's position feedback
 (eq. 4.18) on the error e = theta_plan(s_m) - theta_m, s_m the plan clock a seconds before the
 tick: a joint state compares with where the plan was when it was measured, so a late one does
-not read as a lag. The arm is predicted at mid-period as theta^ = theta_m + theta_plan(s_mid)
-- theta_plan(s_m), and the command is r_mid theta_dot_plan(s_mid) + k e, or in a reactionless
-phase (r_mid sigma_dot + k n . e) n(theta^): in the reaction null space of the arm itself, not
-only of the plan (:meth:`PtpPlan.track`). s advances by what the commands should have played,
+not read as a lag. The command is r_mid theta_dot_plan(s_mid) + k e, or in a reactionless
+phase (r_mid sigma_dot(s_mid) + k n . e) n (:meth:`PtpPlan.track`), n the unit null vector at
+the arm's own place on the path, theta_plan(s_mid - d), d = v . e / |v|^2 the lag along the
+tangent v = d theta_plan / ds at s_m: the lag is made up in the reaction null space of the arm
+where it is. An offset across the path cannot be (it would turn the base) and is kept; the
+null vector is not taken at the measured angles themselves, whose neighbouring reactionless
+curve can leave the path near a fold. s advances by what the commands should have played,
 and the feedback makes up what a plant late or short on a command did not play. After the
 end, :meth:`settle` gives the same feedback towards the plan's last sample.
 """
@@ -52,6 +55,15 @@ class PlaybackMode(Choice):
 
 #: Ticks of plan-clock history kept to place a joint state's age (2.5 s at 100 Hz).
 HISTORY_TICKS = 256
+
+#: Plan time searched either side of a held s for the sample nearest the arm [s], and the
+#: grid of that search [s] (0.002 rad apart at 0.2 rad/s).
+LOCATE_WINDOW = 2.0
+LOCATE_STEP = 0.01
+
+#: |d theta_plan / ds|^2 [rad^2/s^2] below which the plan is at rest and a lag along it is
+#: not estimated.
+MIN_TANGENT_SQUARED = 1e-8
 
 #: Modes in which the joints are at rest (zero velocity).
 AT_REST = (PlaybackMode.HOLDING, PlaybackMode.ENDED, PlaybackMode.CANCELLED)
@@ -210,16 +222,36 @@ class PlanPlayback:
     def _tracked(self, s_mid: float, rate_mid: float, theta, s_measured: float) -> np.ndarray:
         """The command [rad/s] (n,) at mid-period plan time ``s_mid`` [s] for the angles
         ``theta`` [rad] (n,) measured at plan time ``s_measured`` [s] (module docstring)."""
-        theta = self._measured(theta)
-        then = self.plan.angles(s_measured)
-        predicted = theta + self.plan.angles(s_mid) - then
-        return self.plan.track(min(s_mid, self.plan.duration), predicted, then - theta, rate_mid)
+        s_mid = min(s_mid, self.plan.duration)
+        error = self.plan.angles(s_measured) - self._measured(theta)
+        # the arm's own place on the path: the lag along the tangent v = d theta_plan / ds
+        tangent = np.asarray(self.plan.sample(s_measured).theta_dot, dtype=float)
+        squared = float(tangent @ tangent)
+        lag = float(tangent @ error) / squared if squared > MIN_TANGENT_SQUARED else 0.0
+        arm = self.plan.angles(min(max(s_mid - lag, 0.0), self.plan.duration))
+        return self.plan.track(s_mid, arm, error, rate_mid)
 
     def _measured(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         if theta.shape != self.plan.start.shape:
             raise InputError(f"theta must have shape {self.plan.start.shape}, got {theta.shape}")
         return theta
+
+    def locate(self, theta, window: float = LOCATE_WINDOW) -> float:
+        """HOLDING: move s to the plan time within ``window`` [s] of it whose sample is nearest
+        the measured ``theta`` [rad] (n,) (on a grid of LOCATE_STEP), so the plan resumes where
+        the arm stands on its path rather than making up a lag first. Returns the largest
+        |theta_i - theta_plan,i(s)| [rad] there (:meth:`path_error`)."""
+        if self.mode is not PlaybackMode.HOLDING:
+            raise InputError(f"only a held playback is located, not one {self.mode.value}")
+        theta = self._measured(theta)
+        times = np.arange(
+            max(self.s - window, 0.0), min(self.s + window, self.plan.duration), LOCATE_STEP
+        )
+        candidates = [self.s, *times.tolist()]
+        errors = [float(np.abs(self.plan.angles(t) - theta).max()) for t in candidates]
+        self.s = candidates[int(np.argmin(errors))]
+        return min(errors)
 
     def resume(self) -> None:
         """HOLDING -> PLAYING from r = 0: the next tick (``elapsed`` 0) starts the rise of r

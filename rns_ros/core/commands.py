@@ -250,6 +250,11 @@ def check_velocity_limits(
         )
 
 
+#: Rounding allowed past ``max_reference_error`` [rad]: a sender that bounds its command to
+#: the same distance from the angle it measured lands on the edge, one rounding either side.
+REFERENCE_SLACK = 1e-6
+
+
 def check_reference_positions(
     positions: np.ndarray,
     current: np.ndarray,
@@ -259,8 +264,8 @@ def check_reference_positions(
     model_joints: Sequence[str],
 ) -> None:
     """Raise :class:`InputError` naming the first joint whose reference position [rad] is outside
-    its URDF limits [lower, upper] or farther than ``max_error`` [rad] from its current angle
-    (all arrays shape (n,), model order)."""
+    its URDF limits [lower, upper] or farther than ``max_error`` [rad] (plus
+    :data:`REFERENCE_SLACK`) from its current angle (all arrays shape (n,), model order)."""
     outside = np.flatnonzero((positions < lower) | (positions > upper))
     if outside.size:
         joint = outside[0]
@@ -268,7 +273,7 @@ def check_reference_positions(
             f"position {positions[joint]:.4g} rad on {model_joints[joint]} is outside its limits "
             f"[{lower[joint]:.4g}, {upper[joint]:.4g}] rad"
         )
-    far = np.flatnonzero(np.abs(positions - current) > max_error)
+    far = np.flatnonzero(np.abs(positions - current) > max_error + REFERENCE_SLACK)
     if far.size:
         joint = far[0]
         raise InputError(

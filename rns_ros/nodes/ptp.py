@@ -410,7 +410,7 @@ class PtpNode(GoalIntake, Node):
             self._mode, self._detail = PtpState.IDLE, "cancelled: at rest on the path"
             self.get_logger().info(self._detail)
             return False
-        error = playback.path_error(self._theta)
+        error = playback.locate(self._theta)  # s where the arm stands on the path
         where = f"s = {playback.s:.3g} s of {plan.duration:.3g} s"
         tolerance = self._params["resume_tolerance"]
         if error > tolerance:

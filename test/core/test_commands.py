@@ -182,3 +182,19 @@ def test_extra_joints_are_reported_once_per_distinct_set():
     for k in range(MAX_REPORTED_SETS):
         report.note((f"y{k}",))
     assert report.note(("z",)) is None  # at most MAX_REPORTED_SETS sets
+
+
+def test_a_command_bounded_to_the_edge_of_max_reference_error_is_accepted():
+    """A sender that clips its command to max_reference_error from the angle it measured lands
+    on the edge; the plant, whose angle has rounded the other way, takes it; a millirad past
+    the edge is refused, naming the allowed range."""
+    from rns_ros.core.commands import REFERENCE_SLACK, check_reference_positions
+
+    lower, upper = np.full(3, -3.0), np.full(3, 3.0)
+    current = np.array([0.9441, -2.835, 0.0])
+    edge = current + np.array([0.25, 0.25, 0.0]) + 0.5 * REFERENCE_SLACK
+    check_reference_positions(edge, current, lower, upper, 0.25, JOINTS)
+    with pytest.raises(InputError, match=r"on a is 0.251 rad from its current angle 0.9441 rad"):
+        check_reference_positions(
+            edge + np.array([1e-3, 0.0, 0.0]), current, lower, upper, 0.25, JOINTS
+        )

@@ -743,7 +743,8 @@ STEP = 0.01
 
 def _sim_time_stack(ros, **ptp_overrides):
     """rns_ptp under use_sim_time (joint_space, 5 s plans) on a /clock and joint_states that the
-    test publishes (no simulator: the arm stands at START, the playback is open loop)."""
+    test publishes (no simulator: the arm stands at ``stack.arm``, START unless a test moves
+    it)."""
     ptp_overrides.setdefault("method", "joint_space")
     ptp_overrides.setdefault("duration", 5.0)
     ptp = _node(ros, PtpNode, use_sim_time=True, **ptp_overrides)
@@ -756,7 +757,7 @@ def _sim_time_stack(ros, **ptp_overrides):
         False, then the callbacks of 10 ms of wall time."""
         stamp = clock.advance(STEP)
         if state:
-            msg = JointState(name=JOINTS, position=START.tolist())
+            msg = JointState(name=JOINTS, position=stack.arm.tolist())
             msg.header.stamp = stamp
             states.publish(msg)
         ros.spin_for(0.01)
@@ -776,6 +777,7 @@ def _sim_time_stack(ros, **ptp_overrides):
         status=Recorder(probe, DiagnosticArray, "rns_ptp/status"),
         step=step,
         step_until=step_until,
+        arm=START.copy(),
     )
     assert step_until(lambda: _state(stack) == "IDLE")
     _send(stack, JOINTS, START + 4.0 * SMALL_STEP)
@@ -823,8 +825,8 @@ def _stop_the_clock(ros, stack) -> None:
 def test_sim_time_a_stopped_clock_holds_the_arm_and_the_plan_resumes_with_it(ros):
     """/clock stops during a motion: no simulated time passes and the playback timer stops, yet
     after clock_timeout of wall time the arm gets zero velocity and the plan is held (HOLDING,
-    WARN); when /clock and joint_states come back the same plan resumes where it stood (a 20 s
-    plan: the arm that stands at START is still on its path)."""
+    WARN); when /clock and joint_states come back the same plan resumes where the arm stands
+    on its path (a 20 s plan: the test's arm stands at START, the plan's start)."""
     stack = _sim_time_stack(ros, duration=20.0, state_timeout=0.5, clock_timeout=30.0)
     plan = stack.ptp.plan
     _stop_the_clock(ros, stack)
@@ -838,9 +840,7 @@ def test_sim_time_a_stopped_clock_holds_the_arm_and_the_plan_resumes_with_it(ros
     held = len(references) - 1
     assert stack.step_until(lambda: _state(stack) == "MOVING")
     assert stack.ptp.plan is plan
-    np.testing.assert_array_equal(
-        references[held + 1].points[0].positions, references[held].points[0].positions
-    )
+    np.testing.assert_allclose(references[held + 1].points[0].positions, START, atol=1e-12)
     assert "STALE_STATE" not in _states_seen(stack)
 
 
@@ -905,28 +905,31 @@ def test_sim_time_a_cancel_during_a_hold_ends_the_plan_where_the_arm_stands(ros)
 
 
 def test_sim_time_an_arm_off_the_held_path_is_replanned_to_the_same_goal(ros):
-    """The plan has moved 0.08 rad from START, where the test's arm stands: after a gap in
-    joint_states the arm is not on the held plan (resume_tolerance), so the goal is planned
-    again from the measured angles instead of jumping to the path."""
+    """After a gap in joint_states the test's arm stands 0.05 rad across the JS-C line from
+    its start: no sample of the held plan is within resume_tolerance of it, so the goal is
+    planned again from the measured angles instead of jumping to the path."""
     stack = _sim_time_stack(ros, state_timeout=0.25, clock_timeout=30.0)
     for _ in range(150):
         stack.step()
     plan = stack.ptp.plan
     assert stack.step_until(lambda: _state(stack) == "HOLDING", state=False)
     assert stack.ptp.plan is plan
+    other = np.roll(SMALL_STEP, 1)
+    across = other - SMALL_STEP * (other @ SMALL_STEP) / (SMALL_STEP @ SMALL_STEP)
+    stack.arm = START + 0.05 * across / np.abs(across).max()
     assert stack.step_until(lambda: _state(stack) == "MOVING")
     states = [_tick_state(m) for m in stack.status.messages]
     assert "PLANNING" in states[states.index("HOLDING") :]
     replanned = stack.ptp.plan
     assert replanned is not plan
-    np.testing.assert_allclose(replanned.start, START, atol=1e-12)
+    np.testing.assert_allclose(replanned.start, stack.arm, atol=1e-12)
     np.testing.assert_allclose(replanned.goal, plan.goal, atol=1e-12)
 
 
 def test_sim_time_a_whole_plan_is_held_and_its_rest_sent_at_the_resume(ros):
     """plan_output whole: the hold replaces the plan by one at rest where the arm stands; at the
-    resume the rest of the plan goes out as one trajectory, from rest at the held sample to the
-    goal."""
+    resume the rest of the plan goes out as one trajectory, from rest at the plan's sample
+    nearest the arm (the test's arm stands at START: the plan's start) to the goal."""
     stack = _sim_time_stack(
         ros, duration=20.0, plan_output="whole", state_timeout=0.25, clock_timeout=30.0
     )
@@ -941,7 +944,7 @@ def test_sim_time_a_whole_plan_is_held_and_its_rest_sent_at_the_resume(ros):
     assert stack.ptp.plan is plan
     assert len(references) == 3
     rest = references[2]
-    np.testing.assert_array_equal(rest.points[0].positions, held.points[0].positions)
+    np.testing.assert_allclose(rest.points[0].positions, START, atol=1e-12)
     assert not np.any(rest.points[0].velocities)
     np.testing.assert_allclose(rest.points[-1].positions, plan.goal, atol=1e-12)
     times = [_seconds(p.time_from_start) for p in rest.points]

@@ -37,7 +37,7 @@ import numpy as np
 
 from rns_ros.control.ptp import PtpPlan
 from rns_ros.control.ptp_sampling import PlanSamples
-from rns_ros.core.errors import InputError
+from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.validation import Choice, positive
 
 
@@ -115,12 +115,28 @@ class PlanPlayback:
         period: tick period [s] > 0: the command of a tick is held this long.
         acceleration: slope [1/s] > 0 of r after :meth:`resume` (0 to 1 in 1 / acceleration s).
         deceleration: slope [1/s] > 0 of r after :meth:`cancel`.
+        velocity_limits: joint speed limits [rad/s] (n,), > 0 (inf: none); a command with the
+            feedback is scaled down as a whole to stay within them, so its direction (the
+            path's, reactionless) is kept, where a per-joint clip would bend it off the path.
+            None: no limits.
     """
 
     def __init__(
-        self, plan: PtpPlan, period: float, acceleration: float, deceleration: float
+        self,
+        plan: PtpPlan,
+        period: float,
+        acceleration: float,
+        deceleration: float,
+        velocity_limits=None,
     ) -> None:
         self.plan = plan
+        n = plan.start.size
+        limits = np.full(n, np.inf) if velocity_limits is None else velocity_limits
+        self.velocity_limits = np.asarray(limits, dtype=float)
+        if self.velocity_limits.shape != (n,) or not np.all(self.velocity_limits > 0.0):
+            raise ConfigError(
+                f"velocity_limits must be {n} values > 0 rad/s, got {self.velocity_limits!r}"
+            )
         self.period = positive(period, "period", "[s]")
         self.acceleration = positive(acceleration, "acceleration", "[1/s]")
         self.deceleration = positive(deceleration, "deceleration", "[1/s]")
@@ -229,7 +245,9 @@ class PlanPlayback:
         squared = float(tangent @ tangent)
         lag = float(tangent @ error) / squared if squared > MIN_TANGENT_SQUARED else 0.0
         arm = self.plan.angles(min(max(s_mid - lag, 0.0), self.plan.duration))
-        return self.plan.track(s_mid, arm, error, rate_mid)
+        theta_dot = self.plan.track(s_mid, arm, error, rate_mid)
+        scale = np.max(np.abs(theta_dot) / self.velocity_limits)
+        return theta_dot / scale if scale > 1.0 else theta_dot
 
     def _measured(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)

@@ -296,6 +296,7 @@ class GoalIntake:
             self._period,
             self._params["resume_acceleration"],
             self._params["cancel_deceleration"],
+            self._bounds.velocity,
         )
         self._mode = PtpState.MOVING
         self._detail = f"{result.method} plan of {result.duration:.3g} s"

@@ -283,6 +283,25 @@ def test_the_feedback_in_a_reactionless_phase_keeps_the_base_still_and_ends_on_t
     assert math.degrees(deviation) < 1e-3
 
 
+def test_the_feedback_is_scaled_as_a_whole_within_the_velocity_limits():
+    """A plan that runs at its joints' speed limits leaves the feedback no room: a command
+    over a limit is scaled down as a whole, so it keeps its direction (the path's), never
+    clipped per joint; the lag is made up once the plan slows, and the arm still ends there."""
+    plan = _line()
+    peak = np.max([np.abs(plan.sample(t).theta_dot) for t in np.linspace(0, 2, 201)], axis=0)
+    limits = 1.02 * peak
+    free = PlanPlayback(plan, PERIOD, acceleration=2.0, deceleration=2.0)
+    bounded = PlanPlayback(plan, PERIOD, 2.0, 2.0, velocity_limits=limits)
+    played = _short_plant(bounded, 0.7, feedback=True, settle=1.5)
+    for _, step in played:
+        assert np.all(np.abs(step.theta_dot) <= limits * (1 + 1e-12))
+    unbounded = _short_plant(free, 0.7, feedback=True, settle=1.5)
+    assert any(np.any(np.abs(step.theta_dot) > limits) for _, step in unbounded)
+    assert np.abs(played[-1][0] - plan.goal).max() < 1e-3
+    with pytest.raises(ConfigError, match="velocity_limits must be 3 values > 0 rad/s"):
+        PlanPlayback(plan, PERIOD, 2.0, 2.0, velocity_limits=[1.0, 0.0, 1.0])
+
+
 def test_a_late_joint_state_is_compared_with_the_plan_when_it_was_measured():
     """Angles exactly on the plan 0.1 s before the tick, 0.1 s old: no feedback; read as new,
     they would be a lag of 0.1 s of motion and add k times it."""

@@ -80,8 +80,8 @@ PARAMETERS = (
     ParameterSpec(
         "resume_tolerance",
         0.005,
-        "After a hold the plan resumes if every measured joint is this close to its sample "
-        "nearest the arm, else it is replanned",
+        "After a hold the plan resumes if every joint is this close to the plan's sample "
+        "nearest the arm, else replanned",
         "[rad]",
         1e-6,
         1.0,

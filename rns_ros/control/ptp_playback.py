@@ -168,13 +168,13 @@ class PlanPlayback:
         playing = self.mode is PlaybackMode.PLAYING
         self._slope = self.acceleration if playing else -self.deceleration
         rate_mid, to_mid = ramp(self.rate, self._slope, 0.5 * self.period)
-        middle = self.plan.sample(min(self.s + to_mid, self.plan.duration))
         if theta is None:
+            middle = self.plan.sample(min(self.s + to_mid, self.plan.duration))
             theta_dot = rate_mid * np.asarray(middle.theta_dot, dtype=float)
         else:
             theta_dot = self._tracked(self.s + to_mid, rate_mid, theta, self._s_at(age))
         return PlaybackStep(
-            theta=np.asarray(self.plan.sample(self.s).theta, dtype=float),
+            theta=self.plan.angles(self.s),
             theta_dot=theta_dot,
             s=self.s,
             rate=self.rate,
@@ -239,9 +239,10 @@ class PlanPlayback:
         """The command [rad/s] (n,) at mid-period plan time ``s_mid`` [s] for the angles
         ``theta`` [rad] (n,) measured at plan time ``s_measured`` [s] (module docstring)."""
         s_mid = min(s_mid, self.plan.duration)
-        error = self.plan.angles(s_measured) - self._measured(theta)
+        then = self.plan.sample(s_measured)
+        error = then.theta - self._measured(theta)
         # the arm's own place on the path: the lag along the tangent v = d theta_plan / ds
-        tangent = np.asarray(self.plan.sample(s_measured).theta_dot, dtype=float)
+        tangent = then.theta_dot
         squared = float(tangent @ tangent)
         lag = float(tangent @ error) / squared if squared > MIN_TANGENT_SQUARED else 0.0
         arm = self.plan.angles(min(max(s_mid - lag, 0.0), self.plan.duration))

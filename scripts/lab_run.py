@@ -16,7 +16,8 @@ teleop  rns_simulator + rns_controller on the wall clock (method dls, then conve
         the largest base attitude change [deg] from the first base_odom; the camera error [deg]
         at the end between exp(omega T) R_c0 (T: the commanded span of the stamps sent [s],
         world axes) and the measured camera attitude (rns_ros.core on joint_states + base_odom);
-        the camera's turn [deg]; the controller states seen.
+        the camera's turn [deg]; the controller's status tracking_error when the turn stops and at
+        the end [deg]; the controller states seen.
 ptp     rns_simulator + rns_ptp, per method: a held-out joint goal on /ptp_goal; the end state
         on ~/status (DONE, GOAL_MISSED, INVALID_GOAL; none within 120 s), the time to it [s],
         the largest final joint error [deg] against the goal sent (IJ-C and TJ-C end where
@@ -205,6 +206,7 @@ class Probe:
         self.odom: list[np.ndarray] = []  # base quaternions x y z w
         self.commands: list[tuple[np.ndarray, np.ndarray]] = []  # (command, measured) [rad]
         self.status: list[tuple[str, str]] = []  # (state, message)
+        self.tracking: list[float] = []  # rns_controller's tracking_error per status [rad]
         self.expected = ["lab_run_probe"]  # node names of this run (one each)
         self.foreign: set[str] = set()  # other nodes seen on the domain meanwhile
         self._graph_checked = 0.0
@@ -227,6 +229,8 @@ class Probe:
         for status in msg.status:
             values = {kv.key: kv.value for kv in status.values}
             self.status.append((values.get("state", "?"), status.message))
+            if "tracking_error" in values:
+                self.tracking.append(float(values["tracking_error"]))
 
     def check_graph(self) -> None:
         """Note the nodes on the domain beyond one of each :attr:`expected` (another stack or
@@ -322,6 +326,7 @@ def run_teleop(probe: Probe, groups: Groups, env: dict[str, str], method: str) -
             first = seconds if first is None else first
         elif stop_stamp is None:
             stop_stamp = seconds
+            at_stop = probe.tracking[-1] if probe.tracking else math.nan
         probe.send_twist(SPEED if elapsed < TURN else 0.0, now.to_msg())
         sent += 1
         probe.spin_for(max(begin + sent / TWIST_RATE - time.monotonic(), 0.0))
@@ -334,6 +339,8 @@ def run_teleop(probe: Probe, groups: Groups, env: dict[str, str], method: str) -
         "camera err [deg]": f"{math.degrees(rotation_angle(r_cmd, r_end)):.4g}",
         "turn [deg]": f"{math.degrees(rotation_angle(r_c0, r_end)):.2f}",
         "T cmd [s]": f"{span:.3f}",
+        "track err stop/end [deg]": f"{math.degrees(at_stop):.3g}/"
+        + (f"{math.degrees(probe.tracking[-1]):.3g}" if probe.tracking else "-"),
         "twists": sent,
         "states seen": states_seen(probe.status),
     }
@@ -550,6 +557,9 @@ def run_once(probe: Probe, stack: Groups, env: dict, scenario: str, method: str,
         probe.check_graph()
     finally:
         killed = stack.stop()
+        if stack.log_dir is not None:  # the statuses seen, one line each (state: message)
+            path = stack.log_dir / f"{stack.started:03d}-status.log"
+            path.write_text("".join(f"{state}: {message}\n" for state, message in probe.status))
     probe.spin_for(0.5)  # what the stopped nodes sent is not the next run's
     return {
         "method": method,

@@ -512,7 +512,9 @@ class PtpNode(GoalIntake, Node):
     # --- playback ------------------------------------------------------------------------------
     def _play(self, elapsed: float) -> None:
         """One tick of the playback, ``elapsed`` [s] after the last (node clock): the plan at s
-        and r_mid theta_dot_plan(s_mid), held over the period (reactionless over the hold)."""
+        and r_mid theta_dot_plan(s_mid), held over the period (reactionless over the hold);
+        streamed, with the position feedback on the newest joint state and its age
+        (:class:`PlanPlayback`)."""
         if self._whole:
             step = self._playback.tick(elapsed)
         else:

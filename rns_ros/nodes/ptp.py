@@ -419,7 +419,7 @@ class PtpNode(GoalIntake, Node):
                 f"(resume_tolerance {tolerance} rad): replanned from the measured angles to "
                 "the same goal"
             )
-            self._start_planning(self._theta.copy(), plan.goal)
+            self._start_planning(self._theta.copy(), plan.goal, replanned=plan)
             self._detail = "replanning to the same goal from where the arm stands"
             return False
         playback.resume()

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 from sensor_msgs.msg import JointState
@@ -84,7 +85,7 @@ class PtpPlanning:
         self._now, self._info = now, info
         self._lock = threading.Lock()
         self._generation = 0
-        self._request: tuple[int, np.ndarray, np.ndarray | None] | None = None
+        self._request: tuple[int, np.ndarray, np.ndarray | None, PtpSettings] | None = None
         self._busy = False
         # (goal number, plan or the error that refused it, input-clock time it was ready [s])
         self._planned: tuple[int, PtpPlan | RnsError, float] | None = None
@@ -106,12 +107,24 @@ class PtpPlanning:
             self._request = None
         self.deferred = None
 
-    def submit(self, theta: np.ndarray, goal: np.ndarray | None) -> None:
+    def settings_for(self, replanned: PtpPlan | None) -> PtpSettings:
+        """The settings to plan with: :attr:`settings`, and when ``replanned`` (a plan planned
+        again from where the arm stands) has an IJ-C/TJ-C camera target, that target: the
+        camera still goes where the first plan took it (A-2.5 computes it from the start)."""
+        target = None if replanned is None else replanned.details.get("camera_target")
+        if target is None:
+            return self.settings
+        return replace(self.settings, camera_target=tuple(float(x) for x in target))
+
+    def submit(
+        self, theta: np.ndarray, goal: np.ndarray | None, settings: PtpSettings | None = None
+    ) -> None:
         """Plan from ``theta`` [rad] (n,) to ``goal`` [rad] (n,) (None: the deployment) in the
-        worker thread, or as the next request when it is busy."""
+        worker thread, or as the next request when it is busy; with ``settings`` (None:
+        :attr:`settings`)."""
         with self._lock:
             self._generation += 1
-            self._request = (self._generation, theta, goal)
+            self._request = (self._generation, theta, goal, settings or self.settings)
             if self._busy:
                 self._info(
                     "a plan for an earlier goal is still being computed: the newest goal is "
@@ -145,14 +158,21 @@ class PtpPlanning:
         if self.deferred is not None and self.deferred[1] > now:
             self.deferred = (self.deferred[0], now)
 
-    def compute(self, generation: int, theta: np.ndarray, goal: np.ndarray | None) -> None:
-        """Plan request ``generation`` (run in the worker thread); the result is kept only
-        while no newer goal came."""
+    def compute(
+        self,
+        generation: int,
+        theta: np.ndarray,
+        goal: np.ndarray | None,
+        settings: PtpSettings | None = None,
+    ) -> None:
+        """Plan request ``generation`` with ``settings`` (None: :attr:`settings`; run in the
+        worker thread); the result is kept only while no newer goal came."""
+        settings = settings or self.settings
         try:
             if goal is None:
-                result = plan_deployment(self.robot, theta, self.settings)
+                result = plan_deployment(self.robot, theta, settings)
             else:
-                result = plan_ptp(self.robot, theta, goal, self.method, self.settings)
+                result = plan_ptp(self.robot, theta, goal, self.method, settings)
         except RnsError as exc:
             result = exc
         except Exception as exc:  # a planner bug must not kill the node silently
@@ -228,10 +248,14 @@ class GoalIntake:
             return
         self._start_planning(theta, goal)
 
-    def _start_planning(self, theta: np.ndarray, goal: np.ndarray | None) -> None:
+    def _start_planning(
+        self, theta: np.ndarray, goal: np.ndarray | None, replanned: PtpPlan | None = None
+    ) -> None:
+        """PLANNING from ``theta`` [rad] (n,) to ``goal`` (None: the deployment); ``replanned``:
+        the plan this one replaces on its way to the same goal (its camera target is kept)."""
         self.plan, self._playback, self._held = None, None, None
         self._mode, self._detail = PtpState.PLANNING, "deploy" if goal is None else "goal"
-        self.planning.submit(theta, goal)
+        self.planning.submit(theta, goal, self.planning.settings_for(replanned))
 
     def _reject(self, reason: str) -> None:
         self.get_logger().error(f"rejected ptp_goal: {reason}")

@@ -442,14 +442,16 @@ def measure_latency(
         probe = _LatencyProbe(stack, joint_names)
         controller = processes.start(
             executable,
-            # predict_state off: this probe's joint state stands still while the controller
-            # would predict the joints on along its own outputs, and a constant twist must give
-            # a constant output to be recognised
+            # predict_state and tracking_gain off: this probe's joint state stands still
+            # while the controller would predict the joints on along its own outputs and turn
+            # the camera toward the attitude the commands add up to, and a constant twist must
+            # give a constant output to be recognised
             {
                 "method": "dls",
                 "rate": float(rate),
                 "wrist_gain": 0.0,
                 "predict_state": False,
+                "tracking_gain": 0.0,
                 **(parameters or {}),
             },
         )

@@ -152,6 +152,15 @@ def status_values(msg) -> dict[str, str]:
     return {kv.key: kv.value for kv in msg.status[0].values}
 
 
+def caught_up(status, tolerance: float = 2e-3) -> bool:
+    """rns_controller's newest status (a Recorder of ~/status) says the camera is within
+    ``tolerance`` [rad] of the attitude the commands add up to (tracking_error): from then on
+    it turns at the commanded rate itself, not at that rate plus a catch-up."""
+    if not status.messages:
+        return False
+    return float(status_values(status.messages[-1]).get("tracking_error", "inf")) < tolerance
+
+
 class SimClock:
     """A simulated ``/clock`` a test publishes itself, for nodes under ``use_sim_time``: time
     stands still between :meth:`advance` calls, whatever the wall clock does.

@@ -41,7 +41,6 @@ def test_the_four_results_are_registered():
 @pytest.mark.parametrize("identifier", IDS)
 def test_quick_run_writes_json_and_png(identifier, tmp_path):
     record = run_one(REPRODUCTIONS[identifier], tmp_path, quick=True)
-    assert record.seconds < 5.0
     document = json.loads(record.json_path.read_text())
     verdicts = quick_result_verdicts(document, record.png_path, identifier)
     assert document["thesis"].keys() == document["ours"].keys()

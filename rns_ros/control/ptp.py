@@ -110,17 +110,11 @@ class PtpReference:
 
 
 # segments ------------------------------------------------------------------------------------
-class QuinticLine:
-    """Quintic straight line a -> b over ``duration`` [s] (JS-C, Phase II)."""
+class JointSpaceSegment:
+    """A segment that is not reactionless: its position feedback acts on every joint. A
+    subclass is callable, t [s] -> (theta_ref [rad], theta_dot_ref [rad/s]), each (n,)."""
 
     reactionless = False
-
-    def __init__(self, start: np.ndarray, end: np.ndarray, duration: float) -> None:
-        self.start, self.delta, self.duration = start, end - start, duration
-
-    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        s, s_dot = quintic(t, self.duration)
-        return self.start + s * self.delta, s_dot * self.delta
 
     def angles(self, t: float) -> np.ndarray:
         """theta_ref(t) [rad] (n,)."""
@@ -130,6 +124,17 @@ class QuinticLine:
         """r theta_dot_ref(t) + k e [rad/s] (n,): the reference rate scaled by ``rate`` r [-]
         plus ``gain`` k [1/s] times the position ``error`` e [rad] (n,) (``theta`` unused)."""
         return rate * self(t)[1] + gain * error
+
+
+class QuinticLine(JointSpaceSegment):
+    """Quintic straight line a -> b over ``duration`` [s] (JS-C, Phase II)."""
+
+    def __init__(self, start: np.ndarray, end: np.ndarray, duration: float) -> None:
+        self.start, self.delta, self.duration = start, end - start, duration
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        s, s_dot = quintic(t, self.duration)
+        return self.start + s * self.delta, s_dot * self.delta
 
 
 class PathSegment:
@@ -182,10 +187,8 @@ class PathSegment:
         return (rate * self.speed(t) + gain * float(n @ error)) * n
 
 
-class StoredTrajectory:
+class StoredTrajectory(JointSpaceSegment):
     """A trajectory stored at equally spaced times (IJ-C / TJ-C), linearly interpolated."""
-
-    reactionless = False
 
     def __init__(self, times: np.ndarray, thetas: np.ndarray, rates: np.ndarray) -> None:
         self.times, self.thetas, self.rates = times, thetas, rates
@@ -198,15 +201,6 @@ class StoredTrajectory:
         theta = (1.0 - u) * self.thetas[k] + u * self.thetas[k + 1]
         rate = (1.0 - u) * self.rates[k] + u * self.rates[k + 1]
         return theta, rate
-
-    def angles(self, t: float) -> np.ndarray:
-        """theta_ref(t) [rad] (n,)."""
-        return self(t)[0]
-
-    def track(self, t, theta, error, rate, gain) -> np.ndarray:
-        """r theta_dot_ref(t) + k e [rad/s] (n,): the reference rate scaled by ``rate`` r [-]
-        plus ``gain`` k [1/s] times the position ``error`` e [rad] (n,) (``theta`` unused)."""
-        return rate * self(t)[1] + gain * error
 
 
 class PtpPlan:

@@ -217,14 +217,8 @@ class PlanPlayback:
         before the oldest kept; a hold leaves s where it stopped)."""
         if not (math.isfinite(age) and age >= 0.0):
             raise InputError(f"age must be a finite number >= 0 s, got {age!r}")
-        when = self._time - age
-        later = next((i for i, (t, _) in enumerate(self._history) if t > when), None)
-        if later is None:
-            return self._history[-1][1]
-        if later == 0:
-            return self._history[0][1]
-        (t0, s0), (t1, s1) = self._history[later - 1], self._history[later]
-        return s0 + (s1 - s0) * (when - t0) / (t1 - t0)
+        times, values = zip(*self._history, strict=True)
+        return float(np.interp(self._time - age, times, values))
 
     def settle(self, theta) -> PlaybackStep:
         """After the end (ENDED): the plan's last sample and the position feedback towards it

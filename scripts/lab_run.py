@@ -204,6 +204,7 @@ class Probe:
         self.theta: np.ndarray | None = None  # newest joint angles [rad], model order
         self.stamp = 0.0  # newest joint_states stamp [s]
         self.odom: list[np.ndarray] = []  # base quaternions x y z w
+        self.odom_stamps: list[float] = []  # their header stamps [s]
         self.commands: list[tuple[np.ndarray, np.ndarray]] = []  # (command, measured) [rad]
         self.status: list[tuple[str, str]] = []  # (state, message)
         self.tracking: list[float] = []  # rns_controller's tracking_error per status [rad]
@@ -220,6 +221,7 @@ class Probe:
     def _on_odom(self, msg: Odometry) -> None:
         o = msg.pose.pose.orientation
         self.odom.append(np.array([o.x, o.y, o.z, o.w]))
+        self.odom_stamps.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
 
     def _on_command(self, msg: Float64MultiArray) -> None:
         if self.theta is not None:
@@ -531,7 +533,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--load", action="store_true", help="busy loops + a second stack beside")
     parser.add_argument("--domain-id", type=int, default=56, help="ROS_DOMAIN_ID of the stack")
     parser.add_argument("--load-domain-id", type=int, default=57, help="of the second stack")
-    parser.add_argument("--logs", type=Path, help="keep each node's output in this folder")
+    parser.add_argument(
+        "--logs", type=Path, help="keep each node's output, the statuses and the base attitude here"
+    )
     parser.add_argument("--method", action="append", help="only this method (repeatable)")
     args = parser.parse_args(argv)
     if args.repeat < 1:
@@ -560,6 +564,13 @@ def run_once(probe: Probe, stack: Groups, env: dict, scenario: str, method: str,
         if stack.log_dir is not None:  # the statuses seen, one line each (state: message)
             path = stack.log_dir / f"{stack.started:03d}-status.log"
             path.write_text("".join(f"{state}: {message}\n" for state, message in probe.status))
+            if probe.odom:  # the base's attitude change from the first base_odom, per stamp
+                rows = (
+                    f"{stamp:.4f},{math.degrees(quaternion_angle(probe.odom[0], q)):.4e}\n"
+                    for stamp, q in zip(probe.odom_stamps, probe.odom, strict=True)
+                )
+                odom = stack.log_dir / f"{stack.started:03d}-base.csv"
+                odom.write_text("stamp [s],base attitude change [deg]\n" + "".join(rows))
     probe.spin_for(0.5)  # what the stopped nodes sent is not the next run's
     return {
         "method": method,

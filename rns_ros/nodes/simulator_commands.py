@@ -30,11 +30,12 @@ from rns_ros.nodes.parameters import velocity_joint_order
 from rns_ros.nodes.status import CommanderWatch
 from rns_ros.sim.free_floating import FreeFloatingSimulator
 
-#: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to (older: another clock
-#: or a stale command, acted on at receipt).
+#: Oldest JointTrajectory stamp [s] the kinematic mode still catches up to, and farthest ahead
+#: of the real-time pace one waits for (farther: another clock or a stale command, acted on at
+#: receipt).
 MAX_CATCH_UP = 0.05
-#: Most JointTrajectories stamped ahead that wait for their stamps (within one lockstep period
-#: of the simulated time: a controller's next one or two; a flood keeps the newest).
+#: Most JointTrajectories stamped ahead that wait for their stamps (a controller's next one or
+#: two; a flood keeps the newest).
 MAX_PENDING = 8
 #: Period [s] (wall clock) of the check for more than one node commanding the joints.
 COMMANDER_CHECK_PERIOD = 1.0
@@ -304,10 +305,11 @@ class CommandIntake:
         with self._lock:
             if self._blocked():
                 return  # changed since the check: the command is stale now
-            if self._ahead(stamp):
-                # a newer command replaces those waiting for its stamp or a later one
-                waiting = [command for command in self._pending if command[0] < stamp]
-                waiting.append((stamp, positions, velocities, accelerations, velocity_end))
+            starts = self._waits_until(stamp)
+            if starts is not None:
+                # a newer command replaces those waiting for its start or a later one
+                waiting = [command for command in self._pending if command[0] < starts]
+                waiting.append((starts, positions, velocities, accelerations, velocity_end))
                 self._pending = waiting[-MAX_PENDING:]
             else:
                 self._pending = []  # a newer command replaces those still waiting
@@ -338,23 +340,36 @@ class CommandIntake:
         )
 
     # --- stamps (caller holds the lock) -------------------------------------------------------
-    def _ahead(self, stamp: float | None) -> bool:
-        """A command stamped ``stamp`` [s] waits for it: /clock is published and the stamp lies
-        after the next step's start, by at most ``lockstep_period`` (``MAX_CATCH_UP`` without
-        lockstep). Caller holds the lock."""
-        if stamp is None or not self._publish_clock:
-            return False
+    def _waits_until(self, stamp: float | None) -> float | None:
+        """The simulated time [s] a command stamped ``stamp`` [s] waits for, or None when it
+        acts at the next step. With /clock: the stamp, when it lies after the next step's start
+        by at most ``lockstep_period`` (``MAX_CATCH_UP`` without lockstep). On the real-time
+        pace (kinematic mode, ``catch_up_late_commands``): the simulated time the pace maps
+        the stamp to, when it lies after the next step's start by at most ``MAX_CATCH_UP``. A
+        simulation that fell behind its pace (a process waiting for a core sprints to catch up)
+        then starts a command at its stamp, as it catches up a late one, instead of early at a
+        configuration the controller had predicted it past. Caller holds the lock."""
+        if stamp is None:
+            return None
         now, dt = self.simulator.time, self.simulator.dt
-        period = self._pacer.period
-        lead = period if period > 0.0 else MAX_CATCH_UP
-        return now + 0.5 * dt < stamp <= now + lead + 0.5 * dt
+        if self._publish_clock:
+            period = self._pacer.period
+            lead = period if period > 0.0 else MAX_CATCH_UP
+            return stamp if now + 0.5 * dt < stamp <= now + lead + 0.5 * dt else None
+        if self._dynamic or not self._catch_up:
+            return None
+        paced = self._paced_time(now)
+        if paced is None:
+            return None
+        early = stamp - paced.nanoseconds * 1e-9
+        return now + early if 0.5 * dt < early <= MAX_CATCH_UP else None
 
     def command_anchor(self, stamp: float | None) -> float:
         """Simulated time [s] a command's lockstep period counts from, on the grid of its
         header ``stamp`` [s] when /clock is published and the stamp is a recent simulated
         time (a controller ticking on this clock stamps the instant it sampled or, with a lead,
         the instant its output starts): the stamp itself when it lies within the period before
-        now or waits ahead (:meth:`_ahead`); a later point of its grid, stamp + k
+        now or waits ahead (:meth:`_waits_until`); a later point of its grid, stamp + k
         ``lockstep_period``, the last one not after now, when the command is older (one that
         reaches a simulation running in real time after a reset or a dropped command comes a
         few periods late), so the next

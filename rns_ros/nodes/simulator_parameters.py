@@ -156,7 +156,7 @@ PARAMETERS = (
     ParameterSpec(
         "catch_up_late_commands",
         True,
-        "Kinematic mode: a JointTrajectory acts from its header stamp (up to 50 ms late); "
+        "Kinematic mode: a JointTrajectory acts from its header stamp (up to 50 ms late or early); "
         "false: from its receipt",
     ),
     ParameterSpec(

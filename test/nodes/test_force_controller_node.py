@@ -3,6 +3,7 @@ wrist_wrench itself and checks the node's torques, errors and status (docs/part2
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
 import subprocess
@@ -70,7 +71,8 @@ class _Arm:
 
 
 def _start(ros, **overrides):
-    overrides.setdefault("state_timeout", 0.5)  # not about the watchdog: generous
+    # not about the watchdog: longer than this process waits for a core on a loaded machine
+    overrides.setdefault("state_timeout", 10.0)
     node = ros.add(ForceControllerNode, overrides)
     torques = ros.record(Float64MultiArray, "joint_efforts")
     errors = ros.record(Float64MultiArray, "rns_force_controller/errors")
@@ -114,6 +116,9 @@ def test_one_finite_torque_per_state_in_joints_order(ros):
 
 
 def test_stale_state_publishes_one_zero_torque(ros):
+    """Each state gets its torque; once the newest is state_timeout old, one zero torque, and
+    no more while it stays stale. (On a loaded machine a state may come more than 0.1 s after
+    the one before: that gap gets its one zero too.)"""
     _, arm, torques, _, status = _start(ros, state_timeout=0.1)
     for _ in range(5):
         arm.publish()
@@ -126,8 +131,10 @@ def test_stale_state_publishes_one_zero_torque(ros):
         5.0,
     )
     ros.spin_for(0.3)
-    assert len(torques) == 6  # five torques, then exactly one zero
-    assert torques.latest().data.tolist() == [0.0] * 7
+    zero = [not np.any(row) for row in torques.array(lambda m: m.data)]
+    assert zero.count(False) == 5  # one torque per state
+    assert zero[-1]  # stale: the arm's torque is zero
+    assert not any(a and b for a, b in itertools.pairwise(zero))  # one zero per stale episode
     assert "state_timeout 0.1 s" in status.latest().status[0].message
 
 

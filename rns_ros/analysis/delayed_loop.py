@@ -12,7 +12,10 @@ kinematic simulator (1 ms step) so that its share of the base deviation can be m
 * **cut holds**: with ``immediate_reaction`` a changed twist (every ``command_period``, arriving
   ``command_latency`` after it was sent) is served at once and the period restarts; a hold then
   lasts less than the T its midpoint correction assumed.
-* **timer jitter**: timer ticks come ``timer_latency`` late.
+* **timer jitter**: timer ticks come ``timer_latency`` late. The law is told each output's
+  hold (``told_hold``): the period T, the time to the timer's next grid instant, or that plus
+  the timer's mean lateness (:class:`~rns_ros.control.ticks.TickLateness`, as
+  ``rns_controller`` on the wall clock).
 
 The controller part is the node's: :class:`~rns_ros.control.controller.ReactionlessController`
 with :func:`~rns_ros.control.prediction.predict_joint_angles` to when its output acts.
@@ -36,6 +39,7 @@ from rns_ros.control.controller import (
 )
 from rns_ros.control.prediction import OutputTiming, PublishedOutput, predict_joint_angles
 from rns_ros.control.scenario import Scenario, load_scenario
+from rns_ros.control.ticks import TickLateness
 from rns_ros.core.conventions import rotation_from_quaternion
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.integration import attitude_deviation
@@ -47,6 +51,9 @@ from rns_ros.sim.free_floating import FreeFloatingSimulator, SimulationMode
 SIMULATION_STEP = 1e-3
 #: A controller that assumes its output acts at its tick (no latency, no update grid).
 ACTS_AT_TICK = OutputTiming()
+#: What the law is told of each output's hold (``told_hold`` of :func:`run_delayed_loop`): the
+#: period; the time to the timer's next grid instant; that plus the timer's mean lateness.
+TOLD_HOLDS = ("period", "grid", "expected")
 
 
 @dataclass(frozen=True)
@@ -170,6 +177,23 @@ def _command_arrivals(duration: float, timing: LoopTiming, rng) -> np.ndarray:
     return sent + rng.uniform(*timing.command_latency, size=sent.size)
 
 
+def _told_hold(
+    told: str, tick: float, period: float, timing: LoopTiming, lateness: TickLateness
+) -> float | None:
+    """The hold [s] the law is told for the output of ``tick`` [s] (``told``, one of
+    :data:`TOLD_HOLDS`), moved onto the predicted update grid; None: the period."""
+    if told == "period":
+        return None
+    grid = timing.tick_phase + period * (math.floor((tick - timing.tick_phase) / period) + 1)
+    until_next = round((grid - tick) * 1e9)
+    hold = until_next * 1e-9 if told == "grid" else lateness.hold(until_next)
+    if hold is None:
+        return None
+    acting = timing.predicted.acting_time
+    ends, starts = acting(tick + hold, 0.0), acting(tick, 0.0)
+    return ends - starts if ends > starts else None
+
+
 def _known_state(
     robot: FreeFloatingModel,
     samples: list,
@@ -196,14 +220,23 @@ def run_delayed_loop(
     rate: float = 100.0,
     duration: float | None = None,
     hold_correction: HoldCorrection | str = HoldCorrection.MIDPOINT,
+    told_hold: str = "period",
 ) -> DelayedLoopResult:
     """Run ``scenario`` (kinematic mode) with the DDS timing ``timing``; see the module doc.
 
     Args:
         method: DLS / SC (default: the scenario's); rate: control rate [Hz].
         duration: simulated time [s] (default: the scenario's).
+        told_hold: one of :data:`TOLD_HOLDS`; ``grid`` and ``expected`` need a timer without
+            ``immediate`` ticks (its grid is absolute), and the hold is moved onto the plant's
+            predicted update grid as the node does.
     """
+    if told_hold not in TOLD_HOLDS:
+        raise ConfigError(f"told_hold must be one of {list(TOLD_HOLDS)}, got {told_hold!r}")
+    if told_hold != "period" and timing.immediate:
+        raise ConfigError(f"told_hold {told_hold!r} needs a timer without immediate ticks")
     period = 1.0 / rate
+    lateness = TickLateness(period)
     duration = scenario.duration if duration is None else float(duration)
     rng = np.random.default_rng(timing.seed)
     settings = ControllerSettings(
@@ -251,7 +284,9 @@ def run_delayed_loop(
             last_tick = tick
             state = _known_state(robot, samples, outputs, tick, timing)
             omega = _command_at(scenario, tick, period, timing, arrivals)
-            step = controller.step(state, angular_velocity_in_world(state, omega, scenario.frame))
+            hold = _told_hold(told_hold, tick, period, timing, lateness)
+            omega = angular_velocity_in_world(state, omega, scenario.frame)
+            step = controller.step(state, omega, hold)
             outputs.append(PublishedOutput(tick, step.joint_velocity))
             acting = math.ceil((tick + timing.output_delay) / SIMULATION_STEP - 1e-9)
             heapq.heappush(pending, (acting, tick_index, step.joint_velocity))

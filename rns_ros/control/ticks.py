@@ -9,7 +9,8 @@ Pure logic (no ROS), used by the ``rns_controller`` and ``rns_force_controller``
   the ticks that wait for it (``await_commands``) on one stream or several (a twist and a force
   setpoint: a tick is served once the command in force is known on every stream), under a
   wall-clock watchdog.
-* :func:`next_tick_in` checks a timer's time to its next call.
+* :func:`next_tick_in` checks a timer's time to its next call; :class:`TickLateness` adds the
+  timer's mean lateness to it: the hold a wall-clock tick's output is told.
 
 Instants are integer nanoseconds of the node clock (the stamps the node publishes, exactly);
 durations are seconds. Clocks and timers are injected.
@@ -33,6 +34,10 @@ MAX_LEAD_CATCH_UP = 1.0
 MAX_TIMER_DELAY = 1.5
 #: The stream of a single-stream :class:`AwaitedTicks` (rns_controller's cmd_twist).
 COMMANDS = "commands"
+#: Weight of the newest call in :class:`TickLateness`'s running mean [-]: about the last
+#: 1 / LATENESS_SMOOTHING calls (0.2 s at 100 Hz) count, so the mean follows a machine that
+#: gets busier within a fraction of a second and one late call moves it little.
+LATENESS_SMOOTHING = 0.05
 
 Item = TypeVar("Item")
 
@@ -45,6 +50,44 @@ def next_tick_in(until_next_call: int | None, period: float) -> float | None:
         return None
     seconds = until_next_call * 1e-9
     return seconds if 0.0 < seconds <= MAX_TIMER_DELAY * period else None
+
+
+class TickLateness:
+    """The hold of a periodic timer's output: until the next call, which comes late on average.
+
+    A timer is called at its grid instants g_k, each call late by delta_k >= 0 (a busy executor
+    is late, never early), and the output of a call acts until the next one. The midpoint hold
+    (:meth:`ReactionlessController.step`) is reactionless to second order for the hold it is
+    told; told g_(k+1) - t_k, every hold runs delta_(k+1) longer, and the residue
+    M'(theta_dot, theta_dot) h delta / 2 of each has one sign along the motion, so the base turns in
+    proportion to the mean lateness (ticks 0-8 ms late: 4e-4 deg in 10 s,
+    :mod:`rns_ros.analysis.delayed_loop`). The hold told is g_(k+1) - t_k plus the running mean of
+    the calls' lateness, which cancels the mean part (9e-5 deg there).
+
+    Args:
+        period: the timer's period T [s], > 0.
+        smoothing: weight of the newest call in the mean, in (0, 1].
+    """
+
+    def __init__(self, period: float, smoothing: float = LATENESS_SMOOTHING) -> None:
+        if not period > 0.0:
+            raise ConfigError(f"tick period must be > 0 s, got {period!r}")
+        if not 0.0 < smoothing <= 1.0:
+            raise ConfigError(f"lateness smoothing must be in (0, 1], got {smoothing!r}")
+        self.period, self.smoothing = period, smoothing
+        self.mean = 0.0  # running mean of the calls' lateness [s], each counted up to T
+
+    def hold(self, until_next_call: int | None) -> float | None:
+        """The expected hold [s] of the output of the call being served, from the timer's
+        ``until_next_call`` [ns]: the time to its next call (:func:`next_tick_in`) plus the
+        mean lateness, this call's (T minus that time, 0 to T) counted in first; None when the
+        timer is not on its grid (the caller assumes the period)."""
+        seconds = next_tick_in(until_next_call, self.period)
+        if seconds is None:
+            return None
+        late = min(max(self.period - seconds, 0.0), self.period)
+        self.mean += self.smoothing * (late - self.mean)
+        return seconds + self.mean
 
 
 class TickInstants:
@@ -339,6 +382,7 @@ __all__ = [
     "CommandSchedule",
     "ServedTick",
     "TickInstants",
+    "TickLateness",
     "Watchdog",
     "next_tick_in",
 ]

@@ -74,7 +74,7 @@ from rns_ros.control.teleop import (
     TwistCommand,
     twist_frame_ids,
 )
-from rns_ros.control.ticks import ServedTick, TickInstants, next_tick_in
+from rns_ros.control.ticks import ServedTick, TickInstants, TickLateness
 from rns_ros.core import FreeFloatingState
 from rns_ros.core.commands import ExtraJointsReport, match_joint_state
 from rns_ros.core.errors import InputError, RnsError
@@ -158,6 +158,7 @@ class ControllerNode(Node):
         # would land while a lockstep simulator runs on, so ticks stay on the period grid
         self._immediate = params["immediate_reaction"] and not self._sim_time
         self._instants = TickInstants(self._period, self._lead)
+        self._lateness = TickLateness(self._period)  # wall clock: the timer's mean lateness
         self._reporter = StatusReporter(self, self.robot.name)  # the intakes report into it
         self._twists = OperatorTwists(
             self,
@@ -525,8 +526,9 @@ class ControllerNode(Node):
         (:func:`predict_joint_angles`): joint_states lag by up to one publish period, the output
         reaches the plant a moment later and acts at its next update, and the midpoint hold is
         reactionless only for the configuration it starts from. The hold runs until the next
-        output acts: the timer's next call (on its grid, so a late tick holds for less than T)
-        through the same latency and update grid. A state up to ``output_lead`` newer than the
+        output acts: the timer's next call (on its grid, so a late tick holds for less than T),
+        late by the timer's mean lateness (:class:`TickLateness`), through the same latency and
+        update grid. A state up to ``output_lead`` newer than the
         tick (a late tick in lockstep) is taken from its stamp."""
         if not self._predict:
             return self._theta, None  # the sample as it is, held for T
@@ -534,7 +536,7 @@ class ControllerNode(Node):
         if self._lead:
             hold = self._period
         else:
-            hold = next_tick_in(self._timer.time_until_next_call(), self._period)
+            hold = self._lateness.hold(self._timer.time_until_next_call())
         if hold is not None and not 0.0 < hold <= self.controller.max_hold:
             hold = None  # not a time the next tick can be from: the period
         if self._stopped:

@@ -74,3 +74,30 @@ def test_the_dds_timing_is_within_1e_5_deg_when_predicted(robot, scenario, metho
 def test_bad_timing_is_rejected_by_name(overrides, message):
     with pytest.raises(ConfigError, match=message):
         LoopTiming(**overrides)
+
+
+def test_late_ticks_turn_the_base_unless_the_law_expects_their_mean_lateness(robot, scenario):
+    """Timer ticks 0-8 ms late (uniform), the plant's 1 ms update grid predicted: told the
+    time to the timer's next grid instant, every hold runs longer than the law assumed, always
+    the same way, and the base turns by far more than on time; told that plus the mean
+    lateness (TickLateness, as rns_controller), most of it is gone. On time both are the same
+    loop."""
+    grid_predicted = OutputTiming(plant_period=1e-3)
+    late = LoopTiming(timer_latency=(0.0, 8e-3), predicted=grid_predicted)
+    to_grid = _deviation(robot, scenario, late, told_hold="grid").max_base_deviation_deg
+    expected = _deviation(robot, scenario, late, told_hold="expected").max_base_deviation_deg
+    on_time = LoopTiming(predicted=grid_predicted)
+    reference = _deviation(robot, scenario, on_time, told_hold="grid").max_base_deviation_deg
+    print(f"on time {reference:.2e}, late: to the grid {to_grid:.2e}, expected {expected:.2e} deg")
+    assert to_grid > 50 * reference
+    assert expected < 0.35 * to_grid
+    assert _deviation(
+        robot, scenario, on_time, told_hold="expected"
+    ).max_base_deviation_deg == pytest.approx(reference, rel=1e-9)
+
+
+def test_a_told_hold_needs_an_absolute_timer_grid(robot, scenario):
+    with pytest.raises(ConfigError, match="told_hold 'grid' needs a timer without immediate"):
+        _deviation(robot, scenario, DDS_TIMING, told_hold="grid")
+    with pytest.raises(ConfigError, match="told_hold must be one of"):
+        _deviation(robot, scenario, LoopTiming(), told_hold="late")

@@ -14,6 +14,7 @@ from rns_ros.control.ticks import (
     CommandSchedule,
     ServedTick,
     TickInstants,
+    TickLateness,
     next_tick_in,
 )
 from rns_ros.core import ConfigError
@@ -413,3 +414,38 @@ def test_a_ready_tick_always_serves_the_newest_command_stamped_before_it(gaps, l
             in_force = released[-1]
         expected = max((s for s in stamps if s <= tick), default=None)
         assert in_force == expected
+
+
+# --- TickLateness: the hold told is the time to the next call plus the mean lateness ---------
+
+
+def test_on_time_calls_are_told_the_time_to_the_next_call():
+    lateness = TickLateness(PERIOD)
+    for _ in range(50):
+        assert lateness.hold(10 * MS) == pytest.approx(0.010)
+    assert lateness.hold(3 * MS) == pytest.approx(0.003 + 0.05 * 0.007)  # this call 7 ms late
+
+
+def test_calls_late_by_4_ms_are_told_holds_4_ms_longer_once_the_mean_has_settled():
+    lateness = TickLateness(PERIOD, smoothing=0.05)
+    holds = [lateness.hold(6 * MS) for _ in range(200)]
+    assert holds[0] == pytest.approx(0.006 + 0.05 * 0.004)
+    assert holds[-1] == pytest.approx(0.010, abs=1e-6)  # 6 ms to the grid + 4 ms late
+    assert np.all(np.diff(holds) > 0.0)
+
+
+def test_a_call_later_than_a_period_counts_as_one_period_late_and_off_grid_is_none():
+    lateness = TickLateness(PERIOD, smoothing=1.0)
+    assert lateness.hold(14 * MS) == pytest.approx(0.014)  # past its grid point: not late
+    assert lateness.hold(None) is None  # a cancelled timer
+    assert lateness.hold(16 * MS) is None  # off its grid
+    assert lateness.mean == 0.0
+
+
+@pytest.mark.parametrize(
+    ("period", "smoothing", "message"),
+    [(0.0, 0.05, "tick period"), (PERIOD, 0.0, "smoothing"), (PERIOD, 1.5, "smoothing")],
+)
+def test_tick_lateness_rejects_bad_settings(period, smoothing, message):
+    with pytest.raises(ConfigError, match=message):
+        TickLateness(period, smoothing)

@@ -20,8 +20,9 @@ teleop  rns_simulator + rns_controller on the wall clock (method dls, then conve
         the end [deg]; the controller states seen.
 ptp     rns_simulator + rns_ptp, per method: a held-out joint goal on /ptp_goal; the end state
         on ~/status (DONE, GOAL_MISSED, INVALID_GOAL; none within 120 s), the time to it [s],
-        the largest final joint error [deg] against the goal sent (IJ-C and TJ-C end where
-        their loop brings the arm, ~2 deg off here), and the STALE_STATE, hold (a status
+        the largest final joint error [deg] against the goal sent (IJ-C and TJ-C steer the
+        camera to a position target: they end ~2 deg off in the joints here) and, from DONE's
+        message, against the plan's end, and the STALE_STATE, hold (a status
         saying "waiting" or "hold") and abandon (an active state followed by a fault) episodes.
 clock   the lockstep pair as rns_demo runs it (sim time, lockstep, output_lead, await_commands),
         the controller's output_interface position, twists on simulated time; then a second
@@ -41,6 +42,7 @@ import argparse
 import contextlib
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -389,11 +391,17 @@ def run_ptp(probe: Probe, groups: Groups, env: dict[str, str], method: str) -> d
     took = time.monotonic() - sent
     probe.spin_for(0.5)  # the final joint_states
     error = np.degrees(np.abs(probe.theta - goal)).max()
+    # DONE says how far the joints ended from the plan's end, where IJ-C/TJ-C's camera
+    # position target put it
+    last = probe.status[-1][1] if probe.status else ""
+    done = re.search(r"goal reached \(within ([0-9.e+-]+) rad\)", last)
+    to_plan = f"{math.degrees(float(done.group(1))):.3g}" if done else "-"
     return {
         "end": probe.state if ended else f"none ({probe.state})",
         "end message": probe.status[-1][1][:90] if probe.status else "",
         "to end [s]": f"{took:.1f}" if ended else f">{PTP_LIMIT:.0f}",
         "joint err [deg]": f"{error:.3g}",
+        "plan end err [deg]": to_plan,
         **status_episodes(probe.status),
     }
 

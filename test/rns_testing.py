@@ -161,6 +161,31 @@ def caught_up(status, tolerance: float = 2e-3) -> bool:
     return float(status_values(status.messages[-1]).get("tracking_error", "inf")) < tolerance
 
 
+def caught_up_camera(ros, status, simulator, timeout: float = 30.0, tolerance: float = 2e-3):
+    """The simulator's camera rotation in world (3, 3) at a moment this process saw the camera
+    caught up with the attitude the commands add up to (:func:`caught_up`, ``tolerance`` [rad]),
+    and that moment on this process's monotonic clock [s]: the snapshot lies between two
+    consecutive caught-up statuses (a stall in between, which lets the camera fall behind,
+    makes it try again), so the camera then is within ``tolerance`` of the commanded attitude
+    whatever the machine's load. Fails the test after ``timeout`` [s]."""
+    import time
+
+    import pytest
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if not ros.spin_until(lambda: caught_up(status, tolerance), deadline - time.monotonic()):
+            break
+        seen = len(status.messages)
+        moment, (_, camera) = time.monotonic(), simulated_camera(simulator)
+        newer = ros.spin_until(
+            lambda seen=seen: len(status.messages) > seen, deadline - time.monotonic()
+        )
+        if newer and caught_up(status, tolerance):
+            return moment, camera
+    pytest.fail(f"the camera did not catch up with the commands within {timeout} s")
+
+
 class SimClock:
     """A simulated ``/clock`` a test publishes itself, for nodes under ``use_sim_time``: time
     stands still between :meth:`advance` calls, whatever the wall clock does.

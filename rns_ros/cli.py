@@ -62,16 +62,23 @@ def install_startup_handler() -> None:
 
     Called when the ``rns_ros`` package is imported, i.e. before numpy, Pinocchio and rclpy load.
     A no-op unless the process is one of :data:`EXECUTABLES` (so importing rns_ros as a library
-    changes no signal handling) and runs in the main thread with Python's default SIGINT handler.
+    changes no signal handling) and runs in the main thread with Python's default SIGINT handler
+    or the package's (``rns_ros/__init__`` takes Ctrl-C over for any ``rns_*`` program first and
+    gives it back here to one that is not ours).
     Each main() takes the signal over first thing (:func:`run_main`, ``run_node``); one that does
     not still ends quietly with code 0 on Ctrl-C (SystemExit instead of KeyboardInterrupt).
     """
     program = os.path.basename(sys.argv[0]) if getattr(sys, "argv", None) else ""
-    if program.removesuffix(".exe") not in EXECUTABLES:
-        return
     if threading.current_thread() is not threading.main_thread():
         return
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+    handler = signal.getsignal(signal.SIGINT)
+    # rns_ros/__init__ took Ctrl-C over for any rns_* program before this module loaded
+    early = getattr(sys.modules.get("rns_ros"), "_quiet_interrupt", None)
+    if program.removesuffix(".exe") not in EXECUTABLES:
+        if early is not None and handler is early:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        return
+    if handler is signal.default_int_handler or (early is not None and handler is early):
         signal.signal(signal.SIGINT, _record_startup_signal)
         sys.excepthook = _quiet_after_startup_signal(sys.excepthook)
 

@@ -104,3 +104,20 @@ def test_output_folder_problem_allows_new_folders_but_not_below_a_file(tmp_path)
     assert output_folder_problem(blocker / "sub") == (
         f"cannot be a folder: {str(blocker)!r} is a file"
     )
+
+
+@pytest.mark.parametrize(
+    ("program", "handler"),
+    [("rns_simulator", "_record_startup_signal"), ("rns_my_tool", "default_int_handler")],
+)
+def test_ctrl_c_is_taken_over_at_import_only_for_our_executables(tmp_path, program, handler):
+    """Importing rns_ros takes Ctrl-C over first thing for any program named rns_* (before
+    rns_ros.cli's own imports), then keeps it only for one of our executables: a user's
+    rns_my_tool importing rns_ros as a library gets Python's KeyboardInterrupt back."""
+    script = tmp_path / program
+    script.write_text(
+        "import signal\nimport rns_ros\nprint(signal.getsignal(signal.SIGINT).__name__)\n"
+    )
+    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == handler

@@ -34,10 +34,9 @@ from rns_ros.sim.free_floating import FreeFloatingSimulator
 #: of the real-time pace one waits for (farther: another clock or a stale command, acted on at
 #: receipt).
 MAX_CATCH_UP = 0.05
-#: Most JointTrajectories stamped ahead that wait for their stamps: a controller's next one or
-#: two, or on the real-time pace those of a simulation up to MAX_STAMP_LAG behind (50 at
-#: 100 Hz); a flood keeps the newest.
-MAX_PENDING = 64
+#: Most JointTrajectories stamped ahead that wait for their stamps (a controller's next one or
+#: two; a flood keeps the newest).
+MAX_PENDING = 8
 #: Period [s] (wall clock) of the check for more than one node commanding the joints.
 COMMANDER_CHECK_PERIOD = 1.0
 #: Lockstep: a command stamped up to this long [s] before the simulated time still puts the
@@ -346,12 +345,10 @@ class CommandIntake:
         acts at the next step. With /clock: the stamp, when it lies after the next step's start
         by at most ``lockstep_period`` (``MAX_CATCH_UP`` without lockstep). On the real-time
         pace (kinematic mode, ``catch_up_late_commands``): the simulated time the pace maps
-        the stamp to, when it lies after the next step's start by at most how far the
-        simulation is behind its pace plus ``MAX_CATCH_UP`` (farther: another clock). A
-        simulation that fell behind its pace (its process waited for a core; it sprints to
-        catch up, up to MAX_STAMP_LAG) then starts a command at its stamp, as it catches up a
-        late one, instead of early at a configuration the controller had predicted it past.
-        Caller holds the lock."""
+        the stamp to, when it lies after the next step's start by at most ``MAX_CATCH_UP``. A
+        simulation that fell behind its pace (a process waiting for a core sprints to catch up)
+        then starts a command at its stamp, as it catches up a late one, instead of early at a
+        configuration the controller had predicted it past. Caller holds the lock."""
         if stamp is None:
             return None
         now, dt = self.simulator.time, self.simulator.dt
@@ -361,12 +358,11 @@ class CommandIntake:
             return stamp if now + 0.5 * dt < stamp <= now + lead + 0.5 * dt else None
         if self._dynamic or not self._catch_up:
             return None
-        paced, lead = self._paced_time(now), self._pacer.stamp_lead(now)
-        if paced is None or lead is None:
+        paced = self._paced_time(now)
+        if paced is None:
             return None
         early = stamp - paced.nanoseconds * 1e-9
-        behind = max(-lead, 0.0)  # how far the simulation is behind its pace [s]
-        return now + early if 0.5 * dt < early <= behind + MAX_CATCH_UP else None
+        return now + early if 0.5 * dt < early <= MAX_CATCH_UP else None
 
     def command_anchor(self, stamp: float | None) -> float:
         """Simulated time [s] a command's lockstep period counts from, on the grid of its

@@ -156,8 +156,8 @@ PARAMETERS = (
     ParameterSpec(
         "catch_up_late_commands",
         True,
-        "Kinematic mode: a JointTrajectory acts at its stamp (up to 50 ms late, or early when "
-        "behind the pace); false: on receipt",
+        "Kinematic mode: a JointTrajectory acts from its header stamp (up to 50 ms late or early); "
+        "false: from its receipt",
     ),
     ParameterSpec(
         "max_reference_error",

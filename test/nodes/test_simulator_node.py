@@ -1134,39 +1134,37 @@ def test_a_streamed_trajectory_ends_at_rest_in_dynamic_mode(ros):
     assert node._commands.ended_at_rest == 1
 
 
-@pytest.mark.parametrize(
-    ("catch_up", "behind", "ahead", "waits"),
-    [
-        (True, 0.0, 0.02, True),
-        (True, 0.3, 0.32, True),  # behind its pace by 0.3 s: a command 0.32 s ahead waits
-        (True, 0.0, 2.0 * MAX_CATCH_UP, False),  # another clock: acts at once
-        (True, 0.3, 0.3 + 2.0 * MAX_CATCH_UP, False),
-        (False, 0.0, 0.02, False),
-    ],
-)
-def test_on_the_real_time_pace_a_command_stamped_ahead_waits_for_its_stamp(
-    ros, catch_up, behind, ahead, waits
-):
-    """A simulation ``behind`` [s] its real-time pace (its process waited for a core, and it
-    sprints to catch up) receives a JointTrajectory stamped ``ahead`` [s] of the instant its
-    pace maps the simulated time to. With catch_up_late_commands, up to the lag plus
-    MAX_CATCH_UP, the joints keep the previous command (rest) until the simulated time reaches
-    the stamp, then move at the new rate: the arm follows the stamped timeline, as a late
-    command caught up does, not early at a configuration the controller predicted it past.
-    Farther ahead (another clock), or without catch_up_late_commands, a command acts at the
-    next step."""
+@pytest.mark.parametrize("catch_up", [True, False])
+def test_on_the_real_time_pace_a_command_stamped_ahead_waits_for_its_stamp(ros, catch_up):
+    """A simulation behind its real-time pace (its process waited for a core, and sprints to
+    catch up) receives a JointTrajectory stamped 20 ms after the instant its pace maps the
+    simulated time to. With catch_up_late_commands the joints keep the previous command (rest)
+    until the simulated time reaches the stamp, then move at the new rate: the arm follows the
+    stamped timeline, as a late command caught up does, not early at a configuration the
+    controller predicted it past. Stamped farther ahead than MAX_CATCH_UP (another clock), or
+    without catch_up_late_commands, a command acts at the next step."""
     node = _simulator(ros, catch_up_late_commands=catch_up)
     stop_worker(node._thread, node._stop, node._command_arrived)  # steps only when told here
     intake, simulator = node._commands, node.simulator
     epoch = 1_000_000.0  # the node-clock instant the pace maps simulated time 0 to [s]
     intake._paced_time = lambda sim_time: Time(nanoseconds=round((epoch + sim_time) * 1e9))
-    intake._pacer.stamp_lead = lambda sim_time: -behind
     dt, theta_0 = simulator.dt, simulator.q[7:].copy()
     rate = np.array([0.2, -0.3, 0.25, 0.4, -0.5, 0.6, 0.7])
-    intake._accept(None, rate, None, epoch + simulator.time + ahead)
-    run = ahead + 0.01
-    for _ in range(round(run / dt)):
+
+    def accept(ahead: float) -> None:
+        intake._accept(None, rate, None, epoch + simulator.time + ahead)
+
+    accept(0.02)
+    for _ in range(round(0.03 / dt)):
         node.advance()
     moved = simulator.q[7:] - theta_0
-    acted = 0.01 if waits else run  # [s] of motion at the new rate
+    acted = 0.01 if catch_up else 0.03  # [s] of motion at the new rate
     np.testing.assert_allclose(moved, acted * rate, atol=1e-9)
+
+    theta_1 = simulator.q[7:].copy()
+    intake._accept(None, np.zeros(7), None, None)  # unstamped: at rest from the next step
+    node.advance()
+    np.testing.assert_allclose(simulator.q[7:], theta_1, atol=1e-12)
+    accept(2.0 * MAX_CATCH_UP)  # another clock: acts at once
+    node.advance()
+    np.testing.assert_allclose(simulator.q[7:] - theta_1, dt * rate, atol=1e-12)

@@ -59,10 +59,10 @@ class TickLateness:
     is late, never early), and the output of a call acts until the next one. The midpoint hold
     (:meth:`ReactionlessController.step`) is reactionless to second order for the hold it is
     told; told g_(k+1) - t_k, every hold runs delta_(k+1) longer, and the residue
-    M'(theta_dot, theta_dot) h delta / 2 of each has one sign along the motion, so the base turns in
-    proportion to the mean lateness (ticks 0-8 ms late: 4e-4 deg in 10 s,
-    :mod:`rns_ros.analysis.delayed_loop`). The hold told is g_(k+1) - t_k plus the running mean of
-    the calls' lateness, which cancels the mean part (9e-5 deg there).
+    M'(theta_dot, theta_dot) h delta / 2 of each has one sign along the motion, so the base turns
+    in proportion to the mean lateness. The hold told is g_(k+1) - t_k plus the running mean of
+    the calls' lateness, which cancels the mean part (the figures: docs/controller.md, "Late
+    ticks on a busy machine"; :func:`rns_ros.analysis.delayed_loop.run_delayed_loop`).
 
     Args:
         period: the timer's period T [s], > 0.

@@ -74,11 +74,12 @@ def install_startup_handler() -> None:
     handler = signal.getsignal(signal.SIGINT)
     # rns_ros/__init__ took Ctrl-C over for any rns_* program before this module loaded
     early = getattr(sys.modules.get("rns_ros"), "_quiet_interrupt", None)
+    taken_early = early is not None and handler is early
     if program.removesuffix(".exe") not in EXECUTABLES:
-        if early is not None and handler is early:
+        if taken_early:
             signal.signal(signal.SIGINT, signal.default_int_handler)
         return
-    if handler is signal.default_int_handler or (early is not None and handler is early):
+    if taken_early or handler is signal.default_int_handler:
         signal.signal(signal.SIGINT, _record_startup_signal)
         sys.excepthook = _quiet_after_startup_signal(sys.excepthook)
 

@@ -356,12 +356,10 @@ class CommandIntake:
             period = self._pacer.period
             lead = period if period > 0.0 else MAX_CATCH_UP
             return stamp if now + 0.5 * dt < stamp <= now + lead + 0.5 * dt else None
-        if self._dynamic or not self._catch_up:
+        starts = self._next_step_on_stamp_clock() if self._catch_up and not self._dynamic else None
+        if starts is None:
             return None
-        paced = self._paced_time(now)
-        if paced is None:
-            return None
-        early = stamp - paced.nanoseconds * 1e-9
+        early = stamp - starts
         return now + early if 0.5 * dt < early <= MAX_CATCH_UP else None
 
     def command_anchor(self, stamp: float | None) -> float:
@@ -395,15 +393,20 @@ class CommandIntake:
         command: it acts on receipt). Caller holds the lock."""
         if stamp is None or self._dynamic or not self._catch_up:
             return 0.0
-        if self._publish_clock:
-            starts = self.simulator.time
-        else:
-            paced = self._paced_time(self.simulator.time)
-            if paced is None:
-                return 0.0
-            starts = paced.nanoseconds * 1e-9
+        starts = self._next_step_on_stamp_clock()
+        if starts is None:
+            return 0.0
         late = starts - stamp
         return late if 0.0 < late <= MAX_CATCH_UP else 0.0
+
+    def _next_step_on_stamp_clock(self) -> float | None:
+        """When the next step starts on the clock of the commands' stamps [s]: the simulated
+        time with /clock, else the node-clock instant the real-time pace maps it to; None off
+        real time without /clock. Caller holds the lock."""
+        if self._publish_clock:
+            return self.simulator.time
+        paced = self._paced_time(self.simulator.time)
+        return None if paced is None else paced.nanoseconds * 1e-9
 
     # --- simulation step (caller holds the lock) ----------------------------------------------
     def reset(self) -> None:

@@ -35,6 +35,7 @@ from trajectory_msgs.msg import JointTrajectory
 from rns_ros.core import ConfigError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.nodes.controller import ControllerNode
+from rns_ros.nodes.controller_parameters import SPECS
 from rns_ros.nodes.robot_io import measured_state_problem
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.nodes.simulator import SimulatorNode
@@ -111,7 +112,8 @@ def test_closed_loop_turns_the_camera_and_leaves_the_base_alone(ros, stack):
     camera turns about x only, and the base does not turn. (How far it turns per second depends
     on how promptly this machine runs the ticks, on the wall clock: the camera ends at the
     integral of the commanded rate over the stamps, test_the_camera_ends_where_the_commanded_
-    rate_adds_up_over_the_stamps; the rate per simulated second in lockstep: test_demo.)
+    rate_adds_up_over_the_stamps; the rate per simulated second, in lockstep:
+    test_demo_as_fast_as_possible_runs_in_lockstep.)
     Released, the command stays in force for command_timeout (0.5 s) after its receipt, then
     ramps down (0.1 rad/s at 1 rad/s^2) to zero: the zero output is stamped at least 0.5 s after
     the last twist, and comes within that time's worth of the controller's own ticks (a slow
@@ -1110,7 +1112,7 @@ def test_a_second_commander_of_the_joints_is_reported_by_the_controller_and_the_
 
 
 #: rns_controller's command_timeout [s]: one twist counts for at most this long.
-COMMAND_TIMEOUT = 0.5
+COMMAND_TIMEOUT = SPECS["command_timeout"].default
 
 
 class StampedStream:

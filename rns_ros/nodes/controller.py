@@ -216,6 +216,11 @@ class ControllerNode(Node):
             "joint_states": self.resolve_topic_name("joint_states"),
         }
 
+    def realtime_scheduling(self) -> tuple[int, bool]:
+        """(thread_priority, whether it applies: on the wall clock), for
+        :func:`rns_ros.nodes.runner.run_node` (the process, never a host's in-process node)."""
+        return self._params["thread_priority"], not self._sim_time
+
     def _start_ticks(self) -> None:
         """The control timer, or with output_lead the ticks of /clock itself: the events
         executor can run a sim-time timer two or three times for one /clock message and then

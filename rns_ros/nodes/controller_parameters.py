@@ -19,6 +19,7 @@ from rns_ros.nodes.parameters import (
     ParameterSpec,
     specs_by_name,
 )
+from rns_ros.nodes.realtime import thread_priority_spec
 
 NODE_NAME = "rns_controller"
 SUMMARY = "Reactionless camera-pointing controller: twist in, joint references out (DLS / SC)."
@@ -36,6 +37,7 @@ def _choices(enum: type[Choice], default: Choice) -> tuple[str, ...]:
 
 PARAMETERS = (
     MODEL_CONFIG,
+    thread_priority_spec(40, "on the wall clock (use_sim_time false)"),
     ParameterSpec(
         "method",
         Method.DLS.value,

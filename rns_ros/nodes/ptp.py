@@ -623,6 +623,11 @@ class PtpNode(GoalIntake, Node):
         self._state_publishers = self._status.check_graph(self._state_topic)
         self._status.publish_diagnostics()
 
+    def realtime_scheduling(self) -> tuple[int, bool]:
+        """(thread_priority, whether it applies: on the wall clock), for
+        :func:`rns_ros.nodes.runner.run_node` (the process, never a host's in-process node)."""
+        return self._params["thread_priority"], not self.get_parameter("use_sim_time").value
+
     def destroy_node(self) -> None:
         """Stop the arm: one zero-velocity output, then tear down."""
         if self._theta is not None:

@@ -19,12 +19,14 @@ from rns_ros.nodes.parameters import (
     choices_of,
     specs_by_name,
 )
+from rns_ros.nodes.realtime import thread_priority_spec
 
 NODE_NAME = "rns_ptp"
 SUMMARY = "Reactionless point-to-point motion: joint goal in, planned joint references out."
 
 PARAMETERS = (
     MODEL_CONFIG,
+    thread_priority_spec(40, "on the wall clock (use_sim_time false)"),
     ParameterSpec(
         "method",
         PtpMethod.THREE_PHASE.value,

@@ -30,6 +30,7 @@ from rns_ros.cli import (
 )
 from rns_ros.core.errors import RnsError
 from rns_ros.nodes.parameters import ParameterSpec, warn_unknown_parameters
+from rns_ros.nodes.realtime import schedule_node
 from rns_ros.resources import apply_loopback_profile
 
 #: What rcl / rclpy raise at start-up on a user's mistake rather than a bug: unparsable ROS
@@ -150,6 +151,10 @@ def run_node(
         # the output under load (scripts/benchmark.py --only latency); this one ticks steadily.
         executor = EventsExecutor()
         executor.add_node(node)
+        # the node's own process only: a node embedded in a host process leaves its scheduling
+        wanted = getattr(node, "realtime_scheduling", None)
+        if wanted is not None:
+            schedule_node(node, *wanted())
         # the executor dispatches in C++ for up to 0.1 s per call rather than returning to this
         # loop after each event: less CPU per received message
         never = Future()

@@ -118,6 +118,8 @@ class SimulatorNode(Node):
         self._wheels = params["reaction_wheels"]
         self._publish_every = max(1, round(1.0 / (params["publish_rate"] * params["step_size"])))
         self._publish_clock = params["publish_clock"]
+        # the plant's loop on the real-time pace runs ahead of other work, as hardware would
+        self._scheduling = (params["thread_priority"], params["real_time_factor"] > 0.0)
         self._steps = 0  # since the start or the last reset
         self._run_state = RunState()
 
@@ -169,6 +171,11 @@ class SimulatorNode(Node):
             f"{params['step_size']} s, publishing at {params['publish_rate']} Hz, real-time "
             f"factor {params['real_time_factor'] or 'max'}"
         )
+
+    def realtime_scheduling(self) -> tuple[int, bool]:
+        """(thread_priority, whether it applies: real_time_factor > 0 at start-up), for
+        :func:`rns_ros.nodes.runner.run_node` (the process, never a host's in-process node)."""
+        return self._scheduling
 
     # --- services and parameters (executor thread) --------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:

@@ -18,6 +18,7 @@ from rns_ros.nodes.parameters import (
     ParameterSpec,
     specs_by_name,
 )
+from rns_ros.nodes.realtime import thread_priority_spec
 from rns_ros.sim.free_floating import SimulationMode
 
 NODE_NAME = "rns_simulator"
@@ -77,6 +78,7 @@ PARAMETERS = (
     STEP_SIZE,
     PUBLISH_RATE,
     REAL_TIME_FACTOR,
+    thread_priority_spec(50, "when real_time_factor > 0 at start-up"),
     INITIAL_JOINT_POSITIONS,
     ParameterSpec(
         "initial_base_position",

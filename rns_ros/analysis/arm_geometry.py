@@ -20,6 +20,7 @@ import pinocchio as pin
 from rns_ros.core.errors import InputError, ModelError
 from rns_ros.core.model import FreeFloatingModel, ModelSpec
 from rns_ros.core.urdf_prep import INERTIA_KEYS, inertia_matrix
+from rns_ros.core.urdf_tree import UrdfTree
 
 _ROOT = Path(__file__).resolve().parents[2]
 #: The first, inferred arm: every candidate reuses its base, mount, masses and moments (Table 4.1).
@@ -147,9 +148,9 @@ def load_reference(path: str | Path = REFERENCE_URDF) -> ReferenceData:
     Raises:
         ModelError: the file lacks base_link, joint_1..7 or link_1..7 inertials.
     """
-    root = ET.fromstring(Path(path).read_text())
-    links = {link.get("name"): link for link in root.iter("link")}
-    joints = {joint.get("name"): joint for joint in root.iter("joint")}
+    tree = UrdfTree.parse(Path(path).read_text(), str(path))
+    links = {link.get("name"): link for link in tree.links}
+    joints = {joint.name: joint.element for joint in tree.joints}
     if "base_link" not in links or any(name not in joints for name in _JOINTS):
         raise ModelError(f"{path}: needs base_link and joints {_JOINTS}")
     base_xml = ET.tostring(links["base_link"], encoding="unicode").strip()

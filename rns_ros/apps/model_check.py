@@ -104,10 +104,14 @@ def report_lines(path: Path, robot, feasibility) -> list[str]:
 
 def _check(path: Path) -> int:
     from rns_ros.analysis.arm_feasibility import arm_feasibility
+    from rns_ros.core.link_tree import link_edges
 
     robot = _load(path)
     feasibility = arm_feasibility(robot)
     print("\n".join(report_lines(path, robot, feasibility)))
+    edges = link_edges(robot)  # what rns_simulator publishes on /tf: the nodes build it too
+    moving = sum(not edge.static for edge in edges)
+    print(f"/tf link tree: {len(edges)} transforms ({moving} moving, {len(edges) - moving} static)")
     for note in robot.loading_notes:
         print(f"note: {note}")
     for warning in feasibility.warnings:

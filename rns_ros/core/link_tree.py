@@ -8,13 +8,13 @@ added satellite, are static. A root link the loader replaced by the satellite (a
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.model import FreeFloatingModel
+from rns_ros.core.urdf_tree import UrdfTree
 
 
 @dataclass(frozen=True)
@@ -43,21 +43,15 @@ def link_edges(robot: FreeFloatingModel) -> tuple[LinkEdge, ...]:
         if frame.type == pin.FrameType.BODY
     }
     controlled = set(robot.joint_names)
-    root = ET.fromstring(robot.urdf_xml.encode())
-    children = set()
+    tree = UrdfTree.parse(robot.urdf_xml, robot.name)
     edges = []
-    for joint in root.iter("joint"):
-        parent = joint.find("parent").get("link")
-        child = joint.find("child").get("link")
-        children.add(child)
-        if child not in frames:
+    for joint in tree.joints:
+        if joint.child not in frames:
             continue
-        if parent not in frames:  # a root the satellite replaced
-            parent = robot.base_link
-        static = joint.get("name") not in controlled
-        edges.append(LinkEdge(parent, child, frames[parent], frames[child], static))
-    links = [link.get("name") for link in root.iter("link")]
-    for link in (name for name in links if name not in children):
+        parent = joint.parent if joint.parent in frames else robot.base_link  # a replaced root
+        static = joint.name not in controlled
+        edges.append(LinkEdge(parent, joint.child, frames[parent], frames[joint.child], static))
+    for link in tree.root_links():
         if link in frames and link != robot.base_link:  # the arm's root on an added satellite
             frame = frames[robot.base_link]
             edges.insert(0, LinkEdge(robot.base_link, link, frame, frames[link], True))

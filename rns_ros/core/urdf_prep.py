@@ -31,6 +31,7 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.errors import ModelError
+from rns_ros.core.urdf_tree import UrdfTree
 
 #: Relative tolerance of the triangle inequality on principal moments (I1 + I2 >= I3): URDFs
 #: exported from CAD round their moments, and a thin disk (I, I, 2I) sits exactly on the bound.
@@ -124,8 +125,7 @@ def check_urdf_inertials(xml: str, name: str = "robot") -> None:
     Raises:
         ModelError: one line naming the link and the bad value; or the text is not XML.
     """
-    root = _parse(xml, name)
-    for link in root.iter("link"):
+    for link in UrdfTree.parse(xml, name).links:
         inertial = link.find("inertial")
         if inertial is None:
             continue
@@ -194,13 +194,6 @@ def _fmt(values: np.ndarray) -> str:
     return np.array2string(np.asarray(values), precision=6, separator=", ").replace("\n", "")
 
 
-def _parse(xml: str, name: str) -> ET.Element:
-    try:
-        return ET.fromstring(xml.encode())
-    except ET.ParseError as exc:
-        raise ModelError(f"{name}: URDF could not be parsed: {exc}") from None
-
-
 # preparation ------------------------------------------------------------------------------------
 def prepare_urdf(xml: str, base: BaseBody | None = None, name: str = "robot") -> PreparedUrdf:
     """Rewrite continuous joints and add the satellite (module docstring).
@@ -212,17 +205,24 @@ def prepare_urdf(xml: str, base: BaseBody | None = None, name: str = "robot") ->
     Raises:
         ModelError: the text is not XML, has no single root link, or a ``<mimic>`` is unreadable.
     """
-    root = _parse(xml, name)
+    tree = UrdfTree.parse(xml, name)
+    root = tree.root
     notes: list[str] = []
-    joints = root.findall("joint")
+    joints = [joint.element for joint in tree.joints]
     continuous = tuple(joint.get("name") for joint in joints if joint.get("type") == "continuous")
     for joint in joints:
         if joint.get("type") == "continuous":
             _make_revolute(joint)
     if continuous:
         notes.append(f"continuous joints {list(continuous)}: revolute without position limits")
+    skipped = [f"<{tag}>" for tag in tree.non_kinematic() if tag != "material"]
+    if skipped:
+        notes.append(f"{', '.join(skipped)} not read: not part of the kinematic tree")
     mimic = _mimic_rules(joints, name)
-    root_link = _root_link(root, joints, name)
+    roots = tree.root_links()
+    if len(roots) != 1:
+        raise ModelError(f"{name}: the URDF must have exactly one root link, found {roots}")
+    root_link = roots[0]
     world = root_link == WORLD_LINK and _link_mass(root, root_link) == 0.0
     satellite = base
     if base is None and (world or _root_body_mass(root, joints, root_link) == 0.0):
@@ -268,14 +268,6 @@ def _mimic_rules(joints: list[ET.Element], name: str) -> dict[str, MimicRule]:
         offset = _number(element, "offset", where) if "offset" in element.attrib else 0.0
         rules[joint.get("name")] = MimicRule(leader, float(multiplier), float(offset))
     return rules
-
-
-def _root_link(root: ET.Element, joints: list[ET.Element], name: str) -> str:
-    children = {_link_of(joint, "child") for joint in joints}
-    roots = [link.get("name") for link in root.findall("link") if link.get("name") not in children]
-    if len(roots) != 1:
-        raise ModelError(f"{name}: the URDF must have exactly one root link, found {roots}")
-    return roots[0]
 
 
 def _link_of(joint: ET.Element, role: str) -> str | None:

@@ -32,7 +32,6 @@ model mounts it.
 from __future__ import annotations
 
 import tempfile
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -82,7 +81,7 @@ class RobotView:
             self.description = resolve_description(
                 self.source_path.read_text(), self.source_path.parent
             )
-        except (OSError, ET.ParseError) as exc:
+        except (OSError, ModelError) as exc:
             raise ModelError(f"cannot read the URDF {self.source_path}: {exc}") from exc
         # the loader reads a file: the resolved copy lives as long as this view
         self._folder = tempfile.TemporaryDirectory(prefix="rns_ros_urdf_")

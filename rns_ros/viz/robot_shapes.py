@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.urdf_prep import inertia_matrix
+from rns_ros.core.urdf_tree import UrdfTree
 
 #: Smallest semi-axis drawn [m]: a flat or needle-like inertia still shows.
 MIN_SEMI_AXIS = 0.005
@@ -100,9 +101,10 @@ def resolve_mesh(filename: str, folder: Path) -> Path | None:
 def resolve_description(xml: str, folder: Path) -> ResolvedDescription:
     """:class:`ResolvedDescription` of the URDF text ``xml`` whose relative paths start at
     ``folder``."""
-    root = ET.fromstring(xml)
+    tree = UrdfTree.parse(xml)
+    root = tree.root
     unresolved = []
-    for link in root.iter("link"):
+    for link in tree.links:
         for visual in list(link.findall("visual")):
             for mesh in visual.iter("mesh"):
                 path = resolve_mesh(mesh.get("filename", ""), folder)
@@ -112,13 +114,11 @@ def resolve_description(xml: str, folder: Path) -> ResolvedDescription:
                     break
                 mesh.set("filename", str(path.resolve()))
     children: dict[str, list[np.ndarray]] = {}
-    for joint in root.iter("joint"):
-        parent = joint.find("parent")
-        if parent is not None:
-            children.setdefault(parent.get("link", ""), []).append(_xyz(joint.find("origin")))
+    for joint in tree.joints:
+        children.setdefault(joint.parent, []).append(_xyz(joint.element.find("origin")))
     shapes = tuple(
         _link_shape(link, children.get(link.get("name", ""), []))
-        for link in root.iter("link")
+        for link in tree.links
         if link.find("visual") is None
     )
     return ResolvedDescription(

@@ -78,8 +78,9 @@ def _mass(link: ET.Element) -> float:
 
 
 def _root_link(root: ET.Element) -> str:
-    children = {joint.find("child").get("link") for joint in root.iter("joint")}
-    (name,) = [link.get("name") for link in root.iter("link") if link.get("name") not in children]
+    children = {joint.find("child").get("link") for joint in root.findall("joint")}
+    links = [link.get("name") for link in root.findall("link")]
+    (name,) = [link for link in links if link not in children]
     return name
 
 
@@ -104,8 +105,8 @@ def _add_satellite(root: ET.Element, base: dict) -> None:
 def _needs_satellite(root: ET.Element) -> bool:
     """The URDF root link and every link joined to it by fixed joints carry no mass, or the root
     is a massless ``world`` link (a fixed-base description: the satellite replaces the world)."""
-    links = {link.get("name"): link for link in root.iter("link")}
-    children = {joint.find("child").get("link"): joint for joint in root.iter("joint")}
+    links = {link.get("name"): link for link in root.findall("link")}
+    children = {joint.find("child").get("link"): joint for joint in root.findall("joint")}
     cluster = [_root_link(root)]
     if cluster == ["world"] and _mass(links["world"]) == 0.0:
         return True
@@ -121,7 +122,7 @@ def _needs_satellite(root: ET.Element) -> bool:
 def _held_positions(root: ET.Element, controlled, given: dict) -> dict[str, float]:
     """Position [rad or m] of every moving joint not controlled: ``held_joints`` of the YAML,
     else a <mimic> joint's multiplier * leader + offset, else 0."""
-    joints = {j.get("name"): j for j in root.iter("joint") if j.get("type") != "fixed"}
+    joints = {j.get("name"): j for j in root.findall("joint") if j.get("type") != "fixed"}
     held = {name: float(given[name]) for name in joints if name not in controlled and name in given}
     pending = [name for name in joints if name not in controlled and name not in held]
     while pending:
@@ -176,8 +177,9 @@ def _perturbed(description: Description) -> Description:
     """The description with one arm link's mass scaled by 1 + MASS_PERTURBATION: the child link
     of the last controlled joint that carries mass (a flange link may carry none)."""
     root = ET.fromstring(description.xml)
-    links = {link.get("name"): link for link in root.iter("link")}
-    children = {joint.get("name"): joint.find("child").get("link") for joint in root.iter("joint")}
+    links = {link.get("name"): link for link in root.findall("link")}
+    joints = root.findall("joint")  # under <robot>: not those of a <ros2_control> block
+    children = {joint.get("name"): joint.find("child").get("link") for joint in joints}
     link = next(
         links[children[joint]]
         for joint in reversed(description.controlled)

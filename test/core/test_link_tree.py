@@ -1,6 +1,7 @@
 """The /tf link tree: composing the parent-to-child transforms from the base reaches every link
 at the pose Pinocchio's forward kinematics gives it, for the default arm and three public-style
-arms (held fingers, continuous joints, a replaced `world` root)."""
+arms (held fingers, continuous joints, a replaced `world` root; `<ros2_control>`, `<gazebo>` and
+`<transmission>` elements, whose `<joint>` entries are not kinematic)."""
 
 from __future__ import annotations
 

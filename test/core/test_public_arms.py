@@ -60,7 +60,7 @@ def _urdf(arm: str) -> str:
 
 
 def _links(xml: str) -> dict[str, ET.Element]:
-    return {link.get("name"): link for link in ET.fromstring(xml).iter("link")}
+    return {link.get("name"): link for link in ET.fromstring(xml).findall("link")}
 
 
 def test_the_arms_have_the_published_traits():

@@ -10,8 +10,9 @@ OS-C; :mod:`rns_ros.runs.contact`). The table of the recorded figures
 ``--model FILE`` (inspection scenarios) runs every node on another robot model YAML
 (docs/own_arm.md): each node gets ``model_config``, the operator's frames are the model's. A
 scenario's ``initial_joint_positions_deg`` are used when they give one angle per controlled joint
-of the model and lie within its joint limits; otherwise (a scenario written for another arm) the
-run starts from the model's ``initial_joint_positions`` (zeros without them) and a note says so
+of the model and lie within its joint limits (a note says so when they differ from the model's
+``initial_joint_positions``); otherwise (a scenario written for another arm) the run starts from
+the model's ``initial_joint_positions`` and a note says so
 (:func:`rns_ros.runs.inspection.start_configuration`).
 
 The runs start only on a domain without another stack (:func:`rns_ros.harness.claim_domain`);

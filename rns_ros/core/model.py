@@ -287,6 +287,18 @@ class FreeFloatingModel:
                     f"its limits [{low:.6g}, {high:.6g}] rad"
                 )
             theta[index] = value
+        defaulted = [
+            f"{joint} [{low:.6g}, {high:.6g}]"
+            for joint, low, high in zip(
+                self.joint_names, self.lower_limits, self.upper_limits, strict=True
+            )
+            if joint not in positions and not low - LIMIT_SLACK <= 0.0 <= high + LIMIT_SLACK
+        ]
+        if defaulted:
+            raise ModelError(
+                f"{self.name}: initial_joint_positions defaults to 0 rad, outside the limits of "
+                f"{', '.join(defaulted)} rad: give those joints an initial angle in the model YAML"
+            )
         theta.setflags(write=False)
         return theta
 

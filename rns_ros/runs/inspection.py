@@ -109,14 +109,19 @@ def check_scenarios(files: list[Path]) -> list[Scenario]:
     return scenarios
 
 
+def _degrees(theta: np.ndarray) -> str:
+    return ", ".join(f"{value:.4g}" for value in np.rad2deg(theta))
+
+
 def start_configuration(scenario: Scenario, robot: FreeFloatingModel) -> tuple[np.ndarray, str]:
     """The joint angles [rad] (n,) a run of ``scenario`` on ``robot`` starts from, and a note
     ('' when none is due).
 
     The scenario's ``initial_joint_positions_deg`` when they give one angle per controlled joint
-    and lie within the joint limits; otherwise the scenario was written for another arm, and the
-    run starts from the model's ``initial_joint_positions`` (zeros when the model YAML has none),
-    which the note says.
+    and lie within the joint limits (the note says so when they differ from the model's own
+    ``initial_joint_positions``); otherwise the scenario was written for another arm, and the
+    run starts from the model's ``initial_joint_positions`` (zeros for joints the model YAML
+    leaves out), which the note says.
     """
     theta = scenario.initial_theta
     own = robot.initial_theta
@@ -134,9 +139,14 @@ def start_configuration(scenario: Scenario, robot: FreeFloatingModel) -> tuple[n
             if not low <= value <= high
         ]
         why = f"puts joints {outside} outside their limits"
-    else:
+    elif np.allclose(theta, own, rtol=0.0, atol=1e-9):
         return theta, ""
-    angles = ", ".join(f"{value:.4g}" for value in np.rad2deg(own))
+    else:
+        return theta, (
+            f"starting from scenario {scenario.name!r}'s initial_joint_positions_deg "
+            f"[{_degrees(theta)}] deg, not the model's [{_degrees(own)}] deg"
+        )
+    angles = _degrees(own)
     return own, (
         f"scenario {scenario.name!r} {why}: starting from the model's initial_joint_positions "
         f"[{angles}] deg"

@@ -20,6 +20,7 @@ from rns_ros.apps import demo
 from rns_ros.apps.demo import main
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import load_model
+from rns_ros.resources import default_model_config, scenario_path
 from rns_ros.runs.inspection import DemoRow, start_configuration
 from rns_ros.viz.readback import recording_summary
 
@@ -40,6 +41,17 @@ def test_a_scenario_for_the_arm_gives_the_start(tmp_path):
     scenario = load_scenario(_scenario(tmp_path, SIX_ANGLES_DEG))
     theta, note = start_configuration(scenario, robot)
     np.testing.assert_array_equal(theta, np.deg2rad(SIX_ANGLES_DEG))
+    # the model YAML starts elsewhere (zeros): the note says which start the run takes
+    assert note == (
+        "starting from scenario 'short_observation''s initial_joint_positions_deg "
+        "[-90, -30, 0, -70, 180, -30] deg, not the model's [0, 0, 0, 0, 0, 0] deg"
+    )
+
+
+def test_the_thesis_scenario_on_the_thesis_arm_starts_where_both_say_without_a_note():
+    robot = load_model(default_model_config())
+    theta, note = start_configuration(load_scenario(scenario_path("satellite_observation")), robot)
+    np.testing.assert_allclose(theta, robot.initial_theta, atol=1e-9)
     assert note == ""
 
 

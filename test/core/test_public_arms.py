@@ -281,6 +281,16 @@ def test_mimic_joints_cannot_be_controlled():
         FreeFloatingModel.from_urdf(urdf, _with(spec, held_joints=conflicting))
 
 
+def test_a_controlled_joint_left_at_0_outside_its_limits_is_refused_naming_it():
+    """The model YAML gives no angle for g7_joint4, whose range [-3.07, -0.07] rad excludes the
+    default 0: one line naming the joint and its range, not a start every command is refused
+    from."""
+    urdf, spec = load_model_config(_config("gripper7"))
+    given = {k: v for k, v in spec.initial_joint_positions.items() if k != "g7_joint4"}
+    with pytest.raises(ModelError, match=r"defaults to 0 rad, outside the limits of g7_joint4 \["):
+        FreeFloatingModel.from_urdf(urdf, _with(spec, initial_joint_positions=given))
+
+
 def test_joints_past_the_camera_are_held_and_must_sit_within_their_limits():
     """Camera on link 3: joints 4-7 are off the chain and held; joint 4's range excludes 0."""
     urdf, spec = load_model_config(_config("gripper7"))

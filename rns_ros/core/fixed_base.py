@@ -22,6 +22,7 @@ import pinocchio as pin
 
 from rns_ros.core.config import read_yaml_mapping
 from rns_ros.core.errors import ConfigError, ModelError
+from rns_ros.core.joint_selection import frame_id
 from rns_ros.core.model import check_moving_bodies, check_one_dof_joints
 from rns_ros.core.urdf_prep import check_urdf_inertials
 from rns_ros.core.validation import as_vector
@@ -58,12 +59,7 @@ class FixedBaseModel:
             raise ModelError(f"{name}: the URDF has no moving joint")
         check_one_dof_joints(model, name, 1, "Part II arms need revolute joints with limits")
         check_moving_bodies(model, name)
-        if not model.existFrame(ee_frame):
-            names = sorted({f.name for f in model.frames} - {"universe"})
-            raise ModelError(
-                f"{name}: ee_frame '{ee_frame}' is not a frame of the URDF; have {names}"
-            )
-        self.ee_frame_id = model.getFrameId(ee_frame)
+        self.ee_frame_id = frame_id(model, ee_frame, "ee_frame", name)
         self.n = model.nv
         self.joint_names: tuple[str, ...] = tuple(model.names[1:])
         self.lower_limits = np.array(model.lowerPositionLimit, dtype=float)
@@ -93,11 +89,10 @@ class FixedBaseModel:
 
     def frame_position(self, q, frame: str) -> np.ndarray:
         """Position of a named frame in world [m], shape (3,) (own Data: the shared one is kept)."""
-        if not self.model.existFrame(frame):
-            raise ModelError(f"{self.name}: no frame '{frame}'")
+        index = frame_id(self.model, frame, "frame", self.name)
         data = self.model.createData()
         pin.framesForwardKinematics(self.model, data, as_vector(q, self.n, "q"))
-        return data.oMf[self.model.getFrameId(frame)].translation.copy()
+        return data.oMf[index].translation.copy()
 
 
 def load_fixed_base_model(path: str | Path, *, gravity: bool = False) -> FixedBaseModel:

@@ -48,11 +48,21 @@ class JointSelection(NamedTuple):
 
 
 def frame_id(model: pin.Model, frame: str, what: str, name: str) -> int:
-    """Pinocchio id of ``frame``, else a ModelError listing the frames of the URDF."""
-    if not model.existFrame(frame):
+    """Pinocchio id of the frame named ``frame`` (``what`` and ``name`` label errors).
+
+    A URDF may give a link and a joint the same name (a fixed ``right_hand`` joint whose child
+    is the link ``right_hand``); the name then means the link, whose frame is the one a
+    tool, a camera or /tf refers to. A joint's frame is taken when no link has the name.
+
+    Raises:
+        ModelError: no frame has the name (the message lists the frames of the URDF).
+    """
+    matches = [index for index, f in enumerate(model.frames) if f.name == frame]
+    if not matches:
         names = sorted({f.name for f in model.frames} - {"universe", "root_joint"})
         raise ModelError(f"{name}: {what} '{frame}' is not a frame of the URDF; have {names}")
-    return model.getFrameId(frame)
+    links = [index for index in matches if model.frames[index].type == pin.FrameType.BODY]
+    return (links or matches)[0]
 
 
 def chain_joints(model: pin.Model, frame: int) -> list[str]:

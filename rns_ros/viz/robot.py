@@ -41,6 +41,7 @@ import rerun.urdf as rru
 
 from rns_ros.core.errors import ModelError
 from rns_ros.core.fixed_base import FixedBaseModel
+from rns_ros.core.joint_selection import frame_id
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.viz import paths
 from rns_ros.viz.robot_shapes import (
@@ -216,7 +217,7 @@ class RobotView:
         model = self.robot.model
         if not model.existFrame(self.root_link):
             return None
-        frame = model.frames[model.getFrameId(self.root_link)]
+        frame = model.frames[frame_id(model, self.root_link, "root link", self.robot.name)]
         return frame.placement if frame.parentJoint == 1 else None
 
     def log_fixed_base(self, rec: rr.RecordingStream) -> None:

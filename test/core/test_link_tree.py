@@ -45,7 +45,7 @@ def test_the_tree_reaches_every_link_where_forward_kinematics_puts_it(path):
     bodies = {f.name for f in robot.model.frames if f.type == pin.FrameType.BODY}
     assert set(placed) == bodies
     for name, pose in placed.items():
-        expected = data.oMf[robot.model.getFrameId(name)]
+        expected = data.oMf[robot.model.getFrameId(name, pin.FrameType.BODY)]
         np.testing.assert_allclose(pose.homogeneous, expected.homogeneous, atol=1e-12)
 
 

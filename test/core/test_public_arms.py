@@ -77,6 +77,30 @@ def test_the_arms_have_the_published_traits():
     root = ET.fromstring(world)
     assert root.find("joint[@name='world_joint']").get("type") == "fixed"
     assert root.find("joint/parent[@link='world']") is not None
+    # blocks that are not kinematic, with <joint> entries of their own
+    assert gripper.count("<ros2_control name=") == 1
+    assert world.count("<transmission name=") == 7
+    # a joint and a link named alike
+    cont_root = ET.fromstring(cont)
+    assert cont_root.find("joint[@name='c6_hand']") is not None
+    assert cont_root.find("link[@name='c6_hand']") is not None
+
+
+def test_a_frame_name_shared_by_a_joint_and_a_link_means_the_link():
+    """cont6's camera_frame c6_hand names a fixed joint and its child link; the camera is the
+    link, 2 cm past c6_end_effector along its z axis."""
+    robot = load_model(_config("cont6"))
+    frame = robot.model.frames[robot.camera_frame_id]
+    assert frame.name == "c6_hand"
+    assert frame.type == pin.FrameType.BODY
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, robot.configuration(robot.initial_theta))
+    end = data.oMf[robot.model.getFrameId("c6_end_effector", pin.FrameType.BODY)]
+    np.testing.assert_allclose(
+        data.oMf[robot.camera_frame_id].translation,
+        end.act(np.array([0.0, 0.0, 0.02])),
+        atol=1e-12,
+    )
 
 
 def test_each_arm_loads_with_its_controlled_and_held_joints(arm):
@@ -178,7 +202,7 @@ def _independent_full_model(name: str, robot: FreeFloatingModel, q, base_twist, 
         angular += force.angular
         energy += 0.5 * velocity.vector @ local
     angular_about_base = angular - np.cross(base.translation, linear)
-    camera = data.oMf[full.getFrameId(robot.spec.camera_frame)].translation
+    camera = data.oMf[full.getFrameId(robot.spec.camera_frame, pin.FrameType.BODY)].translation
     return linear, angular_about_base, energy, camera
 
 

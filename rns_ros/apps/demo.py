@@ -278,16 +278,21 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
         f"ROS domain {args.domain_id} (localhost only)\n",
         flush=True,
     )
-    runs = []
+    runs, failures = [], []
     for run in range(args.runs):
         label = f" (run {run + 1} of {args.runs})" if args.runs > 1 else ""
-        rows = _run_methods(args, lambda method: run_method(method, args, scenario_file), label)
+        rows = _run_methods(
+            args, lambda method: run_method(method, args, scenario_file), failures, label
+        )
         if rows is None:
             return 2
         runs.append(rows)
+        if failures:
+            break  # the figures so far; further runs would only repeat the failure
     table = format_table(runs[-1])
-    if args.runs > 1:
+    if len(runs) > 1 and not failures:
         table += "\n\n" + format_spread(runs)
+    ended = [f"{row.method}: {row.ended}" for row in runs[-1] if row.ended]
     return _report(
         args,
         runs[-1],
@@ -295,22 +300,26 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
         [problem for rows in runs for problem in non_finite_figures(rows)],
         f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
         inspection_summary(runs),
+        failures + ended,
     )
 
 
-def _run_methods(args: argparse.Namespace, run: Callable, label: str = "") -> list | None:
+def _run_methods(
+    args: argparse.Namespace, run: Callable, failures: list[str], label: str = ""
+) -> list | None:
     """``run(method)`` for each of ``--methods`` in turn, announced (``label`` after the method);
-    a run whose recording came out partial is run again (up to PARTIAL_RETRIES times); None,
-    the error on stderr, when one fails."""
+    a run whose recording came out partial is run again (up to PARTIAL_RETRIES times). A
+    method that fails is said at once on stderr and added to ``failures`` (one line); the
+    others still run. The rows of the methods that completed; None when none did."""
     rows = []
-    try:
-        for method in args.methods:
-            print(f"running {method}{label} ...", flush=True)
+    for method in args.methods:
+        print(f"running {method}{label} ...", flush=True)
+        try:
             rows.append(_run_complete(run, method))
-    except RnsError as exc:
-        print(f"rns_demo: {one_line(exc)}", file=sys.stderr)
-        return None
-    return rows
+        except RnsError as exc:
+            failures.append(one_line(exc))
+            print(f"rns_demo: {failures[-1]}", file=sys.stderr, flush=True)
+    return rows or None
 
 
 def _run_complete(run: Callable, method: str):
@@ -326,10 +335,19 @@ def _run_complete(run: Callable, method: str):
             print(f"  {one_line(exc)}: running {method} again", flush=True)
 
 
-def _report(args, rows, table: str, problems: list[str], epilogue: str, summary: list) -> int:
+def _report(
+    args,
+    rows,
+    table: str,
+    problems: list[str],
+    epilogue: str,
+    summary: list,
+    unfinished: list[str] = (),
+) -> int:
     """The end of every demo: the table; exit 1 on non-finite figures (a run that produced NaN
     / inf failed, whatever the table shows); else the epilogue, the recordings and the JSON
-    ``summary`` to ``--summary``."""
+    ``summary`` to ``--summary``; then, exit 2, one line per method that did not finish its
+    task (``unfinished``: the method and why), whose figures above are those so far."""
     print()
     print(table)
     if problems:
@@ -350,7 +368,9 @@ def _report(args, rows, table: str, problems: list[str], epilogue: str, summary:
                   file=sys.stderr)  # fmt: skip
             return 2
         print(f"summary written to {args.summary}")
-    return 0
+    for line in unfinished:
+        print(f"rns_demo: {line}", file=sys.stderr)
+    return 2 if unfinished else 0
 
 
 def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
@@ -361,7 +381,8 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
         "(localhost only)\n",
         flush=True,
     )
-    rows = _run_methods(args, lambda method: run_ptp_method(method, scenario, args))
+    failures: list[str] = []
+    rows = _run_methods(args, lambda method: run_ptp_method(method, scenario, args), failures)
     if rows is None:
         return 2
     return _report(
@@ -372,6 +393,7 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
         "ratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
         "not printed (ours is identified, docs/arm_identification.md): compare the ranking.",
         [asdict(row) for row in rows],
+        failures,
     )
 
 
@@ -383,7 +405,10 @@ def _main_contact(args: argparse.Namespace) -> int:
         f"{args.domain_id} (localhost only)\n",
         flush=True,
     )
-    rows = _run_methods(args, lambda method: run_contact_method(method, args.scenario, args))
+    failures: list[str] = []
+    rows = _run_methods(
+        args, lambda method: run_contact_method(method, args.scenario, args), failures
+    )
     if rows is None:
         return 2
     return _report(
@@ -393,6 +418,7 @@ def _main_contact(args: argparse.Namespace) -> int:
         non_finite_figures(rows),
         contact_epilogue(args.scenario),
         contact_summary(rows),
+        failures,
     )
 
 

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rns_ros.core.errors import InputError
+from rns_ros.core.validation import apart
 
 #: Commanded speeds may exceed the URDF velocity limit by this fraction before rejection [-]
 #: (controllers that scale exactly to the limit land a rounding error above it).
@@ -269,9 +270,10 @@ def check_reference_positions(
     outside = np.flatnonzero((positions < lower) | (positions > upper))
     if outside.size:
         joint = outside[0]
+        value, low, high = apart(positions[joint], lower[joint], upper[joint])
         raise InputError(
-            f"position {positions[joint]:.4g} rad on {model_joints[joint]} is outside its limits "
-            f"[{lower[joint]:.4g}, {upper[joint]:.4g}] rad"
+            f"position {value} rad on {model_joints[joint]} is outside its limits "
+            f"[{low}, {high}] rad"
         )
     far = np.flatnonzero(np.abs(positions - current) > max_error + REFERENCE_SLACK)
     if far.size:
@@ -320,8 +322,6 @@ def partial_joint_goal(
         goal[index[name]] = value
     for i, name in enumerate(model):
         if not lower[i] <= goal[i] <= upper[i]:
-            raise InputError(
-                f"goal {name} = {goal[i]:.4g} rad is outside its limits "
-                f"[{lower[i]:.4g}, {upper[i]:.4g}] rad"
-            )
+            value, low, high = apart(goal[i], lower[i], upper[i])
+            raise InputError(f"goal {name} = {value} rad is outside its limits [{low}, {high}] rad")
     return goal

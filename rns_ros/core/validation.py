@@ -63,3 +63,19 @@ class Choice(StrEnum):
         if isinstance(value, cls):
             return value
         return parse_choice(cls, value, getattr(cls, "__label__", cls.__name__))
+
+
+def apart(*values: float, digits: int = 4) -> list[str]:
+    """``values`` as text with at least ``digits`` significant digits, and as many more (up to
+    17) as it takes for values that differ to read differently: a position just past a limit
+    never prints as the limit itself (2.2300004 against 2.23)."""
+    numbers = [float(value) for value in values]
+    for precision in range(digits, 18):
+        texts = [f"{value:.{precision}g}" for value in numbers]
+        if all(
+            (texts[i] == texts[j]) == (numbers[i] == numbers[j])
+            for i in range(len(numbers))
+            for j in range(i + 1, len(numbers))
+        ):
+            return texts
+    return [repr(value) for value in numbers]

@@ -15,6 +15,7 @@ from sensor_msgs.msg import JointState
 from rns_ros.control.controller import ControllerStep
 from rns_ros.control.teleop import ControllerState, GateOutput
 from rns_ros.core.model import FreeFloatingModel
+from rns_ros.core.validation import apart
 from rns_ros.nodes.status import (
     CommanderWatch,
     level_rank,
@@ -66,9 +67,10 @@ def joint_limit_text(robot: FreeFloatingModel, theta: np.ndarray) -> str:
     lower, upper = robot.lower_limits, robot.upper_limits
     margin = np.minimum(theta - lower, upper - theta)
     joint = int(np.argmin(margin))
+    angle, low, high = apart(theta[joint], lower[joint], upper[joint])
     return (
-        f"JOINT_LIMIT: {robot.joint_names[joint]} at {theta[joint]:.4g} rad is "
-        f"{margin[joint]:.3g} rad from its limit [{lower[joint]:.4g}, {upper[joint]:.4g}]; "
+        f"JOINT_LIMIT: {robot.joint_names[joint]} at {angle} rad is "
+        f"{margin[joint]:.3g} rad from its limit [{low}, {high}]; "
         "the motion is slowed or stopped (choose another direction)"
     )
 

@@ -49,6 +49,9 @@ from rns_ros.nodes.simulator_publishing import StatePublisher, WheelSnapshot
 from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationState
 from rns_ros.sim.reaction_wheels import ReactionWheels
 
+#: Least time [s] between two log lines about a joint standing at a limit.
+JOINT_STOP_LOG_PERIOD = 5.0
+
 
 def _free_floating_simulator(robot: FreeFloatingModel, params: dict) -> FreeFloatingSimulator:
     """The simulator the parameters describe (initial state, servo, wheels)."""
@@ -233,6 +236,8 @@ class SimulatorNode(Node):
                 )
                 return None
             self._steps += 1
+            if self.simulator.at_stop.any():
+                self._log_joint_stop()
             # a lockstep pause also publishes the state there: the controller's tick at the
             # pause samples this instant, not the last grid point (stale by up to a period)
             pauses = self._pacer.note_pause()
@@ -248,6 +253,17 @@ class SimulatorNode(Node):
         elif clock:
             self._publisher.send_clock(sim_time)
         return sim_time
+
+    def _log_joint_stop(self) -> None:
+        """A joint stands at a position limit (kinematic mode: a mechanical stop): say which,
+        where and when, at most every few seconds. Caller holds the lock."""
+        joint, side, limit = self.simulator.joint_stop()
+        self.get_logger().warn(
+            f"{self.robot.joint_names[joint]} stands at its {side} limit {limit:.6g} rad at "
+            f"t = {self.simulator.time:.3f} s: the commanded rate past it is not followed "
+            "(joint stop)",
+            throttle_duration_sec=JOINT_STOP_LOG_PERIOD,
+        )
 
     def _reset(self) -> None:
         """Back to the initial state (a requested ~/reset). Caller holds the lock."""

@@ -73,6 +73,8 @@ class DemoRow:
     task_wall_s: float | None = None
     task_sim_s: float | None = None
     mcap: str | None = None
+    #: why the run ended before the task's end (a joint at its limit), None when it did not
+    ended: str | None = None
 
     @property
     def real_time_factor(self) -> float | None:
@@ -211,7 +213,7 @@ def run_method(
         if sim_time and args.output_lead:
             awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
         _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
-        task, end, task_wall = _run_task(stack, processes, streams, scenario, args, method)
+        task, end, task_wall, limited = _run_task(stack, processes, streams, scenario, args, method)
         # stopped before the recorded messages are read: in lockstep the stack would go on
         # stepping as fast as it can meanwhile, competing with this process for the cores
         processes.stop()  # the logger writes its summary line as it closes the recording
@@ -243,6 +245,9 @@ def run_method(
             ]
             print("\n".join(closed[-1:]), flush=True)
     figures = run_figures(robot, scenario, **data)
+    ended = None
+    if limited:
+        ended = limit_cause(robot, data["joint_positions"][-1], data["times"][-1] - task)
     return DemoRow(
         method,
         figures,
@@ -252,7 +257,30 @@ def run_method(
         task_wall_s=task_wall,
         task_sim_s=end - task,
         mcap=mcap,
+        ended=ended,
     )
+
+
+#: How close [rad] a joint must be to a limit to be named as the one that stopped a run.
+LIMIT_NEAR = 0.05
+
+
+def limit_cause(robot: FreeFloatingModel, theta: np.ndarray, t: float) -> str:
+    """Why a run stopped at ``t`` [s] of task time with the joints at ``theta`` [rad] (n,): the
+    joint nearest one of its limits, named with the limit (e.g. ``g7_joint5 reached its upper
+    limit 2.9 rad at t = 11.68 s``)."""
+    lower = np.abs(theta - robot.lower_limits)
+    upper = np.abs(theta - robot.upper_limits)
+    gaps = np.minimum(lower, upper)
+    joint = int(np.argmin(gaps))
+    side, limit = (
+        ("upper", robot.upper_limits[joint])
+        if upper[joint] <= lower[joint]
+        else ("lower", robot.lower_limits[joint])
+    )
+    if gaps[joint] > LIMIT_NEAR:
+        return f"the controller stopped at a joint limit at t = {t:.2f} s"
+    return f"{robot.joint_names[joint]} reached its {side} limit {limit:.6g} rad at t = {t:.2f} s"
 
 
 def _controller_parameters(
@@ -363,9 +391,12 @@ def _run_task(
     args: argparse.Namespace,
     method: str,
 ) -> tuple[float, float, float]:
-    """Record ``cmd_twist`` (into ``streams``) until every state stream reached the task's end;
-    return the task's start and end [s] (stamps' clock) and its wall time [s]."""
+    """Record ``cmd_twist`` (into ``streams``) until every state stream reached the task's end,
+    or until rns_controller reports JOINT_LIMIT (a joint at its limit: the task cannot be done;
+    the run ends there, its figures so far kept); return the task's start and end [s] (stamps'
+    clock), its wall time [s] and whether a joint limit ended it."""
     commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
+    status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
     budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
     if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
         raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
@@ -376,15 +407,39 @@ def _run_task(
     task_started = time.perf_counter()
     end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
     states = [streams[name] for name in ("joints", "odom", "momentum")]
+    stop = JointLimitWatch(status)
     if not stack.spin_until(
-        lambda: all(len(log) and log.latest_stamp() >= end for log in states),
+        lambda: all(len(log) and log.latest_stamp() >= min(end, stop.at) for log in states),
         timeout=budget,
         check_every=0.005,  # not after each of the ~4 messages a period brings
     ):
         raise RnsError(
             f"{method}: the scenario did not finish within {budget:.0f} s{processes.exit_report()}"
         )
-    return task, end, time.perf_counter() - task_started
+    return task, min(end, stop.at), time.perf_counter() - task_started, stop.at < end
+
+
+class JointLimitWatch:
+    """The stamp [s] of rns_controller's first JOINT_LIMIT status in the log ``status``
+    (:attr:`at`; inf until one comes), read as the messages arrive."""
+
+    def __init__(self, status: TopicLog) -> None:
+        self._status = status
+        self._read = 0
+        self._at = math.inf
+
+    @property
+    def at(self) -> float:
+        if math.isfinite(self._at):
+            return self._at
+        messages = self._status.messages
+        for msg in messages[self._read :]:
+            states = {kv.value for entry in msg.status for kv in entry.values if kv.key == "state"}
+            if "JOINT_LIMIT" in states:
+                self._at = header_seconds(msg)
+                break
+        self._read = len(messages)
+        return self._at
 
 
 #: rns_simulator's default RK4 step [s] and the range --sim-step accepts (its step_size's).

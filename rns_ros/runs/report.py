@@ -38,9 +38,19 @@ def non_finite_figures(rows: Iterable[CheckedRow]) -> list[str]:
     return problems
 
 
+#: Marks a row whose run ended before the task's end (figures so far; the cause follows).
+ENDED_MARK = " *"
+
+
+def _row_name(row: DemoRow) -> str:
+    return row.method + (ENDED_MARK if row.ended else "")
+
+
 def format_table(rows: list[DemoRow]) -> str:
+    """The comparison table of inspection ``rows``; a row marked ``*`` ended early (a joint at
+    its limit), its figures those up to then."""
     columns = (
-        ("method", max(14, 2 + max((len(row.method) for row in rows), default=0))),
+        ("method", max(14, 2 + max((len(_row_name(row)) for row in rows), default=0))),
         ("max base dev [deg]", 20),
         ("camera err [deg]", 18),
         ("RMS ω err [rad/s]", 19),
@@ -63,11 +73,14 @@ def format_table(rows: list[DemoRow]) -> str:
     for row in rows:
         f = row.figures
         lines.append(
-            f"{row.method:<{columns[0][1]}}{f.max_base_deviation_deg:>20.3e}{f.final_camera_error_deg:>18.4g}"
+            f"{_row_name(row):<{columns[0][1]}}{f.max_base_deviation_deg:>20.3e}"
+            f"{f.final_camera_error_deg:>18.4g}"
             f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
             f"{f.angular_momentum_drift:>14.2e}{_energy_columns(row.energy)}"
             f"{row.wall_time_s:>10.1f}{_task_columns(row)}"
         )
+    if any(row.ended for row in rows):
+        lines.append(f"{ENDED_MARK.strip()} ended before the task's end: the figures up to then")
     return "\n".join(lines)
 
 
@@ -194,7 +207,7 @@ def inspection_summary(runs: list[list[DemoRow]]) -> list[dict]:
     return [
         {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
         | {"task_wall_s": row.task_wall_s, "task_sim_s": row.task_sim_s}
-        | {"recording": row.recording, "mcap": row.mcap}
+        | {"recording": row.recording, "mcap": row.mcap, "ended": row.ended}
         | {"energy": None if row.energy is None else asdict(row.energy)}
         | (
             {

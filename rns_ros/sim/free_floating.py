@@ -2,7 +2,9 @@
 
 Two modes (:class:`SimulationMode`):
 
-* ``kinematic`` - the joints follow the commanded joint velocities exactly; the base twist follows
+* ``kinematic`` - the joints follow the commanded joint velocities exactly, up to their URDF
+  position limits, where they stop as at a mechanical stop (a step never takes a joint past a
+  limit; a rate away from it is followed); the base twist follows
   from momentum conservation. With the conserved centroidal momentum h_G (world axes, about the
   system CoM) and Pinocchio's centroidal momentum matrix A_G(q) = [A_b, A_m]:
   A_b v_b + A_m theta_dot = h_G, i.e. eq. (2.33) solved for the base twist, moved to the CoM.
@@ -201,6 +203,9 @@ class FreeFloatingSimulator:
         self._position_rate = np.divide(stiffness, damping, out=np.zeros(n), where=damping > 0.0)
         self.velocity_limits = _limits(robot.velocity_limits)
         self.effort_limits = _limits(robot.model.effortLimit[6:])
+        #: URDF position limits [rad] (n,); -inf / +inf for continuous joints
+        self.lower_limits = np.asarray(robot.lower_limits, dtype=float)
+        self.upper_limits = np.asarray(robot.upper_limits, dtype=float)
         if wheels is None:
             self._model, self._data = robot.model, robot.data
         else:
@@ -270,13 +275,35 @@ class FreeFloatingSimulator:
         self._v = self._kinematic_velocity(self.q, np.zeros(n))
         #: joint displacement [rad] (n,) still to make up in the next kinematic step
         self._catch_up = np.zeros(n)
+        #: joints whose rate a position limit cut in the last kinematic step, (n,) bool
+        self.at_stop = np.zeros(n, dtype=bool)
 
     @property
     def v(self) -> np.ndarray:
         """Pinocchio velocity (6 + n,): base twist in the base frame [m/s, rad/s], theta_dot."""
         if self._v is None:
-            self._v = self._kinematic_velocity(self.q, self.reference.velocities)
+            self._v = self._kinematic_velocity(self.q, self.stopped_rate(self.reference.velocities))
         return self._v
+
+    def joint_stop(self) -> tuple[int, str, float]:
+        """The first joint the last kinematic step held at a position limit (:attr:`at_stop`):
+        (its index, ``"lower"`` or ``"upper"``, the limit [rad])."""
+        joint = int(np.flatnonzero(self.at_stop)[0])
+        theta = self.q[7 + joint]
+        lower, upper = self.lower_limits[joint], self.upper_limits[joint]
+        if abs(theta - upper) < abs(theta - lower):
+            return joint, "upper", float(upper)
+        return joint, "lower", float(lower)
+
+    def stopped_rate(self, theta_dot: np.ndarray) -> np.ndarray:
+        """The joint rate [rad/s] (n,) kinematic mode applies for ``theta_dot`` over the next
+        step: cut per joint so that no joint passes its position limit within the step (a joint
+        at a limit stands there, as at a mechanical stop; a joint outside its limits is not
+        moved further out). Unlimited joints are untouched."""
+        theta, dt = self.q[7:], self.dt
+        low = np.minimum(0.0, (self.lower_limits - theta) / dt)
+        high = np.maximum(0.0, (self.upper_limits - theta) / dt)
+        return np.clip(theta_dot, low, high)
 
     def set_reference(
         self, positions=None, velocities=None, accelerations=None, *, since: float = 0.0
@@ -433,6 +460,8 @@ class FreeFloatingSimulator:
         if self._catch_up.any():  # a late reference: make up the missed motion (set_reference)
             theta_dot = theta_dot + self._catch_up / dt
             self._catch_up = np.zeros(self.robot.n)
+        wanted, theta_dot = theta_dot, self.stopped_rate(theta_dot)
+        self.at_stop = theta_dot != wanted
         increment = np.empty(model.nv)
 
         def stage(fraction: float, base_rate: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -140,3 +141,44 @@ def test_demo_runs_a_six_joint_arm_reactionless_over_dds(tmp_path):
     counts = recording_summary(row["recording"])
     assert any(path.endswith("joint_6") and rows > 0 for path, rows in counts.items())
     assert not any(path.endswith("joint_7") and rows > 0 for path, rows in counts.items())
+
+
+def test_a_failing_method_leaves_the_others_run_and_printed(tmp_path, monkeypatch, capsys):
+    """One method's run fails (here: did not finish): it is said in one line and exit 2, and
+    the methods after it still run and print their figures."""
+    from rns_ros.core import RnsError
+
+    def fake_run(method, _args, _file):
+        if method == "dls":
+            raise RnsError("dls: the scenario did not finish within 82 s")
+        return DemoRow(method, _figures(), 1.0, None)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    argv = ["--no-record", "--methods", "dls,sc", "--domain-id", DOMAIN]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert "\nsc " in captured.out  # its row
+    assert "rns_demo: dls: the scenario did not finish within 82 s" in captured.err
+
+
+def test_a_joint_driven_to_its_limit_ends_the_run_with_the_cause_and_the_figures_so_far(
+    tmp_path, capfd
+):
+    """gripper7's default roll drives g7_joint5 into its upper limit 2.9 rad: each method's run
+    ends there with its figures so far (row marked *), the cause in one line each, exit 2; the
+    summary says so."""
+    model = Path(__file__).parents[1] / "data" / "arms" / "gripper7" / "model.yaml"
+    summary = tmp_path / "summary.json"
+    argv = ["--model", str(model), "--methods", "dls,sc", "--no-record", "--real-time-factor"]
+    argv += ["0", "--summary", str(summary), "--domain-id", DOMAIN]
+    assert main(argv) == 2
+    captured = capfd.readouterr()
+    for method in ("dls", "sc"):
+        assert f"\n{method} *" in captured.out
+        assert re.search(
+            rf"rns_demo: {method}: g7_joint5 reached its upper limit 2.9 rad at t = \d+\.\d\d s",
+            captured.err,
+        ), captured.err
+    rows = {row["method"]: row for row in json.loads(summary.read_text())}
+    assert rows["dls"]["ended"].startswith("g7_joint5 reached its upper limit 2.9 rad")
+    assert rows["dls"]["max_base_deviation_deg"] < 1e-4  # reactionless up to the stop

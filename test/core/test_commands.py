@@ -17,6 +17,7 @@ from rns_ros.core.commands import (
     match_named_command,
     partial_joint_goal,
 )
+from rns_ros.core.validation import apart
 
 JOINTS = ("a", "b", "c")
 LIMITS = np.array([1.0, 1.0, 2.0])
@@ -198,3 +199,28 @@ def test_a_command_bounded_to_the_edge_of_max_reference_error_is_accepted():
         check_reference_positions(
             edge + np.array([1e-3, 0.0, 0.0]), current, lower, upper, 0.25, JOINTS
         )
+
+
+def test_a_position_just_past_a_limit_never_reads_as_the_limit():
+    from rns_ros.core.commands import check_reference_positions
+
+    lower, upper = np.full(2, -2.23), np.full(2, 2.23)
+    positions = np.array([0.0, 2.23 + 4e-7])
+    with pytest.raises(InputError) as caught:
+        check_reference_positions(positions, positions, lower, upper, 0.25, ("a", "b"))
+    assert "position 2.2300004 rad on b is outside its limits [-2.23, 2.23] rad" in str(
+        caught.value
+    )
+
+
+@pytest.mark.parametrize(
+    ("values", "texts"),
+    [
+        ((2.899, -2.9, 2.9), ["2.899", "-2.9", "2.9"]),
+        ((1.0, 1.0), ["1", "1"]),
+        ((3.0000000000000004, 3.0), ["3.0000000000000004", "3"]),
+        ((0.123456789, 0.12345679), ["0.123456789", "0.12345679"]),
+    ],
+)
+def test_apart_prints_distinct_values_distinctly_and_equal_ones_alike(values, texts):
+    assert apart(*values) == texts

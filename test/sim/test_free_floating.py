@@ -10,18 +10,21 @@ themselves are tested with steps far beyond them.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
 from rns_testing import SATELLITE_OBSERVATION_DEG
 
-from rns_ros.core import ConfigError, FreeFloatingState, InputError
+from rns_ros.core import ConfigError, FreeFloatingState, InputError, load_model
 from rns_ros.core.commands import VELOCITY_LIMIT_TOLERANCE
 from rns_ros.core.errors import SimulationDivergedError
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.core.momentum import reactionless_joint_velocity
 from rns_ros.sim.free_floating import FreeFloatingSimulator, ServoGains, SimulationMode
 
+ARMS = Path(__file__).resolve().parents[1] / "data" / "arms"
 THETA_0 = np.deg2rad(SATELLITE_OBSERVATION_DEG)
 AMPLITUDE = np.array([0.6, -0.5, 0.5, 0.75, -0.8, 0.7, 1.1])  # rad
 FREQUENCY = np.array([0.5, 0.7, 0.9, 0.6, 1.1, 1.3, 0.8])  # rad/s
@@ -345,3 +348,37 @@ def test_the_speed_cap_keeps_unlimited_joints_unlimited():
     np.testing.assert_allclose(cap, [np.inf, np.inf, np.inf, 0.2, 0.2, 0.2], rtol=1e-15)
     sim.velocity_limits = np.full(robot.n, np.inf)
     assert np.all(sim._speed_cap(theta_dot, bias) == np.inf)
+
+
+def test_a_kinematic_joint_stops_at_its_limit_as_at_a_mechanical_stop():
+    """gripper7's joint 5 is limited to [-2.9, 2.9] rad. Driven at 0.5 rad/s from 2.85 rad for
+    0.5 s it stands at 2.9 rad exactly while the others follow their rates; the base moves as
+    momentum conservation says throughout (the stop is a rate the arm takes, with its
+    reaction); a rate away from the limit is followed at once."""
+    robot = load_model(ARMS / "gripper7" / "model.yaml")
+    theta = np.array(robot.initial_theta)
+    joint = robot.joint_names.index("g7_joint5")
+    theta[joint] = 2.85
+    q0 = robot.configuration(theta, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+    simulator = FreeFloatingSimulator(
+        robot, mode="kinematic", initial_q=q0, initial_momentum=MOMENTUM
+    )
+    command = np.full(robot.n, 0.05)
+    command[joint] = 0.5
+    simulator.set_reference(velocities=command)
+    for _ in range(500):
+        simulator.step()
+        assert simulator.q[7 + joint] <= robot.upper_limits[joint]
+    others = np.arange(robot.n) != joint
+    np.testing.assert_allclose(simulator.q[7:][others], theta[others] + 0.5 * 0.05, atol=1e-12)
+    assert simulator.q[7 + joint] == pytest.approx(2.9, abs=1e-12)
+    assert simulator.at_stop.tolist() == [j == joint for j in range(robot.n)]
+    assert simulator.joint_stop() == (joint, "upper", 2.9)
+    assert simulator.v[6 + joint] == 0.0  # standing at the stop, as joint_states say
+    np.testing.assert_allclose(simulator.centroidal_momentum(), MOMENTUM, atol=1e-9)
+    command[joint] = -0.5
+    simulator.set_reference(velocities=command)
+    for _ in range(100):
+        simulator.step()
+    assert simulator.q[7 + joint] == pytest.approx(2.9 - 0.05, abs=1e-12)
+    assert not simulator.at_stop.any()

@@ -544,13 +544,23 @@ class ProcessStack:
         log.seek(0)
         return log.read()
 
-    def exit_report(self, tail: int = 300) -> str:
-        """': <last ``tail`` characters of the output of each process that exited>' on one
-        line, or '' while all run (for an error that says why a stack stopped)."""
-        outputs = "; ".join(
-            one_line(self.output(p)[-tail:]) for p in self.processes if p.poll() is not None
-        )
-        return f": {outputs}" if outputs else ""
+    def exited(self) -> bool:
+        """Whether a process of the stack has exited (a node that failed to start, or died)."""
+        return any(process.poll() is not None for process in self.processes)
+
+    def exit_report(self) -> str:
+        """': <executable> exited (code c): <its last line>' for each process that exited, on
+        one line, or '' while all run (for an error that says why a stack stopped). A node's
+        start-up failure is its one-line error; a crash, the last line of its traceback."""
+        reports = []
+        for process in self.processes:
+            code = process.poll()
+            if code is None:
+                continue
+            lines = [line for line in self.output(process).splitlines() if line.strip()]
+            last = one_line(lines[-1]) if lines else "no output"
+            reports.append(f"{self._names[process.pid]} exited (code {code}): {last}")
+        return f": {'; '.join(reports)}" if reports else ""
 
     def stop(self, timeout: float = 5.0) -> list[int]:
         """SIGINT every process, wait up to ``timeout`` [s] each, kill the rest; exit codes."""

@@ -573,8 +573,10 @@ def _wait_for_start(
             *(["rns_controller has received no cmd_twist"] if not _has_twist(awaited) else []),
         ]
 
-    if not stack.spin_until(lambda: not missing(), timeout=timeout):
+    if not stack.spin_until(lambda: processes.exited() or not missing(), timeout=timeout):
         raise RnsError(
             f"{method}: not ready within {timeout:.0f} s: {'; '.join(missing())}"
             f"{processes.exit_report()}"
         )
+    if processes.exited():  # a node failed at start-up: no use waiting for it
+        raise RnsError(f"{method}: a node did not start{processes.exit_report()}")

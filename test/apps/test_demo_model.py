@@ -182,3 +182,16 @@ def test_a_joint_driven_to_its_limit_ends_the_run_with_the_cause_and_the_figures
     rows = {row["method"]: row for row in json.loads(summary.read_text())}
     assert rows["dls"]["ended"].startswith("g7_joint5 reached its upper limit 2.9 rad")
     assert rows["dls"]["max_base_deviation_deg"] < 1e-4  # reactionless up to the stop
+
+
+def test_a_node_that_fails_at_start_up_is_named_with_its_one_line_at_once(capfd):
+    """rns_controller refuses a parameter and exits 2: the demo does not wait out its start-up
+    timeout, and its line names the process and quotes the node's own one-line error."""
+    argv = ["--no-record", "--methods", "dls", "--real-time-factor", "0", "--domain-id", DOMAIN]
+    assert main([*argv, "--ros-args", "-p", "state_timeout:=-1.0"]) == 2
+    err = capfd.readouterr().err
+    assert (
+        "rns_demo: dls: a node did not start: rns_controller exited (code 2): rns_controller: "
+        "parameter 'state_timeout' out of range: valid range [0.005, 10.0] [s]"
+    ) in err
+    assert "Traceback" not in err

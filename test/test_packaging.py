@@ -52,6 +52,7 @@ ROSDEP_TO_PYPI = {
     "python3-numpy": "numpy",
     "python3-yaml": "pyyaml",
     "python3-pytest": "pytest",
+    "xacro": "xacro",  # a ROS package whose Python code PyPI carries under the same name
 }
 
 

@@ -2,7 +2,9 @@
 thesis roles, which joints are held, the satellite body and the initial joint angles. Unknown
 keys and wrong types raise :class:`ConfigError` naming the key.
 
-Keys (all but ``urdf`` optional): ``urdf`` (path relative to the YAML file), ``camera_frame``,
+Keys (all but ``urdf`` optional): ``urdf`` (path relative to the YAML file; a ``.xacro`` is
+expanded, :mod:`rns_ros.core.description`), ``xacro_args`` ({name: value}), ``packages``
+({package: share folder relative to the YAML file}, for ``$(find pkg)``), ``camera_frame``,
 ``wrist_frame`` (null: no wrist term), ``positioning_joints``, ``wrist_joints``,
 ``controlled_joints`` (list), ``held_joints`` ({name: position [rad or m]}),
 ``initial_joint_positions`` ({name: angle [rad]}), ``base`` ({mass [kg], inertia: 3 principal
@@ -30,6 +32,8 @@ _KEYS = {
     "held_joints",
     "initial_joint_positions",
     "base",
+    "xacro_args",
+    "packages",
 }
 _BASE_KEYS = {"mass", "inertia", "mount_xyz", "mount_rpy"}
 
@@ -87,6 +91,13 @@ def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
             content.get("initial_joint_positions", {}), f"{path}: 'initial_joint_positions'"
         ),
         base=None if content.get("base") is None else _base(content["base"], f"{path}: 'base'"),
+        xacro_args=_strings(content.get("xacro_args", {}), f"{path}: 'xacro_args'"),
+        packages={
+            package: (path.parent / folder).resolve()
+            for package, folder in _strings(
+                content.get("packages", {}), f"{path}: 'packages'"
+            ).items()
+        },
         **joints,
     )
     return (path.parent / content["urdf"]).resolve(), spec
@@ -96,6 +107,20 @@ def load_model(path: str | Path) -> FreeFloatingModel:
     """Load the :class:`FreeFloatingModel` described by a model YAML file."""
     urdf, spec = load_model_config(path)
     return FreeFloatingModel.from_urdf(urdf, spec)
+
+
+def _strings(value, where: str) -> dict[str, str]:
+    """A mapping of names to scalar values, as text (``xacro_args``, ``packages``)."""
+    if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
+        raise ConfigError(f"{where} must be a mapping of names to values, got {value!r}")
+    scalars = (str, int, float, bool)
+    bad = [key for key, item in value.items() if not isinstance(item, scalars)]
+    if bad:
+        raise ConfigError(f"{where}: '{bad[0]}' must be a single value, got {value[bad[0]]!r}")
+    return {
+        key: ("true" if item else "false") if isinstance(item, bool) else str(item)
+        for key, item in value.items()
+    }
 
 
 def _names(value, where: str) -> tuple[str, ...]:

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.core.description import read_description
 from rns_ros.core.errors import InputError, ModelError
 from rns_ros.core.joint_selection import (
     LIMIT_SLACK,
@@ -60,6 +61,9 @@ class ModelSpec:
         initial_joint_positions: initial angles [rad] of controlled joints (others 0).
         base: the satellite body, or None (the URDF root, or the thesis satellite when the
             URDF root has no mass).
+        xacro_args: ``<xacro:arg>`` values of a xacro description
+            (:func:`rns_ros.core.description.read_description`).
+        packages: package name -> share folder, for a xacro's ``$(find pkg)``.
     """
 
     camera_frame: str = "camera"
@@ -70,6 +74,8 @@ class ModelSpec:
     held_joints: Mapping[str, float] = field(default_factory=dict)
     initial_joint_positions: Mapping[str, float] = field(default_factory=dict)
     base: BaseBody | None = None
+    xacro_args: Mapping[str, str] = field(default_factory=dict)
+    packages: Mapping[str, Path] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -163,15 +169,17 @@ class FreeFloatingModel:
     # construction ---------------------------------------------------------------------------
     @classmethod
     def from_urdf(cls, path: str | Path, spec: ModelSpec | None = None) -> FreeFloatingModel:
-        """Load a URDF file with a free-flyer root joint.
+        """Load a URDF (or xacro, expanded with ``spec``'s ``xacro_args`` and ``packages``)
+        file with a free-flyer root joint.
 
         Raises:
             ModelError: the file is missing or unparsable, or the spec names unknown frames/joints.
         """
         path = Path(path)
-        if not path.is_file():
-            raise ModelError(f"URDF file not found: {path}")
-        return cls.from_urdf_string(path.read_text(), spec, name=path.stem, source_path=path)
+        spec = spec or ModelSpec()
+        xml = read_description(path, spec.xacro_args, spec.packages)
+        name = path.name.removesuffix(".xacro").removesuffix(".urdf")
+        return cls.from_urdf_string(xml, spec, name=name, source_path=path)
 
     @classmethod
     def from_urdf_string(

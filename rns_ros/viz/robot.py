@@ -39,6 +39,7 @@ import pinocchio as pin
 import rerun as rr
 import rerun.urdf as rru
 
+from rns_ros.core.description import read_description
 from rns_ros.core.errors import ModelError
 from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.core.joint_selection import frame_id
@@ -79,9 +80,13 @@ class RobotView:
         self.robot = robot
         self.source_path = Path(urdf_path)
         try:
-            self.description = resolve_description(
-                self.source_path.read_text(), self.source_path.parent
+            spec = getattr(robot, "spec", None)
+            text = read_description(
+                self.source_path,
+                getattr(spec, "xacro_args", None),
+                getattr(spec, "packages", None),
             )
+            self.description = resolve_description(text, self.source_path.parent)
         except (OSError, ModelError) as exc:
             raise ModelError(f"cannot read the URDF {self.source_path}: {exc}") from exc
         # the loader reads a file: the resolved copy lives as long as this view

@@ -1,5 +1,6 @@
-"""Three public-style arm descriptions (test/data/arms: a gripper arm with prismatic and mimic
-joints, a 6-joint arm with continuous joints, a 7-joint arm with a fixed `world` root), each on
+"""Four public-style arm descriptions (test/data/arms: a gripper arm with prismatic and mimic
+joints, a 6-joint arm with continuous joints, a 7-joint arm with a fixed `world` root, a 7-joint
+arm written in xacro), each on
 the thesis satellite: `rns_model check` passes, and `rns_demo --model` turns the camera about an
 oblique axis over DDS (simulator, controller, operator as separate nodes, lockstep on simulated
 time) with the satellite's attitude held below 1e-4 deg by the dls controller, where the
@@ -45,7 +46,7 @@ def _scenario(folder: Path, robot) -> Path:
     return path
 
 
-@pytest.mark.parametrize("arm", ["gripper7", "cont6", "world7"])
+@pytest.mark.parametrize("arm", ["gripper7", "cont6", "world7", "xacro7"])
 def test_a_public_arm_turns_its_camera_reactionlessly_over_dds(arm, tmp_path, capfd):
     model = ARMS / arm / "model.yaml"
     assert check_main(["check", str(model)]) == 0

@@ -141,9 +141,38 @@ def _held_positions(root: ET.Element, controlled, given: dict) -> dict[str, floa
     return held
 
 
+def _expanded(path: Path, config: dict) -> str:
+    """The URDF text of the model YAML's ``urdf``: a xacro expanded by the xacro package
+    itself, its ``$(find pkg)`` through an ament index made for the test (as ROS finds them)."""
+    urdf = path.parent / config["urdf"]
+    if not urdf.name.endswith(".xacro"):
+        return urdf.read_text()
+    import os
+    import tempfile
+
+    import xacro
+
+    with tempfile.TemporaryDirectory() as prefix:
+        for package, folder in (config.get("packages") or {}).items():
+            marker = Path(prefix, "share", "ament_index", "resource_index", "packages", package)
+            marker.parent.mkdir(parents=True, exist_ok=True)
+            marker.write_text("")
+            Path(prefix, "share", package).symlink_to((path.parent / folder).resolve())
+        old = os.environ.get("AMENT_PREFIX_PATH")
+        os.environ["AMENT_PREFIX_PATH"] = prefix
+        try:
+            args = {k: str(v) for k, v in (config.get("xacro_args") or {}).items()}
+            return xacro.process_file(str(urdf), mappings=args).toxml()
+        finally:
+            if old is None:
+                del os.environ["AMENT_PREFIX_PATH"]
+            else:
+                os.environ["AMENT_PREFIX_PATH"] = old
+
+
 def _description(path: Path, robot: FreeFloatingModel) -> Description:
     config = yaml.safe_load(path.read_text())
-    root = ET.fromstring((path.parent / config["urdf"]).read_text())  # the text we loaded
+    root = ET.fromstring(_expanded(path, config))  # the text we loaded
     controlled = tuple(robot.joint_names)
     held = _held_positions(root, controlled, config.get("held_joints") or {})
     if "base" in config or _needs_satellite(root):

@@ -3,12 +3,14 @@ equivalent-inertia ellipsoid against its defining moments; drawn into a saved .r
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
 import rerun as rr
 
-from rns_ros.core import FreeFloatingModel, ModelSpec
+from rns_ros.core import FreeFloatingModel, ModelSpec, load_model
 from rns_ros.viz import paths
 from rns_ros.viz.readback import recording_summary
 from rns_ros.viz.robot import RobotView
@@ -144,3 +146,13 @@ def test_the_view_draws_the_bare_links_into_a_recording(arm, tmp_path):
     assert not any(entity.startswith(f"{paths.ROBOT_SHAPES}/fore") for entity in counts)
     # the mesh that resolved is the loader's: its visual is in the model
     assert any("fore" in entity and "visual" in entity for entity in counts)
+
+
+def test_a_xacro_description_is_shown_expanded():
+    """The viewer reads the model's description as the loader does: a xacro expanded with the
+    model YAML's arguments and packages."""
+    model = Path(__file__).resolve().parents[1] / "data" / "arms" / "xacro7" / "model.yaml"
+    robot = load_model(model)
+    view = RobotView(robot, robot.source_path)
+    assert 'name="x7_joint_7"' in view.description.xml
+    assert "xacro:" not in view.description.xml

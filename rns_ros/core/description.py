@@ -1,0 +1,94 @@
+"""The text of a robot description file: a URDF as it is, or a xacro expanded to URDF.
+
+Most published descriptions are xacro. They are expanded with the PyPI ``xacro`` package (the
+one ROS uses), with no ROS install needed:
+
+* ``xacro_args`` are the ``<xacro:arg>`` values, as ``xacro file.xacro name:=value`` gives them;
+* ``$(find pkg)`` resolves to ``packages[pkg]`` when the model YAML names the package's folder,
+  else through the ament index (``AMENT_PREFIX_PATH``), as on a ROS install.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+
+from rns_ros.core.errors import ModelError
+
+#: File name endings read as xacro.
+XACRO_SUFFIXES = (".xacro", ".urdf.xacro")
+
+
+def is_xacro(path: str | Path) -> bool:
+    """Whether ``path`` names a xacro file (by its ending)."""
+    return str(path).endswith(XACRO_SUFFIXES)
+
+
+def read_description(
+    path: str | Path,
+    xacro_args: Mapping[str, str] | None = None,
+    packages: Mapping[str, str | Path] | None = None,
+) -> str:
+    """The URDF text of ``path``: read as it is, or, for a ``.xacro`` file, expanded.
+
+    Args:
+        path: the URDF or xacro file.
+        xacro_args: ``<xacro:arg>`` values (xacro only).
+        packages: package name -> its share folder, for ``$(find pkg)`` (xacro only).
+
+    Raises:
+        ModelError: the file is missing or unreadable, or xacro cannot expand it (one line:
+            the file and xacro's reason).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ModelError(f"URDF file not found: {path}")
+    if not is_xacro(path):
+        try:
+            return path.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ModelError(f"{path}: cannot read the URDF: {exc}") from None
+    return _expand(path, dict(xacro_args or {}), {k: Path(v) for k, v in (packages or {}).items()})
+
+
+def _expand(path: Path, args: dict[str, str], packages: dict[str, Path]) -> str:
+    try:
+        import xacro
+    except ImportError:  # pragma: no cover - a dependency of the package
+        raise ModelError(
+            f"{path}: a xacro file needs the xacro package (pip install xacro)"
+        ) from None
+    try:
+        with _finding(packages):
+            document = xacro.process_file(str(path), mappings=args)
+    except Exception as exc:  # xacro raises its own and XML errors, and KeyError on a package
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ModelError(f"{path}: xacro could not expand it: {reason}") from None
+    return document.toprettyxml(indent="  ")
+
+
+@contextlib.contextmanager
+def _finding(packages: dict[str, Path]) -> Iterator[None]:
+    """``$(find pkg)`` answers from ``packages`` first, then the ament index, while xacro
+    runs (xacro 2.1 resolves it in ``substitution_args._eval_find``)."""
+    from xacro import substitution_args
+
+    ament = substitution_args._eval_find
+
+    def find(package: str) -> str:
+        if package in packages:
+            return str(packages[package])
+        try:
+            return ament(package)
+        except Exception:
+            raise KeyError(
+                f"$(find {package}): package not found (name its folder under 'packages' in "
+                "the model YAML, or set AMENT_PREFIX_PATH)"
+            ) from None
+
+    substitution_args._eval_find = find
+    try:
+        yield
+    finally:
+        substitution_args._eval_find = ament

@@ -117,7 +117,10 @@ def _check(path: Path) -> int:
     for warning in feasibility.warnings:
         print(f"warning: {warning}")
     if not feasibility.warnings:
-        print("ok: reactionless camera pointing and wrist holding are feasible")
+        if feasibility.wrist_frame is None:
+            print("ok: reactionless camera pointing is feasible (wrist holding not requested)")
+        else:
+            print("ok: reactionless camera pointing and wrist holding are feasible")
     return 0
 
 

@@ -218,3 +218,21 @@ def test_help_and_module_entry_point():
     )
     assert done.returncode == 0
     assert "MODEL.yaml" in done.stdout
+
+
+def test_without_a_wrist_frame_ok_claims_only_camera_pointing(tmp_path, capsys):
+    """wrist_frame: null requests no wrist holding, so `ok` does not claim it."""
+    model = six_joint_model(tmp_path, wrist_frame=None)
+    angles = {
+        "joint_1": -1.57,
+        "joint_2": -0.52,
+        "joint_4": -1.22,
+        "joint_5": 3.14,
+        "joint_6": -0.52,
+    }
+    with model.open("a") as stream:
+        stream.write(f"initial_joint_positions: {angles}\n")  # away from singularities
+    assert model_check.main(["check", str(model)]) == 0
+    out = capsys.readouterr().out
+    assert "ok: reactionless camera pointing is feasible (wrist holding not requested)" in out
+    assert "wrist holding are feasible" not in out

@@ -3,8 +3,10 @@
 The math lives in :mod:`rns_ros.core` (numpy + Pinocchio, no ROS imports); ROS 2 nodes wrap it.
 """
 
+# the interpreter has these loaded at start-up (``signal`` itself would be read from disk,
+# a window in which Ctrl-C still meets Python's default handler)
+import _signal
 import os as _os
-import signal as _signal
 import sys as _sys
 
 __version__ = "0.1.0"

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rns_ros.control.camera_law import wrist_offset
+from rns_ros.control.camera_law import THESIS_EPSILON, wrist_offset
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.scenario import Scenario
 from rns_ros.core.errors import InputError
@@ -33,6 +33,10 @@ class RunFigures:
         max_joint_speed: largest |theta_dot_i| measured [rad/s].
         angular_momentum_drift: largest |l(t) - l(0)| about the CoM [kg m^2/s].
         samples: robot states used.
+        min_sigma: smallest sigma_min of the restricted Jacobian J-bar_omega_e (eq. 4.5) over
+            the samples [-] (SVD).
+        singular_time_s: time spent with sigma_min below the singular-region threshold
+            (the DLS epsilon of section 4.3.2) [s], each sample counting until the next.
     """
 
     max_base_deviation_deg: float
@@ -42,6 +46,8 @@ class RunFigures:
     max_joint_speed: float
     angular_momentum_drift: float
     samples: int
+    min_sigma: float
+    singular_time_s: float
 
 
 def run_figures(
@@ -57,6 +63,7 @@ def run_figures(
     angular_momentum: np.ndarray,
     command_times: np.ndarray,
     commands: np.ndarray,
+    singular_threshold: float = THESIS_EPSILON,
 ) -> RunFigures:
     """Compute :class:`RunFigures` from recorded streams.
 
@@ -69,6 +76,7 @@ def run_figures(
         angular_momentum: angular momentum about the CoM, world axes [kg m^2/s], shape (m, 3).
         command_times: stamps of the operator's twists [s], shape (c,).
         commands: their angular velocities in ``scenario.frame`` axes [rad/s], shape (c, 3).
+        singular_threshold: sigma_min below which a sample is in the singular region [-].
     """
     k = len(times)
     if k < 2 or joint_positions.shape[0] != k or base_orientations.shape[0] != k:
@@ -90,6 +98,8 @@ def run_figures(
         else 0.0
     )
     momentum = np.asarray(angular_momentum, dtype=float).reshape(-1, 3)
+    sigma = np.array([np.linalg.svd(s.restricted_jacobian, compute_uv=False)[-1] for s in states])
+    held = np.diff(times, append=times[-1])  # each sample until the next
     return RunFigures(
         max_base_deviation_deg=float(np.rad2deg(base)),
         final_camera_error_deg=float(np.rad2deg(attitude_deviation(target, last.camera.rotation))),
@@ -108,6 +118,8 @@ def run_figures(
         if len(momentum)
         else 0.0,
         samples=k,
+        min_sigma=float(sigma.min()),
+        singular_time_s=float(held[sigma < singular_threshold].sum()),
     )
 
 

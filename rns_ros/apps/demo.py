@@ -57,11 +57,13 @@ from rns_ros.runs.inspection import (
     MIN_SIM_STEP,
     check_scenarios,
     run_method,
+    singular_threshold,
     start_configuration,
 )
 from rns_ros.runs.ptp import PTP_METHODS, PTP_SCENARIOS, PtpScenario, run_ptp_method
 from rns_ros.runs.recorded import PartialRecordingError
 from rns_ros.runs.report import (
+    camera_notes,
     contact_summary,
     format_contact_table,
     format_ptp_table,
@@ -293,12 +295,14 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
     if len(runs) > 1 and not failures:
         table += "\n\n" + format_spread(runs)
     ended = [f"{row.method}: {row.ended}" for row in runs[-1] if row.ended]
+    notes = camera_notes(runs[-1], singular_threshold(scenario))
     return _report(
         args,
         runs[-1],
         table,
         [problem for rows in runs for problem in non_finite_figures(rows)],
-        f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
+        "".join(f"note: {line}\n" for line in notes)
+        + f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
         inspection_summary(runs),
         failures + ended,
     )

@@ -146,6 +146,7 @@ class ControllerNode(Node):
         # the newest joint state and base pose, their receipt times, a jump seen in joint_states
         self._measured = MeasuredState(self.robot.joint_names, self._input_clock)
         self._stopped = True  # the last output was zero velocity: the next one ramps up
+        self._singular_time = 0.0  # [s] of outputs served in the singular region
         self._resync = False  # the reference restarts at the measured angles this tick
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._predict = params["predict_state"]
@@ -423,6 +424,7 @@ class ControllerNode(Node):
             lambda: {
                 **step_values(self.controller.settings.method.value, step, gate),
                 "tracking_error": self._tracking.error,
+                "singular_time": self._singular_time,
                 **self._requests.values(),
             },
         )
@@ -565,7 +567,15 @@ class ControllerNode(Node):
             if began:
                 self.get_logger().warn(joint_limit_text(self.robot, state.theta))
             return ControllerState.JOINT_LIMIT
-        if step.output.sigma_min < self.controller.settings.gains.epsilon:
+        epsilon = self.controller.settings.gains.epsilon
+        if step.output.sigma_min < epsilon:
+            if self._reporter.last_state is not ControllerState.SINGULAR_REGION:  # entering
+                self.get_logger().warn(
+                    f"SINGULAR_REGION: sigma_min of J-bar {step.output.sigma_min:.3g} < epsilon "
+                    f"{epsilon:g}: the commanded rate is damped (the camera lags; section 4.3)",
+                    throttle_duration_sec=5.0,
+                )
+            self._singular_time += hold
             return ControllerState.SINGULAR_REGION
         return gate.state
 

@@ -244,7 +244,7 @@ def run_method(
                 line for line in processes.output(logger).splitlines() if LOGGER_CLOSED_LINE in line
             ]
             print("\n".join(closed[-1:]), flush=True)
-    figures = run_figures(robot, scenario, **data)
+    figures = run_figures(robot, scenario, **data, singular_threshold=singular_threshold(scenario))
     ended = None
     if limited:
         ended = limit_cause(robot, data["joint_positions"][-1], data["times"][-1] - task)
@@ -259,6 +259,12 @@ def run_method(
         mcap=mcap,
         ended=ended,
     )
+
+
+def singular_threshold(scenario: Scenario) -> float:
+    """The singular-region threshold of ``scenario``'s controller: its ``epsilon`` (section
+    4.3.2), rns_controller's default when the scenario sets none."""
+    return float(scenario.controller.get("epsilon", CONTROLLER_SPECS["epsilon"].default))
 
 
 #: How close [rad] a joint must be to a limit to be named as the one that stopped a run.

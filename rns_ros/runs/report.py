@@ -57,6 +57,8 @@ def format_table(rows: list[DemoRow]) -> str:
         ("wrist drift [m]", 17),
         ("max |θ̇| [rad/s]", 17),
         ("Δl [kg m²/s]", 14),
+        ("min σ(J̄)", 11),
+        ("sing. [s]", 11),
         ("C_max [J]", 11),
         ("C_sum [J s]", 13),
         ("wheel KE [J]", 14),
@@ -76,7 +78,8 @@ def format_table(rows: list[DemoRow]) -> str:
             f"{_row_name(row):<{columns[0][1]}}{f.max_base_deviation_deg:>20.3e}"
             f"{f.final_camera_error_deg:>18.4g}"
             f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
-            f"{f.angular_momentum_drift:>14.2e}{_energy_columns(row.energy)}"
+            f"{f.angular_momentum_drift:>14.2e}{f.min_sigma:>11.3g}{f.singular_time_s:>11.2f}"
+            f"{_energy_columns(row.energy)}"
             f"{row.wall_time_s:>10.1f}{_task_columns(row)}"
         )
     if any(row.ended for row in rows):
@@ -100,6 +103,33 @@ def _energy_columns(energy: EnergyFigures | None) -> str:
         f"{energy.c_max:>11.3g}{energy.c_sum:>13.3g}{energy.peak_wheel_energy:>14.3g}"
         f"{saturation:>15}"
     )
+
+
+#: A camera that ends farther than this from the scenario's target [deg] gets a line saying why.
+CAMERA_OFF_DEG = 1.0
+
+
+def camera_notes(rows: list[DemoRow], threshold: float) -> list[str]:
+    """One line per completed run whose camera ends more than :data:`CAMERA_OFF_DEG` off its
+    target, saying whether the singular region (sigma_min of J-bar below ``threshold``) is why."""
+    notes = []
+    for row in rows:
+        f = row.figures
+        if row.ended or not f.final_camera_error_deg > CAMERA_OFF_DEG:
+            continue
+        head = f"{row.method}: the camera ends {f.final_camera_error_deg:.3g} deg off its target"
+        if f.singular_time_s > 0.0:
+            notes.append(
+                f"{head}: {f.singular_time_s:.2f} s in the singular region (sigma_min of J-bar "
+                f"down to {f.min_sigma:.2g} < {threshold:g}), where the method gives up rate "
+                "accuracy to keep the joint rates bounded (section 4.3)"
+            )
+        else:
+            notes.append(
+                f"{head} with sigma_min of J-bar >= {f.min_sigma:.2g} (never below {threshold:g}):"
+                " not a singular region; see the RMS ω error and the controller's warnings"
+            )
+    return notes
 
 
 class Spread(NamedTuple):

@@ -120,6 +120,8 @@ def _figures():
         max_joint_speed=0.3,
         angular_momentum_drift=1e-13,
         samples=400,
+        min_sigma=0.4,
+        singular_time_s=0.0,
     )
 
 

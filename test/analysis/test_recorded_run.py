@@ -1,0 +1,52 @@
+"""rns_ros.analysis.recorded_run: the singular-region figures of a recorded run. sigma_min of
+J-bar is taken by SVD here and compared with the eigenvalues of J-bar J-bar^T
+(rns_ros.control.law_matrices, another route to the same number); the time in the singular
+region counts each sample until the next."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rns_ros.analysis.closed_loop import run_scenario
+from rns_ros.analysis.recorded_run import run_figures
+from rns_ros.control.law_matrices import restricted_jacobian
+from rns_ros.control.scenario import load_scenario
+from rns_ros.core import FreeFloatingState
+from rns_ros.resources import scenario_path
+
+
+def _record(robot, thetas, dt=0.1):
+    k = len(thetas)
+    return {
+        "times": np.arange(k) * dt,
+        "joint_positions": np.asarray(thetas),
+        "joint_velocities": np.zeros((k, robot.n)),
+        "base_positions": np.zeros((k, 3)),
+        "base_orientations": np.tile([0.0, 0.0, 0.0, 1.0], (k, 1)),
+        "base_angular_velocities": np.zeros((k, 3)),
+        "angular_momentum": np.zeros((k, 3)),
+        "command_times": np.zeros(0),
+        "commands": np.zeros((0, 3)),
+    }
+
+
+def test_sigma_min_and_the_time_below_the_threshold(robot):
+    """Fig. 4.6's run passes the algorithmic singularity: along its joint path sigma_min dips
+    far below the DLS epsilon 0.2 and rises again."""
+    scenario = load_scenario(scenario_path("algorithmic_singularity"))
+    samples = []
+    run_scenario(robot, scenario, method="dls", rate=20.0, on_period=samples.append)
+    path = [sample.state.theta for sample in samples[::5]]
+    sigmas = []
+    for theta in path:
+        state = FreeFloatingState.compute(robot, robot.configuration(theta))
+        sigmas.append(restricted_jacobian(state).sigma_min)
+    sigmas = np.array(sigmas)
+    threshold = 0.2
+    assert sigmas.min() < 0.1 < threshold < sigmas.max()  # the path goes through it
+    figures = run_figures(robot, scenario, **_record(robot, path), singular_threshold=threshold)
+    assert figures.min_sigma == pytest.approx(sigmas.min(), rel=1e-6, abs=1e-9)
+    below = np.flatnonzero(sigmas < threshold)
+    expected = 0.1 * np.sum(below < len(path) - 1)  # the last sample is held for no time
+    assert figures.singular_time_s == pytest.approx(expected, abs=1e-9)

@@ -1,0 +1,52 @@
+"""rns_ros.runs.report: the demo's table marks a run that ended early, and a camera that ends off
+its target gets one line saying whether the singular region is why."""
+
+from __future__ import annotations
+
+from rns_ros.analysis.recorded_run import RunFigures
+from rns_ros.runs.inspection import DemoRow
+from rns_ros.runs.report import CAMERA_OFF_DEG, camera_notes, format_table
+
+
+def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None):
+    figures = RunFigures(
+        max_base_deviation_deg=1e-6,
+        final_camera_error_deg=camera_deg,
+        rms_tracking_error=1e-3,
+        max_wrist_drift_m=0.01,
+        max_joint_speed=0.3,
+        angular_momentum_drift=1e-15,
+        samples=100,
+        min_sigma=min_sigma,
+        singular_time_s=singular_s,
+    )
+    return DemoRow(method, figures, 1.0, None, ended=ended)
+
+
+def test_a_camera_off_its_target_is_explained_once():
+    rows = [
+        _row("dls", 25.0, singular_s=6.2, min_sigma=1.7e-4),
+        _row("sc", 3.0),
+        _row("pinv", CAMERA_OFF_DEG / 2),  # on target: nothing to say
+        _row("conventional", 30.0, ended="joint_2 reached its upper limit 1 rad at t = 2.00 s"),
+    ]
+    notes = camera_notes(rows, 0.2)
+    assert len(notes) == 2
+    assert notes[0].startswith("dls: the camera ends 25 deg off its target: 6.20 s in the singular")
+    assert "sigma_min of J-bar down to 0.00017 < 0.2" in notes[0]
+    assert notes[1].startswith("sc: the camera ends 3 deg off its target with sigma_min")
+    assert "not a singular region" in notes[1]
+
+
+def test_the_table_marks_a_run_that_ended_early_and_shows_the_singular_figures():
+    table = format_table(
+        [_row("dls", 0.1, singular_s=1.25, min_sigma=0.031), _row("sc", 9.0, ended="x")]
+    )
+    lines = table.splitlines()
+    assert "min σ(J̄)" in lines[0]
+    assert "sing. [s]" in lines[0]
+    dls = next(line for line in lines if line.startswith("dls "))
+    assert "0.031" in dls
+    assert "1.25" in dls
+    assert any(line.startswith("sc *") for line in lines)
+    assert lines[-1] == "* ended before the task's end: the figures up to then"

@@ -90,6 +90,7 @@ class OperatorNode(Node):
     def __init__(self, **node_kwargs) -> None:
         super().__init__(operator_parameters.NODE_NAME, **node_kwargs)
         params = declare_parameters(self, operator_parameters.PARAMETERS)
+        self._thread_priority = params["thread_priority"]
         self.scenario: Scenario | MotionForceScenario = load_operator_scenario(
             scenario_path(params["scenario"])
         )
@@ -287,6 +288,11 @@ class OperatorNode(Node):
         self._force = np.array(force, dtype=float)
         self._force_publisher.publish(wrench)
         self._publisher.publish(twist)
+
+    def realtime_scheduling(self) -> tuple[int, bool]:
+        """(thread_priority, whether it applies: on the wall clock, where its samples are the
+        operator's timing), for :func:`rns_ros.nodes.runner.run_node`."""
+        return self._thread_priority, not self.get_parameter("use_sim_time").value
 
     def destroy_node(self) -> None:
         """Stop the camera / EE when the profile is playing: zero twists first (motion_force:

@@ -10,6 +10,7 @@ from rns_ros.nodes.parameters import (
     ParameterSpec,
     specs_by_name,
 )
+from rns_ros.nodes.realtime import thread_priority_spec
 
 NODE_NAME = "rns_operator"
 SUMMARY = (
@@ -20,6 +21,7 @@ SUMMARY = (
 MOTION_FORCE_RATE = 500.0
 
 PARAMETERS = (
+    thread_priority_spec(40, "on the wall clock (use_sim_time false)"),
     ParameterSpec(
         "scenario",
         "satellite_observation",

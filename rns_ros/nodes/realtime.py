@@ -66,10 +66,12 @@ def set_thread_priority(
     set_scheduler: Callable[[int, int, object], None] | None = None,
 ) -> Scheduling:
     """SCHED_FIFO at ``priority`` (1-99) for every thread of this process; threads started
-    later inherit it from the thread that starts them. ``priority`` 0 changes nothing.
+    later inherit it from the thread that starts them. ``priority`` 0: normal scheduling
+    (SCHED_OTHER) for every thread, also in a process that inherited a real-time policy from
+    the one that started it (lowering a policy needs no permission).
 
     Args:
-        priority: SCHED_FIFO priority; 0 keeps normal scheduling.
+        priority: SCHED_FIFO priority; 0 for normal scheduling.
         threads: the thread ids to set (default: all of this process).
         set_scheduler: ``os.sched_setscheduler`` (injected in tests).
 
@@ -79,11 +81,13 @@ def set_thread_priority(
     """
     if not 0 <= priority <= MAX_THREAD_PRIORITY:
         raise ValueError(f"thread_priority {priority} outside [0, {MAX_THREAD_PRIORITY}]")
-    if priority == 0:
-        return Scheduling(False, "thread_priority 0: normal scheduling")
     setter = set_scheduler or getattr(os, "sched_setscheduler", None)
     policy = getattr(os, "SCHED_FIFO", None)
     ids = list(threads())
+    if priority == 0:
+        if setter is not None:
+            _restore(ids, setter)
+        return Scheduling(False, "thread_priority 0: normal scheduling")
     if setter is None or policy is None or not ids:
         return Scheduling(
             False,
@@ -111,7 +115,7 @@ def set_thread_priority(
 
 
 def _restore(tids: Iterable[int], setter: Callable[[int, int, object], None]) -> None:
-    """Back to normal scheduling for the threads already set (all or none)."""
+    """Normal scheduling (SCHED_OTHER) for the threads ``tids``."""
     other = getattr(os, "SCHED_OTHER", 0)
     for tid in tids:
         try:
@@ -126,6 +130,7 @@ def schedule_node(node: Node, priority: int, wall_paced: bool) -> Scheduling:
     asked for and refused, info otherwise. Call once every thread of the node's own is
     started."""
     if not wall_paced and priority > 0:
+        set_thread_priority(0)  # not a real-time policy inherited from a parent either
         outcome = Scheduling(
             False,
             f"thread_priority {priority} not used: off the wall clock the run waits for its "

@@ -90,12 +90,17 @@ def test_a_thread_that_ended_meanwhile_is_skipped():
     assert outcome.text == "SCHED_FIFO priority 40 for its 2 threads"
 
 
-def test_priority_0_keeps_normal_scheduling_and_an_out_of_range_one_is_refused():
-    def setter(tid, policy, param):
-        raise AssertionError("priority 0 must not touch the scheduler")
+def test_priority_0_is_normal_scheduling_and_an_out_of_range_one_is_refused():
+    """0 puts every thread on SCHED_OTHER: a process started by a real-time one inherits its
+    policy, and a node off the wall clock must not keep it."""
+    calls = []
 
-    outcome = set_thread_priority(0, threads=lambda: [1], set_scheduler=setter)
+    def setter(tid, policy, param):
+        calls.append((tid, policy, param.sched_priority))
+
+    outcome = set_thread_priority(0, threads=lambda: [1, 2], set_scheduler=setter)
     assert not outcome.applied
+    assert calls == [(1, SCHED_OTHER, 0), (2, SCHED_OTHER, 0)]
     for bad in (-1, MAX_THREAD_PRIORITY + 1):
         with pytest.raises(ValueError, match=rf"thread_priority {bad} outside \[0, 99\]"):
             set_thread_priority(bad, threads=lambda: [1], set_scheduler=setter)
@@ -164,6 +169,9 @@ def test_the_simulator_on_the_real_time_pace_runs_fifo_50_and_as_fast_as_possibl
 
 @needs_rt
 def test_the_controller_runs_fifo_40_on_the_wall_clock_only(ros):
+    """Started from this test process, which runs under SCHED_FIFO 30 while its nodes do
+    (test/nodes/conftest.py): a node off the wall clock does not keep that inherited policy."""
+    assert os.sched_getscheduler(0) == SCHED_FIFO
     assert _scheduling_of("rns_controller", "SCHED_FIFO priority 40 for its") == {(SCHED_FIFO, 40)}
     on_sim_time = _scheduling_of(
         "rns_controller", "thread_priority 40 not used", "-p", "use_sim_time:=true"

@@ -295,7 +295,7 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
     if len(runs) > 1 and not failures:
         table += "\n\n" + format_spread(runs)
     ended = [f"{row.method}: {row.ended}" for row in runs[-1] if row.ended]
-    notes = camera_notes(runs[-1], singular_threshold(scenario))
+    notes = camera_notes(runs[-1], singular_threshold(scenario), float(min(robot.velocity_limits)))
     return _report(
         args,
         runs[-1],

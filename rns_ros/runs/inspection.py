@@ -402,7 +402,9 @@ def _run_task(
     the run ends there, its figures so far kept); return the task's start and end [s] (stamps'
     clock), its wall time [s] and whether a joint limit ended it."""
     commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
-    status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
+    # serialized: only the newest is read (JointLimitWatch); deserializing each status in the
+    # executor would cost it the time it needs to record every cmd_twist
+    status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status", raw=True)
     budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
     if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
         raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
@@ -426,25 +428,23 @@ def _run_task(
 
 
 class JointLimitWatch:
-    """The stamp [s] of rns_controller's first JOINT_LIMIT status in the log ``status``
-    (:attr:`at`; inf until one comes), read as the messages arrive."""
+    """The stamp [s] of an rns_controller status in JOINT_LIMIT (:attr:`at`; inf until one is
+    seen). Only the newest status of the log ``status`` is read at each look (a joint-limit stop
+    lasts while the operator pushes on, many periods), so the watch costs one message per look."""
 
     def __init__(self, status: TopicLog) -> None:
         self._status = status
-        self._read = 0
         self._at = math.inf
 
     @property
     def at(self) -> float:
         if math.isfinite(self._at):
             return self._at
-        messages = self._status.messages
-        for msg in messages[self._read :]:
+        msg = self._status.latest()
+        if msg is not None:
             states = {kv.value for entry in msg.status for kv in entry.values if kv.key == "state"}
             if "JOINT_LIMIT" in states:
                 self._at = header_seconds(msg)
-                break
-        self._read = len(messages)
         return self._at
 
 

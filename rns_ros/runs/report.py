@@ -107,11 +107,14 @@ def _energy_columns(energy: EnergyFigures | None) -> str:
 
 #: A camera that ends farther than this from the scenario's target [deg] gets a line saying why.
 CAMERA_OFF_DEG = 1.0
+#: Share of a velocity limit at which a run counts as speed-limited [-].
+SPEED_LIMIT_REACHED = 0.99
 
 
-def camera_notes(rows: list[DemoRow], threshold: float) -> list[str]:
+def camera_notes(rows: list[DemoRow], threshold: float, speed_limit: float = math.inf) -> list[str]:
     """One line per completed run whose camera ends more than :data:`CAMERA_OFF_DEG` off its
-    target, saying whether the singular region (sigma_min of J-bar below ``threshold``) is why."""
+    target, saying whether the singular region (sigma_min of J-bar below ``threshold``) or the
+    joint speed limit (the lowest URDF velocity limit, ``speed_limit`` [rad/s], reached) is why."""
     notes = []
     for row in rows:
         f = row.figures
@@ -123,6 +126,12 @@ def camera_notes(rows: list[DemoRow], threshold: float) -> list[str]:
                 f"{head}: {f.singular_time_s:.2f} s in the singular region (sigma_min of J-bar "
                 f"down to {f.min_sigma:.2g} < {threshold:g}), where the method gives up rate "
                 "accuracy to keep the joint rates bounded (section 4.3)"
+            )
+        elif f.max_joint_speed >= SPEED_LIMIT_REACHED * speed_limit:
+            notes.append(
+                f"{head}: the joint rates reached their speed limit (max |θ̇| "
+                f"{f.max_joint_speed:.3g} rad/s), which scales the commanded rate down; not a "
+                f"singular region (sigma_min of J-bar >= {f.min_sigma:.2g})"
             )
         else:
             notes.append(

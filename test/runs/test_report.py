@@ -36,6 +36,9 @@ def test_a_camera_off_its_target_is_explained_once():
     assert "sigma_min of J-bar down to 0.00017 < 0.2" in notes[0]
     assert notes[1].startswith("sc: the camera ends 3 deg off its target with sigma_min")
     assert "not a singular region" in notes[1]
+    # the same run with the joints at their 0.3 rad/s speed limit
+    (speed,) = camera_notes([rows[1]], 0.2, speed_limit=0.3)
+    assert speed.startswith("sc: the camera ends 3 deg off its target: the joint rates reached")
 
 
 def test_the_table_marks_a_run_that_ended_early_and_shows_the_singular_figures():

@@ -212,6 +212,10 @@ def run_method(
         awaited = None
         if sim_time and args.output_lead:
             awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
+        # from before the start: the operator counts this subscription among the ones its
+        # profile waits for, and a reader matched only as the profile starts would miss its
+        # first samples (a constant-rate profile moves from its first one)
+        streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
         _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
         task, end, task_wall, limited = _run_task(stack, processes, streams, scenario, args, method)
         # stopped before the recorded messages are read: in lockstep the stack would go on
@@ -348,8 +352,13 @@ def _start_nodes(
     if sim_time and args.output_lead:
         # the profile on the controller's period grid: the same samples in each tick, however
         # late the operator's start condition was met
+        # zeros before it, at least one sample even when every subscriber is there at the
+        # operator's first tick: a first recorded twist that moves then means a late recorder
+        # (a constant-rate profile moves from its first sample)
         operator_timing.update(
-            lead=OPERATOR_LEAD, start_delay=OPERATOR_LEAD, start_grid=1.0 / args.rate
+            lead=OPERATOR_LEAD,
+            start_delay=OPERATOR_LEAD + 1.0 / OPERATOR_RATE,
+            start_grid=1.0 / args.rate,
         )
     processes.start(
         "rns_operator",
@@ -396,12 +405,13 @@ def _run_task(
     scenario: Scenario,
     args: argparse.Namespace,
     method: str,
-) -> tuple[float, float, float]:
-    """Record ``cmd_twist`` (into ``streams``) until every state stream reached the task's end,
-    or until rns_controller reports JOINT_LIMIT (a joint at its limit: the task cannot be done;
-    the run ends there, its figures so far kept); return the task's start and end [s] (stamps'
-    clock), its wall time [s] and whether a joint limit ended it."""
-    commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
+) -> tuple[float, float, float, bool]:
+    """Record ``cmd_twist`` (``streams["commands"]``, recording since the start) until every
+    state stream reached the task's end, or until rns_controller reports JOINT_LIMIT (a joint
+    at its limit: the task cannot be done; the run ends there, its figures so far kept);
+    return the task's start and end [s] (stamps' clock), its wall time [s] and whether a joint
+    limit ended it."""
+    commands = streams["commands"]
     # serialized: only the newest is read (JointLimitWatch); deserializing each status in the
     # executor would cost it the time it needs to record every cmd_twist
     status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status", raw=True)
@@ -577,6 +587,8 @@ def _wait_for_start(
             *(f"no {streams[name].topic} recorded" for name in state_streams if not streams[name]),
             *(f"{name} not subscribed to base_odom" for name in listeners if name not in nodes),
             *(["rns_controller has received no cmd_twist"] if not _has_twist(awaited) else []),
+            # leading, the operator sends zeros before its profile: this process gets them too
+            *(["no cmd_twist recorded"] if awaited is not None and not streams["commands"] else []),
         ]
 
     if not stack.spin_until(lambda: processes.exited() or not missing(), timeout=timeout):

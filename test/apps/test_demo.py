@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 
 import pytest
 import yaml
@@ -367,3 +368,20 @@ def test_a_method_whose_recording_came_out_partial_is_run_again(capsys):
     with pytest.raises(PartialRecordingError):
         demo._run_complete(lambda m: flaky(m, demo.PARTIAL_RETRIES + 1), "sc")
     assert len(calls) == demo.PARTIAL_RETRIES + 1
+
+
+def test_a_constant_rate_scenario_runs_and_its_singular_region_is_said(tmp_path, capfd):
+    """Fig. 4.6's scenario turns at a constant rate from its first sample (no quintic ramp at
+    zero), so a recorder that missed the start would see it move at once; and it crosses the
+    algorithmic singularity, where DLS lets the camera fall behind: the table's line says so."""
+    summary = tmp_path / "summary.json"
+    argv = ["--scenario", "algorithmic_singularity", "--methods", "dls", "--no-record"]
+    argv += ["--real-time-factor", "0", "--summary", str(summary), "--domain-id", DOMAIN]
+    assert main(argv) == 0
+    out = capfd.readouterr().out
+    (row,) = json.loads(summary.read_text())
+    assert row["min_sigma"] < 0.2  # epsilon: it went through the singular region
+    assert row["singular_time_s"] > 0.5
+    assert row["max_base_deviation_deg"] < 1e-4
+    said = r"note: dls: the camera ends [\d.]+ deg off its target: [\d.]+ s in the singular region"
+    assert re.search(said, out), out

@@ -212,10 +212,6 @@ def run_method(
         awaited = None
         if sim_time and args.output_lead:
             awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
-        # from before the start: the operator counts this subscription among the ones its
-        # profile waits for, and a reader matched only as the profile starts would miss its
-        # first samples (a constant-rate profile moves from its first one)
-        streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
         _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
         task, end, task_wall, limited = _run_task(stack, processes, streams, scenario, args, method)
         # stopped before the recorded messages are read: in lockstep the stack would go on
@@ -406,12 +402,13 @@ def _run_task(
     args: argparse.Namespace,
     method: str,
 ) -> tuple[float, float, float, bool]:
-    """Record ``cmd_twist`` (``streams["commands"]``, recording since the start) until every
-    state stream reached the task's end, or until rns_controller reports JOINT_LIMIT (a joint
-    at its limit: the task cannot be done; the run ends there, its figures so far kept);
-    return the task's start and end [s] (stamps' clock), its wall time [s] and whether a joint
-    limit ended it."""
-    commands = streams["commands"]
+    """Record ``cmd_twist`` (into ``streams``) until every state stream reached the task's end,
+    or until rns_controller reports JOINT_LIMIT (a joint at its limit: the task cannot be done;
+    the run ends there, its figures so far kept); return the task's start and end [s] (stamps'
+    clock), its wall time [s] and whether a joint limit ended it."""
+    # the operator's profile waits for this subscription (one of its min_subscribers): made
+    # only now, once the robot runs and is recorded, it holds the profile until then
+    commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
     # serialized: only the newest is read (JointLimitWatch); deserializing each status in the
     # executor would cost it the time it needs to record every cmd_twist
     status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status", raw=True)
@@ -587,8 +584,6 @@ def _wait_for_start(
             *(f"no {streams[name].topic} recorded" for name in state_streams if not streams[name]),
             *(f"{name} not subscribed to base_odom" for name in listeners if name not in nodes),
             *(["rns_controller has received no cmd_twist"] if not _has_twist(awaited) else []),
-            # leading, the operator sends zeros before its profile: this process gets them too
-            *(["no cmd_twist recorded"] if awaited is not None and not streams["commands"] else []),
         ]
 
     if not stack.spin_until(lambda: processes.exited() or not missing(), timeout=timeout):

@@ -59,19 +59,21 @@ def _expand(path: Path, args: dict[str, str], packages: dict[str, Path]) -> str:
         raise ModelError(
             f"{path}: a xacro file needs the xacro package (pip install xacro)"
         ) from None
+    missing: list[str] = []  # a package $(find ...) could not resolve (xacro wraps the error)
     try:
-        with _finding(packages):
+        with _finding(packages, missing):
             document = xacro.process_file(str(path), mappings=args)
-    except Exception as exc:  # xacro raises its own and XML errors, and KeyError on a package
-        reason = " ".join(str(exc).split()) or type(exc).__name__
+    except Exception as exc:  # xacro raises its own and XML errors
+        reason = missing[0] if missing else " ".join(str(exc).split()) or type(exc).__name__
         raise ModelError(f"{path}: xacro could not expand it: {reason}") from None
     return document.toprettyxml(indent="  ")
 
 
 @contextlib.contextmanager
-def _finding(packages: dict[str, Path]) -> Iterator[None]:
+def _finding(packages: dict[str, Path], missing: list[str]) -> Iterator[None]:
     """``$(find pkg)`` answers from ``packages`` first, then the ament index, while xacro
-    runs (xacro 2.1 resolves it in ``substitution_args._eval_find``)."""
+    runs (xacro 2.1 resolves it in ``substitution_args._eval_find``); a package found in
+    neither is said in ``missing``."""
     from xacro import substitution_args
 
     ament = substitution_args._eval_find
@@ -82,10 +84,11 @@ def _finding(packages: dict[str, Path]) -> Iterator[None]:
         try:
             return ament(package)
         except Exception:
-            raise KeyError(
+            missing.append(
                 f"$(find {package}): package not found (name its folder under 'packages' in "
                 "the model YAML, or set AMENT_PREFIX_PATH)"
-            ) from None
+            )
+            raise
 
     substitution_args._eval_find = find
     try:

@@ -49,6 +49,7 @@ def test_an_unknown_package_is_one_line_naming_it():
     text = str(caught.value)
     assert "xacro could not expand it" in text
     assert "$(find x7_description): package not found" in text
+    assert text.count("package not found") == 1  # said once, not wrapped by xacro's own error
     assert "\n" not in text
     assert substitution_args._eval_find is ament  # put back
 

@@ -14,7 +14,7 @@ os.environ.setdefault("ROS_DOMAIN_ID", "43")
 
 from rns_ros.cli import DOMAIN_ID_RANGE
 from rns_ros.harness import Harness
-from rns_ros.nodes.realtime import process_threads, set_thread_priority
+from rns_ros.nodes.realtime import set_thread_priority
 
 #: Consecutive tests run on DOMAINS different domains from ROS_DOMAIN_ID on: whatever a test
 #: leaves behind a while (a process still exiting, a message still in flight) is not on the
@@ -45,9 +45,7 @@ def _scheduled_like_the_executables():
         yield
     finally:
         if applied:
-            for tid in process_threads():
-                with contextlib.suppress(OSError):
-                    os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+            set_thread_priority(0)  # every thread back to SCHED_OTHER
 
 
 @pytest.fixture

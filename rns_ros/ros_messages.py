@@ -93,23 +93,36 @@ def parse_fields(text: str) -> dict:
     """The YAML mapping ``text`` of a message's fields ({} for empty text).
 
     Raises:
-        UsageError: ``text`` is not YAML, or not a mapping.
+        UsageError: ``text`` is not YAML, not a mapping, or over a limit of
+            :mod:`rns_ros.core.yaml_input` (aliases, size).
     """
     import yaml
 
+    from rns_ros.core.errors import ConfigError
+    from rns_ros.core.yaml_input import load_yaml
+
     try:
-        values = yaml.safe_load(text)
+        values = load_yaml(text, "the message")
     except yaml.YAMLError as exc:
         problem = " ".join(str(getattr(exc, "problem", None) or exc).split())
-        raise UsageError(f"cannot parse the message {text!r} as YAML: {problem}") from None
+        raise UsageError(f"cannot parse the message {_short(text)} as YAML: {problem}") from None
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
     if values is None:
         return {}
     if not isinstance(values, dict):
         raise UsageError(
             "the message must be a YAML mapping of field names, e.g. '{data: true}', "
-            f"got {text!r}"
+            f"got {_short(text)}"
         )
     return values
+
+
+def _short(value: Any) -> str:
+    """``repr(value)`` cut for a message (:func:`rns_ros.core.validation.short_repr`)."""
+    from rns_ros.core.validation import short_repr
+
+    return short_repr(value)
 
 
 def message_from_fields(values: dict, msg_type: type, now: Callable[[], Any]) -> Any:
@@ -163,7 +176,7 @@ def _nested(current: Any, value: Any, where: str, now: Callable[[], Any]) -> Any
         return type(current)(stamp=now())
     if not isinstance(value, dict):
         raise UsageError(
-            f"field {where!r} is a {kind}: give a mapping of its fields, not {value!r}"
+            f"field {where!r} is a {kind}: give a mapping of its fields, not {_short(value)}"
         )
     _fill(current, value, where + ".", now)
     return current
@@ -194,7 +207,7 @@ def _converted(slot_type: Any, value: Any, where: str, now: Callable[[], Any], k
     )
 
     def bad(why: str) -> UsageError:
-        return UsageError(f"bad value {value!r} for field {where!r} ({kind}): {why}")
+        return UsageError(f"bad value {_short(value)} for field {where!r} ({kind}): {why}")
 
     if isinstance(slot_type, AbstractNestedType):
         if not isinstance(value, list):

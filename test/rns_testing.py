@@ -264,3 +264,50 @@ def assert_one_clock_fault_logged(capfd) -> None:
     log = capfd.readouterr().err
     assert log.count("CLOCK_FAULT:") == 1, log
     assert "STALE_STATE" not in log
+
+
+#: The model YAML keys the alias-bomb tests fill (the value of each is read and checked).
+BOMB_KEYS = ("urdf", "camera_frame", "held_joints", "initial_joint_positions")
+
+
+def alias_bomb_model(key: str, urdf, levels: int = 9, width: int = 9) -> str:
+    """A model YAML (text) naming ``urdf`` whose ``key`` holds a "billion laughs": anchors nested
+    inside the value, each level ``width`` aliases of the one before, ``width ** levels``
+    strings in all once expanded. Mapping keys (``held_joints``, ``initial_joint_positions``)
+    get it as joint name: value; the others as a list."""
+    mapping = key in ("held_joints", "initial_joint_positions")
+    entry = "  joint_{i}: " if mapping else "  - "
+    lines = [entry.format(i=1) + "&a0 [" + ", ".join(['"lol"'] * width) + "]"]
+    for level in range(1, levels):
+        aliases = ", ".join([f"*a{level - 1}"] * width)
+        lines.append(entry.format(i=level + 1) + f"&a{level} [{aliases}]")
+    head = "" if key == "urdf" else f"urdf: {urdf}\n"
+    return head + f"{key}:\n" + "\n".join(lines) + "\n"
+
+
+def alias_bomb_flow(levels: int = 9, width: int = 9) -> str:
+    """A YAML flow list holding a "billion laughs" (``width ** levels`` strings once expanded),
+    as one command-line value: ``[&a0 [x, ...], &a1 [*a0, ...], ...]``."""
+    items = ["&a0 [" + ", ".join(["x"] * width) + "]"]
+    items += [f"&a{i} [" + ", ".join([f"*a{i - 1}"] * width) + "]" for i in range(1, levels)]
+    return "[" + ", ".join(items) + "]"
+
+
+def chain_urdf(links: int) -> str:
+    """URDF text of a serial chain of ``links`` links (1 kg cubes, 0.1 m apart) joined by
+    revolute joints about z: ``l0`` ... ``l{links-1}``, ``j1`` ... ``j{links-1}``."""
+    inertial = (
+        '<inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" '
+        'izz="0.01"/></inertial>'
+    )
+    parts = ['<robot name="chain">']
+    for i in range(links):
+        parts.append(f'<link name="l{i}">{inertial}</link>')
+        if i:
+            parts.append(
+                f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/>'
+                f'<child link="l{i}"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>'
+                '<limit lower="-3" upper="3" effort="10" velocity="1"/></joint>'
+            )
+    parts.append("</robot>")
+    return "\n".join(parts)

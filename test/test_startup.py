@@ -21,9 +21,12 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
+from rns_testing import alias_bomb_model, chain_urdf
 
 from rns_ros.cli import EXECUTABLES, describe_ros_error, one_line
 from rns_ros.core.config import load_model_config
+from rns_ros.core.urdf_tree import MAX_URDF_LINKS
+from rns_ros.core.yaml_input import MAX_YAML_NODES
 from rns_ros.resources import default_model_config
 
 REPO = Path(__file__).resolve().parents[1]
@@ -164,6 +167,21 @@ def test_model_with_a_nan_inertia_is_one_line_naming_the_link_and_exit_2(tmp_pat
     config.write_text("urdf: arm.urdf\ncamera_frame: camera\nwrist_frame: wrist\n")
     result = _run("rns_simulator", "--ros-args", "-p", f"model_config:={config}", cwd=tmp_path)
     _assert_one_line_error(result, "rns_simulator", r"link 'base_link' <inertia>: ixx='nan'")
+
+
+@pytest.mark.parametrize("kind", ["alias-bomb", "1000-links"])
+def test_model_over_the_input_limits_is_one_line_and_exit_2(kind, tmp_path):
+    config = tmp_path / "model.yaml"
+    if kind == "alias-bomb":
+        urdf, _ = load_model_config(default_model_config())
+        config.write_text(alias_bomb_model("held_joints", urdf))
+        pattern = rf"model\.yaml: more than {MAX_YAML_NODES} YAML nodes with the aliases expanded"
+    else:
+        (tmp_path / "chain.urdf").write_text(chain_urdf(1000))
+        config.write_text("urdf: chain.urdf\ncamera_frame: l999\nwrist_frame: null\n")
+        pattern = rf"chain: 1000 <link> elements, over the limit of {MAX_URDF_LINKS}"
+    result = _run("rns_simulator", "--ros-args", "-p", f"model_config:={config}", cwd=tmp_path)
+    _assert_one_line_error(result, "rns_simulator", pattern)
 
 
 # --- Ctrl-C during start-up ------------------------------------------------------------------

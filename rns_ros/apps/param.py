@@ -63,6 +63,9 @@ def parse_parameter_value(text: str, declared: int = 0):
     (array) parameter is sent as a double (``epsilon 1``), anything for a string parameter as the
     text typed (``frame_id 123``), and a list mixing integers and floats is a double array. Text
     that is not valid YAML, or YAML of another kind (a mapping, a date, null), is a string.
+
+    Raises:
+        UsageError: ``text`` is YAML over a limit of :mod:`rns_ros.core.yaml_input` (aliases).
     """
     from rcl_interfaces.msg import ParameterType, ParameterValue
 
@@ -89,10 +92,15 @@ def _parse_yaml_value(text: str):
     import yaml
     from rcl_interfaces.msg import ParameterType, ParameterValue
 
+    from rns_ros.core.errors import ConfigError
+    from rns_ros.core.yaml_input import load_yaml
+
     try:
-        value = yaml.safe_load(text)
+        value = load_yaml(text, "VALUE")
     except yaml.YAMLError:
         value = text
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
     # bool is an int in Python: test it first, everywhere
     if isinstance(value, bool):
         return ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=value)

@@ -19,7 +19,7 @@ from rns_ros.control.contact_tasks import ArcScenario, Setup, WallScenario
 from rns_ros.control.scenario import Scenario, load_scenario
 from rns_ros.core.config import check_keys, read_yaml_mapping
 from rns_ros.core.errors import ConfigError, InputError
-from rns_ros.core.validation import Choice
+from rns_ros.core.validation import Choice, short_repr
 
 #: Scenario-file key naming its kind; absent = :attr:`ScenarioKind.CAMERA_ROTATION` (Part I).
 KIND_KEY = "kind"
@@ -208,14 +208,20 @@ def _check_types(values: dict) -> None:
     """YAML types the dataclasses do not check themselves (they coerce with float())."""
     for key in ("model",):
         if key in values and not isinstance(values[key], str):
-            raise ConfigError(f"{key} must be a model file name in config/, got {values[key]!r}")
+            raise ConfigError(
+                f"{key} must be a model file name in config/, got {short_repr(values[key])}"
+            )
     if "centripetal" in values and not isinstance(values["centripetal"], bool):
-        raise ConfigError(f"centripetal must be true or false, got {values['centripetal']!r}")
+        raise ConfigError(
+            f"centripetal must be true or false, got {short_repr(values['centripetal'])}"
+        )
     for key, value in values.items():
         if isinstance(value, bool) and key != "centripetal":
-            raise ConfigError(f"{key} must be a number, got {value!r}")
+            raise ConfigError(f"{key} must be a number, got {short_repr(value)}")
         if isinstance(value, str) and key != "model":
-            raise ConfigError(f"{key} must be a number or a list of numbers, got {value!r}")
+            raise ConfigError(
+                f"{key} must be a number or a list of numbers, got {short_repr(value)}"
+            )
 
 
 __all__ = [

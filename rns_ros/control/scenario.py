@@ -39,7 +39,7 @@ from rns_ros.control.controller import TwistFrame
 from rns_ros.core.config import check_keys, read_yaml_mapping
 from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.timing import QUINTIC_PEAK_RATE, quintic
-from rns_ros.core.validation import Choice, as_vector, positive
+from rns_ros.core.validation import Choice, as_vector, positive, short_repr
 
 _KEYS = {
     "name",
@@ -201,14 +201,15 @@ def _piecewise(segments, t: float) -> tuple[float, float]:
 def _segments(value, duration: float, where: str) -> tuple[tuple[float, float], ...]:
     try:
         segments = tuple((float(d), float(f)) for d, f in value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ConfigError(
-            f"{where}: 'segments' must be a list of [duration_s, fraction] pairs, got {value!r}"
+            f"{where}: 'segments' must be a list of [duration_s, fraction] pairs, got "
+            f"{short_repr(value)}"
         ) from None
     if not segments or any(not (d > 0.0 and np.isfinite(d)) for d, _ in segments):
-        raise ConfigError(f"{where}: 'segments' durations must be > 0 s, got {value!r}")
+        raise ConfigError(f"{where}: 'segments' durations must be > 0 s, got {short_repr(value)}")
     if any(not np.isfinite(f) for _, f in segments):
-        raise ConfigError(f"{where}: 'segments' fractions must be finite, got {value!r}")
+        raise ConfigError(f"{where}: 'segments' fractions must be finite, got {short_repr(value)}")
     total_time = sum(d for d, _ in segments)
     total_fraction = sum(f for _, f in segments)
     if abs(total_time - duration) > 1e-9 * max(duration, 1.0):
@@ -238,14 +239,14 @@ def load_scenario(path: str | Path) -> Scenario:
         axis = as_vector(content["axis"], 3, "axis")
         angle = np.deg2rad(float(content["angle_deg"]))
         duration = float(content["duration"])
-    except (InputError, TypeError, ValueError) as exc:
+    except (InputError, TypeError, ValueError, OverflowError) as exc:
         raise ConfigError(f"{where}: {exc}") from exc
     if np.linalg.norm(axis) < 1e-9:
         raise ConfigError(f"{where}: 'axis' must be non-zero, got {axis.tolist()}")
     if not (np.isfinite(angle) and np.isfinite(duration) and duration > 0.0):
         raise ConfigError(
             f"{where}: 'duration' must be > 0 s and 'angle_deg' finite, got "
-            f"{content['duration']!r}, {content['angle_deg']!r}"
+            f"{short_repr(content['duration'])}, {short_repr(content['angle_deg'])}"
         )
     scaling = TimeScaling.parse(content.get("time_scaling", "quintic"))
     if (scaling is TimeScaling.PIECEWISE) != ("segments" in content):
@@ -255,7 +256,7 @@ def load_scenario(path: str | Path) -> Scenario:
     )
     controller = content.get("controller") or {}
     if not isinstance(controller, dict):
-        raise ConfigError(f"{where}: 'controller' must be a mapping, got {controller!r}")
+        raise ConfigError(f"{where}: 'controller' must be a mapping, got {short_repr(controller)}")
     check_keys(controller, set(CONTROLLER_OVERRIDES), f"{where}: controller")
     try:
         controller = {key: CONTROLLER_OVERRIDES[key](value) for key, value in controller.items()}

@@ -16,11 +16,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import yaml
-
 from rns_ros.core.errors import ConfigError
 from rns_ros.core.model import FreeFloatingModel, ModelSpec
 from rns_ros.core.urdf_prep import BaseBody
+from rns_ros.core.validation import short_repr
+from rns_ros.core.yaml_input import read_yaml_file
 
 _KEYS = {
     "urdf",
@@ -36,35 +36,38 @@ _KEYS = {
     "packages",
 }
 _BASE_KEYS = {"mass", "inertia", "mount_xyz", "mount_rpy"}
+#: Longest ``urdf`` path accepted [characters] (Linux's PATH_MAX).
+MAX_PATH_LENGTH = 4096
+#: How many unknown keys an error message lists.
+SHOWN_KEYS = 10
 
 
 def read_yaml_mapping(path: str | Path, keys: set[str] | None, what: str) -> tuple[Path, dict]:
     """Read a YAML file holding one mapping whose keys are all in ``keys`` (None: the caller
     checks them, e.g. once it knows which kind of file it is).
 
-    Returns (path, mapping). A missing file, invalid YAML, a non-mapping or an unknown key raise
-    :class:`ConfigError` naming the file (and the key).
+    Returns (path, mapping). A missing file, invalid YAML, a file or document over the limits of
+    :mod:`rns_ros.core.yaml_input`, a non-mapping or an unknown key raise :class:`ConfigError`
+    naming the file (and the key).
     """
     path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{what} not found: {path}")
-    try:
-        content = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML: {exc}") from exc
+    content = read_yaml_file(path, what)
     if not isinstance(content, dict):
         expected = "a mapping" if keys is None else f"a mapping with keys {sorted(keys)}"
-        raise ConfigError(f"{path}: expected {expected}, got {content!r}")
+        raise ConfigError(f"{path}: expected {expected}, got {short_repr(content)}")
     if keys is not None:
         check_keys(content, keys, str(path))
     return path, content
 
 
 def check_keys(mapping: dict, keys: set[str], where: str) -> None:
-    """Raise :class:`ConfigError` naming any key of ``mapping`` not in ``keys``."""
+    """Raise :class:`ConfigError` naming any key of ``mapping`` not in ``keys`` (the first
+    :data:`SHOWN_KEYS`, each cut to 40 characters)."""
     unknown = sorted(str(key) for key in set(mapping) - keys)
     if unknown:
-        raise ConfigError(f"{where}: unknown key(s) {unknown}; valid keys: {sorted(keys)}")
+        shown = [key if len(key) <= 40 else key[:37] + "..." for key in unknown[:SHOWN_KEYS]]
+        more = f" and {len(unknown) - SHOWN_KEYS} more" if len(unknown) > SHOWN_KEYS else ""
+        raise ConfigError(f"{where}: unknown key(s) {shown}{more}; valid keys: {sorted(keys)}")
 
 
 def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
@@ -74,11 +77,15 @@ def load_model_config(path: str | Path) -> tuple[Path, ModelSpec]:
     ``positioning_joints`` / ``wrist_joints`` means the default split (ModelSpec: None).
     """
     path, content = read_yaml_mapping(path, _KEYS, "model config")
-    if not isinstance(content.get("urdf"), str):
-        raise ConfigError(f"{path}: 'urdf' must be a file path string, got {content.get('urdf')!r}")
+    if not isinstance(content.get("urdf"), str) or len(content["urdf"]) > MAX_PATH_LENGTH:
+        raise ConfigError(
+            f"{path}: 'urdf' must be a file path string, got {short_repr(content.get('urdf'))}"
+        )
     for key in ("camera_frame", "wrist_frame"):
         if key in content and content[key] is not None and not isinstance(content[key], str):
-            raise ConfigError(f"{path}: '{key}' must be a frame name, got {content[key]!r}")
+            raise ConfigError(
+                f"{path}: '{key}' must be a frame name, got {short_repr(content[key])}"
+            )
     joints = {
         key: _names(content[key], f"{path}: '{key}'") if key in content else None
         for key in ("positioning_joints", "wrist_joints", "controlled_joints")
@@ -112,11 +119,13 @@ def load_model(path: str | Path) -> FreeFloatingModel:
 def _strings(value, where: str) -> dict[str, str]:
     """A mapping of names to scalar values, as text (``xacro_args``, ``packages``)."""
     if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
-        raise ConfigError(f"{where} must be a mapping of names to values, got {value!r}")
+        raise ConfigError(f"{where} must be a mapping of names to values, got {short_repr(value)}")
     scalars = (str, int, float, bool)
     bad = [key for key, item in value.items() if not isinstance(item, scalars)]
     if bad:
-        raise ConfigError(f"{where}: '{bad[0]}' must be a single value, got {value[bad[0]]!r}")
+        raise ConfigError(
+            f"{where}: '{bad[0]}' must be a single value, got {short_repr(value[bad[0]])}"
+        )
     return {
         key: ("true" if item else "false") if isinstance(item, bool) else str(item)
         for key, item in value.items()
@@ -125,13 +134,19 @@ def _strings(value, where: str) -> dict[str, str]:
 
 def _names(value, where: str) -> tuple[str, ...]:
     if not isinstance(value, list) or not all(isinstance(name, str) for name in value):
-        raise ConfigError(f"{where} must be a list of joint names, got {value!r}")
+        raise ConfigError(f"{where} must be a list of joint names, got {short_repr(value)}")
     return tuple(value)
 
 
 def _number(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise ConfigError(f"{where} must be a finite number, got {value!r}")
+    finite = False
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an integer beyond float
+            finite = False
+    if not finite:
+        raise ConfigError(f"{where} must be a finite number, got {short_repr(value)}")
     return float(value)
 
 
@@ -143,7 +158,9 @@ def _numbers(value, sizes: tuple[int, ...], where: str) -> tuple[float, ...]:
 
 def _positions(value, where: str) -> dict[str, float]:
     if not isinstance(value, dict) or not all(isinstance(name, str) for name in value):
-        raise ConfigError(f"{where} must be a mapping joint name: position, got {value!r}")
+        raise ConfigError(
+            f"{where} must be a mapping joint name: position, got {short_repr(value)}"
+        )
     return {name: _number(position, f"{where} '{name}'") for name, position in value.items()}
 
 

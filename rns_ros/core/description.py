@@ -6,15 +6,19 @@ one ROS uses), with no ROS install needed:
 * ``xacro_args`` are the ``<xacro:arg>`` values, as ``xacro file.xacro name:=value`` gives them;
 * ``$(find pkg)`` resolves to ``packages[pkg]`` when the model YAML names the package's folder,
   else through the ament index (``AMENT_PREFIX_PATH``), as on a ROS install.
+
+A file, or an expanded xacro, over :data:`~rns_ros.core.urdf_tree.MAX_URDF_BYTES` is refused.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from rns_ros.core.errors import ModelError
+from rns_ros.core.urdf_tree import MAX_URDF_BYTES, check_urdf_size
 
 #: File name endings read as xacro.
 XACRO_SUFFIXES = (".xacro", ".urdf.xacro")
@@ -38,18 +42,27 @@ def read_description(
         packages: package name -> its share folder, for ``$(find pkg)`` (xacro only).
 
     Raises:
-        ModelError: the file is missing or unreadable, or xacro cannot expand it (one line:
-            the file and xacro's reason).
+        ModelError: the file is missing or unreadable, over
+            :data:`~rns_ros.core.urdf_tree.MAX_URDF_BYTES` (as a file or expanded), or xacro
+            cannot expand it (one line: the file and the reason).
     """
     path = Path(path)
-    if not path.is_file():
-        raise ModelError(f"URDF file not found: {path}")
-    if not is_xacro(path):
-        try:
-            return path.read_text()
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ModelError(f"{path}: cannot read the URDF: {exc}") from None
-    return _expand(path, dict(xacro_args or {}), {k: Path(v) for k, v in (packages or {}).items()})
+    try:
+        if not path.is_file():
+            raise ModelError(f"URDF file not found: {path}")
+        with path.open("rb") as stream:
+            data = stream.read(MAX_URDF_BYTES + 1)
+            size = max(len(data), os.fstat(stream.fileno()).st_size)
+        check_urdf_size(size, str(path))
+        if not is_xacro(path):
+            return data.decode().replace("\r\n", "\n").replace("\r", "\n")  # as read_text
+    except OSError as exc:  # the message without the file name, given once in front
+        raise ModelError(f"{path}: cannot read the URDF: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: cannot read the URDF: {exc}") from None
+    text = _expand(path, dict(xacro_args or {}), {k: Path(v) for k, v in (packages or {}).items()})
+    check_urdf_size(len(text.encode()), f"{path} (expanded)")
+    return text
 
 
 def _expand(path: Path, args: dict[str, str], packages: dict[str, Path]) -> str:

@@ -21,11 +21,12 @@ import numpy as np
 import pinocchio as pin
 
 from rns_ros.core.config import read_yaml_mapping
+from rns_ros.core.description import read_description
 from rns_ros.core.errors import ConfigError, ModelError
 from rns_ros.core.joint_selection import frame_id
 from rns_ros.core.model import check_moving_bodies, check_one_dof_joints
 from rns_ros.core.urdf_prep import check_urdf_inertials
-from rns_ros.core.validation import as_vector
+from rns_ros.core.validation import as_vector, short_repr
 
 #: Standard gravity [m/s^2], along -z of world when ``gravity`` is on.
 STANDARD_GRAVITY = 9.80665
@@ -73,13 +74,12 @@ class FixedBaseModel:
         """Load a URDF file with a fixed base (its root link is welded to ``world``).
 
         Raises:
-            ModelError: the file is missing or unparsable, a body is not physical, or the
-                end-effector frame is unknown.
+            ModelError: the file is missing, unparsable or over the limits of
+                :mod:`rns_ros.core.urdf_tree`, a body is not physical, or the end-effector
+                frame is unknown.
         """
         path = Path(path)
-        if not path.is_file():
-            raise ModelError(f"URDF file not found: {path}")
-        xml = path.read_text()
+        xml = read_description(path)
         check_urdf_inertials(xml, path.stem)
         try:
             model = pin.buildModelFromXML(xml)
@@ -106,7 +106,9 @@ def load_fixed_base_model(path: str | Path, *, gravity: bool = False) -> FixedBa
     path, content = read_yaml_mapping(path, _KEYS, "fixed-base model config")
     for key in ("urdf", "ee_frame"):
         if not isinstance(content.get(key), str):
-            raise ConfigError(f"{path}: '{key}' must be a string, got {content.get(key)!r}")
+            raise ConfigError(
+                f"{path}: '{key}' must be a string, got {short_repr(content.get(key))}"
+            )
     urdf = (path.parent / content["urdf"]).resolve()
     return FixedBaseModel.from_urdf(urdf, content["ee_frame"], gravity=gravity)
 

@@ -5,6 +5,11 @@ Only the ``<link>`` and ``<joint>`` elements directly under ``<robot>`` are the 
 descriptions carry more: ``<ros2_control>`` and ``<transmission>`` blocks name joints without a
 parent or child link, ``<gazebo>`` blocks name links for plugins. Reading the document
 recursively mistakes those for kinematic joints; here they are ignored.
+
+A description is refused (one line, before Pinocchio reads it) over :data:`MAX_URDF_BYTES` of
+text or :data:`MAX_URDF_LINKS` links or joints: arms have tens, and what Pinocchio and the
+checks build grows with their number. XML entities are expanded by the standard library's
+expat, whose amplification limit refuses an entity "billion laughs" as a parse error.
 """
 
 from __future__ import annotations
@@ -13,6 +18,20 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 from rns_ros.core.errors import ModelError
+
+#: Largest robot description read, URDF text or expanded xacro [bytes]; meshes are separate files.
+MAX_URDF_BYTES = 2_000_000
+#: Most ``<link>`` elements, and most ``<joint>`` elements, of a robot description.
+MAX_URDF_LINKS = 100
+
+
+def check_urdf_size(size: int, name: str) -> None:
+    """Raise a one-line :class:`ModelError` when a description of ``size`` bytes is over
+    :data:`MAX_URDF_BYTES`; ``name`` labels it."""
+    if size > MAX_URDF_BYTES:
+        raise ModelError(
+            f"{name}: {size} bytes of robot description, over the limit of {MAX_URDF_BYTES}"
+        )
 
 
 @dataclass(frozen=True)
@@ -46,13 +65,23 @@ class UrdfTree:
         """The tree of the URDF text ``xml``; ``name`` labels errors.
 
         Raises:
-            ModelError: not XML, or a kinematic joint without a name, or without the link
-                attribute of its ``<parent>`` / ``<child>`` (one line naming the joint).
+            ModelError: over :data:`MAX_URDF_BYTES` or :data:`MAX_URDF_LINKS`, not XML, or a
+                kinematic joint without a name, or without the link attribute of its
+                ``<parent>`` / ``<child>`` (one line naming the joint).
         """
+        data = xml.encode() if isinstance(xml, str) else xml
+        check_urdf_size(len(data), name)
         try:
-            root = ET.fromstring(xml.encode() if isinstance(xml, str) else xml)
+            root = ET.fromstring(data)
         except ET.ParseError as exc:
             raise ModelError(f"{name}: URDF could not be parsed: {exc}") from None
+        for tag in ("link", "joint"):
+            count = len(root.findall(tag))
+            if count > MAX_URDF_LINKS:
+                raise ModelError(
+                    f"{name}: {count} <{tag}> elements, over the limit of {MAX_URDF_LINKS} "
+                    "for a robot description"
+                )
         return cls.of(root, name)
 
     @classmethod

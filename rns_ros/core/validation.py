@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import reprlib
 from enum import StrEnum
 from typing import Self, TypeVar
 
@@ -12,12 +14,50 @@ from rns_ros.core.errors import ConfigError, InputError
 StrEnumT = TypeVar("StrEnumT", bound=StrEnum)
 
 
+class _BoundedRepr(reprlib.Repr):
+    """:mod:`reprlib` with a few more items shown, and any integer printable."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.maxlevel = 3
+        self.maxlist = self.maxtuple = self.maxset = self.maxfrozenset = self.maxdeque = 8
+        self.maxdict = 8
+        self.maxstring = self.maxother = 200
+        self.maxlong = 60
+
+    def repr_int(self, x: int, level: int) -> str:
+        if x.bit_length() > 1000:  # str() refuses more than 4300 digits
+            return f"<int of {x.bit_length()} bits>"
+        return super().repr_int(x, level)
+
+
+_SHORT = _BoundedRepr()
+
+
+def short_repr(value, limit: int = 80) -> str:
+    """``repr(value)`` for an error message, at most about ``limit`` characters: a longer one is
+    cut with ``...`` and followed by the value's length, e.g. ``'aaaa...' (str of 5000
+    characters)``. Its cost is bounded whatever the size of ``value`` (nested aliases of a YAML
+    file stand for billions of items)."""
+    text = _SHORT.repr(value)
+    if len(text) <= limit and "..." not in text and "<int of" not in text:
+        return repr(value)  # small: the exact repr, dict order kept
+    if len(text) > limit:
+        text = text[: max(limit - 3, 1)] + "..."
+    try:
+        size = len(value)
+    except TypeError:
+        return text
+    unit = "characters" if isinstance(value, str | bytes) else "items"
+    return f"{text} ({type(value).__name__} of {size} {unit})"
+
+
 def as_vector(value, size: int, name: str) -> np.ndarray:
     """Return ``value`` as a finite float vector, shape ``(size,)``, else raise InputError."""
     try:
         array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be numeric, got {value!r}") from exc
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"{name} must be numeric, got {short_repr(value)}") from exc
     if array.shape != (size,):
         raise InputError(f"{name} must have shape ({size},), got shape {array.shape}")
     if not np.isfinite(array).all():
@@ -37,10 +77,13 @@ def as_matrix(value, name: str) -> np.ndarray:
 
 def positive(value: float, name: str, unit: str = "") -> float:
     """Return ``value`` as float if it is finite and > 0, else raise :class:`ConfigError`."""
-    number = float(value)
+    try:
+        number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        number = math.nan
     if not np.isfinite(number) or number <= 0.0:
         raise ConfigError(
-            f"{name} must be a finite number > 0 {unit}".rstrip() + f", got {value!r}"
+            f"{name} must be a finite number > 0 {unit}".rstrip() + f", got {short_repr(value)}"
         )
     return number
 
@@ -51,7 +94,7 @@ def parse_choice(choices: type[StrEnumT], value, name: str) -> StrEnumT:
         return choices(value)
     except ValueError:
         valid = [member.value for member in choices]
-        raise ConfigError(f"{name} must be one of {valid}, got {value!r}") from None
+        raise ConfigError(f"{name} must be one of {valid}, got {short_repr(value)}") from None
 
 
 class Choice(StrEnum):

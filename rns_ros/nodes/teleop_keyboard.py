@@ -89,6 +89,34 @@ class TerminalLost(Exception):  # noqa: N818 - an event, not a programming error
     """The controlling terminal hung up or stdin ended."""
 
 
+class TerminalError(RnsError):
+    """stdin cannot take the panel: not a terminal, or this process is not in its foreground."""
+
+
+_RUN_IN_FOREGROUND = "run it in the foreground of an interactive terminal"
+
+
+def check_terminal(fd: int) -> None:
+    """Raise :class:`TerminalError` unless ``fd`` (stdin; -1: none) is a terminal this process
+    may put into key mode: a terminal, and, when it is this process's controlling terminal, one
+    whose foreground process group is this process's (in the background, changing its mode
+    would stop the process with SIGTTOU, or fail with EIO once the shell is gone)."""
+    if fd < 0 or not os.isatty(fd):
+        raise TerminalError(
+            "stdin is not a terminal; run it in an interactive terminal (not with a pipe, a "
+            "file or a launch file without a console)"
+        )
+    try:
+        foreground = os.tcgetpgrp(fd)
+    except OSError:  # not the controlling terminal: no job control to respect
+        return
+    if foreground != os.getpgrp():
+        raise TerminalError(
+            "this process is in the background of its terminal (started with &, or moved "
+            f"there with bg); {_RUN_IN_FOREGROUND}"
+        )
+
+
 class TeleopKeyboardNode(Node):
     """Publishes the :class:`~rns_ros.keyboard.KeyboardTeleop` commands (module docstring).
 
@@ -195,6 +223,11 @@ def _controller_status(
     return None
 
 
+def _reason(error: termios.error) -> str:
+    """``termios.error``'s text, e.g. ``Input/output error``."""
+    return str(error.args[1]) if len(error.args) > 1 else str(error)
+
+
 class RawTerminal:
     """stdin in cbreak mode without signal characters or flow control, the panel drawn on the
     alternate screen; :meth:`restore` (idempotent, also on a dead terminal) undoes both."""
@@ -206,7 +239,11 @@ class RawTerminal:
         self._shown: list[str] = []
 
     def __enter__(self) -> RawTerminal:
-        self._saved = termios.tcgetattr(self.fd_in)
+        """Raises: TerminalError: the terminal refuses key mode (one line)."""
+        try:
+            self._saved = termios.tcgetattr(self.fd_in)
+        except termios.error as exc:
+            raise TerminalError(f"cannot read the terminal's mode: {_reason(exc)}") from None
         try:
             tty.setcbreak(self.fd_in, termios.TCSAFLUSH)  # drop keys typed before the panel
             mode = termios.tcgetattr(self.fd_in)
@@ -214,6 +251,11 @@ class RawTerminal:
             mode[tty.IFLAG] &= ~termios.IXON  # Ctrl-S must not freeze the panel
             termios.tcsetattr(self.fd_in, termios.TCSANOW, mode)
             self._write("\x1b[?1049h\x1b[?25l")  # alternate screen, hide cursor
+        except termios.error as exc:
+            self.restore()
+            raise TerminalError(
+                f"cannot put the terminal into key mode: {_reason(exc)}; {_RUN_IN_FOREGROUND}"
+            ) from None
         except BaseException:
             self.restore()
             raise
@@ -348,7 +390,7 @@ def _spin(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
 
 def main(args: Sequence[str] | None = None) -> int:
     """Run the teleop in this terminal; exit code 0 (quit, Ctrl-C, SIGTERM), 1 (terminal lost)
-    or 2 (bad parameters, stdin not a terminal)."""
+    or 2 (bad parameters, stdin not a terminal or this process in its background)."""
     argv = list(sys.argv if args is None else args)
     code = answer_help(teleop_keyboard_parameters, argv)
     if code is not None:
@@ -371,13 +413,7 @@ def main(args: Sequence[str] | None = None) -> int:
         if _signals and signal.SIGHUP not in _signals:
             return 0  # Ctrl-C / SIGTERM while starting: nothing was sent yet
         stdin = sys.stdin.fileno() if sys.stdin is not None else -1
-        if stdin < 0 or not os.isatty(stdin):
-            print(
-                f"{NODE_NAME}: stdin is not a terminal; run it in an interactive terminal "
-                "(not with a pipe, a file or a launch file without a console)",
-                file=sys.stderr,
-            )
-            return 2
+        check_terminal(stdin)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         spinner = threading.Thread(

@@ -45,7 +45,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import rerun as rr
-import yaml
 
 from rns_ros.control.contact_topics import ERROR_LABELS
 from rns_ros.core.config import load_model
@@ -54,6 +53,7 @@ from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.core.fixed_base import FixedBaseModel, load_fixed_base_model
 from rns_ros.core.model import FreeFloatingModel
 from rns_ros.core.validation import as_vector
+from rns_ros.core.yaml_input import read_yaml_file
 from rns_ros.viz import paths
 from rns_ros.viz.blueprint import contact_blueprint
 from rns_ros.viz.quantities import RateLimiter
@@ -254,8 +254,8 @@ def load_arm_model(path: str | Path) -> tuple[FreeFloatingModel | FixedBaseModel
         ConfigError, ModelError: from the loader (missing file, unknown key, bad URDF ...).
     """
     content = None
-    with contextlib.suppress(OSError, yaml.YAMLError):  # the loader below reports it
-        content = yaml.safe_load(Path(path).read_text())
+    with contextlib.suppress(ConfigError):  # the loader below reports it
+        content = read_yaml_file(path, "model config")
     if isinstance(content, dict) and "ee_frame" in content:
         robot = load_fixed_base_model(path)
         return robot, (Path(path).parent / str(content["urdf"])).resolve()

@@ -1,5 +1,6 @@
 """``rns_model check``: the feasibility numbers against an independent computation, the warning of
-a 6-joint arm, and one-line errors (exit 2) for bad input.
+a 6-joint arm, and one-line errors (exit 2) for bad input, alias bombs and oversized URDFs among
+them (the console script, in a subprocess, within its memory bound).
 
 Independent route: the reaction null space is the kernel of the base angular rows of
 M_b^-1 M_bm (CRBA, eq. 2.7: zero momentum, M_b V_b + M_bm theta_dot = 0, so the base does not
@@ -13,16 +14,19 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from rns_testing import six_joint_model
+from rns_testing import BOMB_KEYS, alias_bomb_model, chain_urdf, six_joint_model
 
 from rns_ros.analysis.arm_feasibility import NEAR_SINGULAR, arm_feasibility
 from rns_ros.apps import model_check
 from rns_ros.core import load_model
 from rns_ros.core.config import load_model_config
+from rns_ros.core.urdf_tree import MAX_URDF_LINKS
+from rns_ros.core.yaml_input import MAX_YAML_NODES
 from rns_ros.resources import config_dir
 
 RELATIVE_RANK = 1e-9
@@ -236,3 +240,59 @@ def test_without_a_wrist_frame_ok_claims_only_camera_pointing(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "ok: reactionless camera pointing is feasible (wrist holding not requested)" in out
     assert "wrist holding are feasible" not in out
+
+
+# --- bounded input, as the console script meets it ----------------------------------------------
+#: Peak resident memory of ``rns_model check`` refusing a file [MB] (~80: the imports).
+REFUSAL_RSS_MB = 200
+BIN = Path(sys.executable).parent
+
+
+#: Runs a command and prints its peak resident memory [kB]: a small process of its own, since a
+#: child's peak counts the image it was forked from (the test process, hundreds of MB).
+_MEASURE = (
+    "import resource, subprocess, sys\n"
+    "code = subprocess.call(sys.argv[1:], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL)\n"
+    "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
+    "sys.exit(code)\n"
+)
+
+
+def _console_check(path: Path, tmp_path: Path) -> tuple[int, str, float]:
+    """Run ``.venv/bin/rns_model check path``: (exit code, stderr, peak resident memory [MB])."""
+    done = subprocess.run(
+        [sys.executable, "-c", _MEASURE, str(BIN / "rns_model"), "check", str(path)],
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=60.0,
+    )
+    return done.returncode, done.stderr, int(done.stdout) / 1024
+
+
+@pytest.mark.parametrize("key", BOMB_KEYS)
+def test_console_script_refuses_an_alias_bomb_in_one_line(key, tmp_path):
+    urdf, _ = load_model_config(config_dir() / "model.yaml")
+    model = tmp_path / "bomb.yaml"
+    model.write_text(alias_bomb_model(key, urdf))
+    code, err, rss = _console_check(model, tmp_path)
+    assert code == 2, err[-3000:]
+    assert "Traceback" not in err
+    assert re.fullmatch(
+        rf"rns_model: {re.escape(str(model))}: more than {MAX_YAML_NODES} YAML nodes .*\n", err
+    )
+    assert rss < REFUSAL_RSS_MB
+
+
+def test_console_script_refuses_a_1000_link_urdf_in_one_line(tmp_path):
+    (tmp_path / "chain.urdf").write_text(chain_urdf(1000))
+    model = tmp_path / "chain.yaml"
+    model.write_text("urdf: chain.urdf\ncamera_frame: l999\nwrist_frame: null\n")
+    code, err, rss = _console_check(model, tmp_path)
+    assert code == 2, err[-3000:]
+    assert "Traceback" not in err
+    assert err == (
+        f"rns_model: chain: 1000 <link> elements, over the limit of {MAX_URDF_LINKS} for a "
+        "robot description\n"
+    )
+    assert rss < REFUSAL_RSS_MB

@@ -157,6 +157,17 @@ def test_parse_parameter_value():
     assert parse("2", declared=T.PARAMETER_DOUBLE).double_value == 2.0
 
 
+def test_parse_parameter_value_refuses_an_alias_bomb():
+    from rns_testing import alias_bomb_flow
+
+    from rns_ros.apps.param import parse_parameter_value as parse
+    from rns_ros.tool_session import UsageError
+
+    with pytest.raises(UsageError, match=r"^VALUE: more than \d+ YAML nodes"):
+        parse(alias_bomb_flow())
+    assert list(parse("[&a 1, *a]").integer_array_value) == [1, 1]  # a few aliases are YAML
+
+
 def test_describe_shows_range_constraints_and_read_only(stack, capsys):
     from rns_ros.apps.param import param_main
 

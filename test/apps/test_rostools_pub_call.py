@@ -256,3 +256,24 @@ def test_message_from_yaml_fills_nested_arrays_and_times():
     msg = message_from_yaml("{poses: [{position: {z: 2}}, {}]}", PoseArray, now)
     assert [p.position.z for p in msg.poses] == [2.0, 0.0]
     assert message_from_yaml("", JointState, now) == JointState()
+
+
+def test_message_from_yaml_refuses_an_alias_bomb_and_cuts_bad_values():
+    from builtin_interfaces.msg import Time
+    from rns_testing import alias_bomb_flow
+    from sensor_msgs.msg import JointState
+
+    from rns_ros.ros_messages import message_from_yaml
+    from rns_ros.tool_session import UsageError
+
+    def now():
+        return Time()
+
+    with pytest.raises(UsageError, match=r"^the message: more than \d+ YAML nodes"):
+        message_from_yaml(f"{{name: {alias_bomb_flow()}}}", JointState, now)
+    with pytest.raises(UsageError) as caught:
+        message_from_yaml(f"{{position: [[{', '.join(['1'] * 5000)}]]}}", JointState, now)
+    message = str(caught.value)
+    assert message.startswith("bad value [1, 1, ")
+    assert "(list of 5000 items) for field 'position[0]'" in message
+    assert len(message) < 300

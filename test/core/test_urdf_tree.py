@@ -1,13 +1,19 @@
 """rns_ros.core.urdf_tree: the kinematic tree is the <link> and <joint> elements under <robot>;
 the <joint> entries of <ros2_control> and <transmission> blocks and the <link> of a <gazebo>
-plugin are not part of it."""
+plugin are not part of it. A description over the size or link limits, or whose entities multiply,
+is one line before Pinocchio reads it."""
 
 from __future__ import annotations
 
-import pytest
+import time
 
+import pytest
+from rns_testing import chain_urdf
+
+from rns_ros.core import load_model
+from rns_ros.core.description import read_description
 from rns_ros.core.errors import ModelError
-from rns_ros.core.urdf_tree import UrdfTree
+from rns_ros.core.urdf_tree import MAX_URDF_BYTES, MAX_URDF_LINKS, UrdfTree
 
 URDF = """<robot name="quirks">
   <link name="base"/>
@@ -65,3 +71,59 @@ def test_a_kinematic_joint_without_its_links_is_one_line_naming_it(joint, messag
 def test_text_that_is_not_xml_is_one_line():
     with pytest.raises(ModelError, match=r"^my_arm: URDF could not be parsed: "):
         UrdfTree.parse("<robot><link name='a'></robot>", "my_arm")
+
+
+# --- input limits -------------------------------------------------------------------------------
+def _laughs(levels: int) -> str:
+    """A URDF whose mesh file name is an internal entity "billion laughs" (10 ** levels lols)."""
+    entities = ['<!ENTITY lol0 "lol">']
+    entities += [f'<!ENTITY lol{i} "{f"&lol{i - 1};" * 10}">' for i in range(1, levels + 1)]
+    return (
+        f'<?xml version="1.0"?>\n<!DOCTYPE robot [\n{chr(10).join(entities)}\n]>\n'
+        f'<robot name="laughs"><link name="base"><visual><geometry><mesh filename="&lol{levels};"/>'
+        "</geometry></visual></link></robot>"
+    )
+
+
+def test_a_description_with_more_links_than_the_limit_is_one_line_before_pinocchio(tmp_path):
+    urdf = tmp_path / "chain.urdf"
+    urdf.write_text(chain_urdf(1000))
+    config = tmp_path / "chain.yaml"
+    config.write_text("urdf: chain.urdf\ncamera_frame: l999\n")
+    start = time.process_time()
+    with pytest.raises(ModelError) as caught:
+        load_model(config)
+    assert time.process_time() - start < 1.0  # ~20 ms: nothing is built
+    assert str(caught.value) == (
+        f"chain: 1000 <link> elements, over the limit of {MAX_URDF_LINKS} for a robot description"
+    )
+    assert UrdfTree.parse(chain_urdf(MAX_URDF_LINKS)).link_names[-1] == f"l{MAX_URDF_LINKS - 1}"
+    many_joints = URDF.replace("</robot>", '<joint name="j2"/>' * MAX_URDF_LINKS + "</robot>")
+    with pytest.raises(ModelError, match=rf"{MAX_URDF_LINKS + 2} <joint> elements, over the"):
+        UrdfTree.parse(many_joints)
+
+
+def test_a_description_over_the_size_limit_is_one_line(tmp_path):
+    padded = URDF.replace("<robot ", "<robot " + " " * MAX_URDF_BYTES, 1)
+    with pytest.raises(ModelError, match="bytes of robot description, over the limit of"):
+        UrdfTree.parse(padded, "my_arm")
+    urdf = tmp_path / "big.urdf"
+    urdf.write_text(padded)
+    size = urdf.stat().st_size
+    with pytest.raises(ModelError) as caught:
+        read_description(urdf)
+    assert str(caught.value) == (
+        f"{urdf}: {size} bytes of robot description, over the limit of {MAX_URDF_BYTES}"
+    )
+
+
+def test_an_entity_billion_laughs_is_one_line_and_small_entities_are_expanded():
+    start = time.process_time()
+    with pytest.raises(ModelError) as caught:
+        UrdfTree.parse(_laughs(9), "laughs")  # 3 GB once expanded
+    assert time.process_time() - start < 2.0  # expat stops at its amplification limit
+    message = str(caught.value)
+    assert message.startswith("laughs: URDF could not be parsed: limit on input amplification")
+    assert "\n" not in message
+    tree = UrdfTree.parse(_laughs(2))
+    assert tree.links[0].find("visual/geometry/mesh").get("filename") == "lol" * 100

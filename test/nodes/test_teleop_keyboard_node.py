@@ -7,11 +7,14 @@ from __future__ import annotations
 
 import itertools
 import os
+import pty
 import shlex
 import shutil
 import subprocess
 import sys
+import termios
 import time
+import tty
 import uuid
 from collections.abc import Callable
 from pathlib import Path
@@ -22,6 +25,7 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.qos import QoSProfile
 
 from rns_ros.harness import ros_environment
+from rns_ros.nodes.teleop_keyboard import RawTerminal, TerminalError, check_terminal
 from rns_ros.nodes.teleop_keyboard_parameters import PARAMETERS
 
 REPO = Path(__file__).resolve().parents[2]
@@ -442,6 +446,88 @@ def test_without_a_terminal_it_exits_2_with_a_clear_message(ros):
     assert result.returncode == 2
     assert "stdin is not a terminal" in result.stderr
     assert "Traceback" not in result.stderr + result.stdout
+
+
+#: Runs argv[1:] in a background process group of a fresh session whose controlling terminal is
+#: stdin (a pty): as `rns_teleop_keyboard &` from an interactive shell. Exits with the child's
+#: code, or 99 if the child was stopped (SIGTTOU: the terminal's mode changed from the background).
+_IN_THE_BACKGROUND = """
+import fcntl, os, subprocess, sys, termios, time
+fcntl.ioctl(0, termios.TIOCSCTTY, 0)
+child = subprocess.Popen(sys.argv[1:], process_group=0)
+deadline = time.monotonic() + 50.0
+while time.monotonic() < deadline:
+    pid, status = os.waitpid(child.pid, os.WUNTRACED | os.WNOHANG)
+    if pid and os.WIFSTOPPED(status):
+        child.kill()
+        sys.exit(99)
+    if pid:
+        sys.exit(os.waitstatus_to_exitcode(status))
+    time.sleep(0.05)
+child.kill()
+sys.exit(98)
+"""
+
+
+def test_in_the_background_of_its_terminal_it_exits_2_in_one_line(ros):
+    master, slave = pty.openpty()
+    try:
+        result = subprocess.run(
+            [sys.executable, "-c", _IN_THE_BACKGROUND, *COMMAND[:3]],
+            stdin=slave,
+            stdout=slave,
+            stderr=subprocess.PIPE,
+            env=ros_environment(ros.domain_id),
+            cwd=REPO,
+            text=True,
+            timeout=60,
+            start_new_session=True,
+        )
+    finally:
+        os.close(slave)
+        os.close(master)
+    assert result.returncode == 2, result.stderr[-3000:]
+    assert "Traceback" not in result.stderr
+    assert result.stderr.splitlines() == [
+        "rns_teleop_keyboard: this process is in the background of its terminal (started with "
+        "&, or moved there with bg); run it in the foreground of an interactive terminal"
+    ]
+
+
+def test_check_terminal_refuses_a_pipe_and_takes_a_terminal_it_does_not_control():
+    read_end, write_end = os.pipe()
+    master, slave = pty.openpty()
+    try:
+        with pytest.raises(TerminalError, match=r"^stdin is not a terminal; "):
+            check_terminal(read_end)
+        with pytest.raises(TerminalError, match=r"^stdin is not a terminal; "):
+            check_terminal(-1)
+        check_terminal(slave)  # not this process's controlling terminal: no job control
+    finally:
+        for fd in (read_end, write_end, master, slave):
+            os.close(fd)
+
+
+def test_a_terminal_refusing_key_mode_is_one_line_and_left_as_it_was(monkeypatch):
+    """tcsetattr fails with EIO in an orphaned background process group."""
+
+    def refuse(*_args):
+        raise termios.error(5, "Input/output error")
+
+    master, slave = pty.openpty()
+    try:
+        before = termios.tcgetattr(slave)
+        monkeypatch.setattr(tty, "setcbreak", refuse)
+        with pytest.raises(TerminalError) as caught, RawTerminal(slave, master):
+            pass
+        assert str(caught.value) == (
+            "cannot put the terminal into key mode: Input/output error; run it in the "
+            "foreground of an interactive terminal"
+        )
+        assert termios.tcgetattr(slave) == before
+    finally:
+        os.close(slave)
+        os.close(master)
 
 
 def test_bad_parameter_is_one_line_and_exit_2(ros):

@@ -11,12 +11,13 @@ rclpy: about 0.4 s of imports), so it imports nothing beyond the standard librar
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import re
 import signal
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 #: ROS 2 domain IDs accepted here (the range that maps to valid UDP ports on every platform).
@@ -107,6 +108,45 @@ def restore_default_interrupt() -> None:
     """Give Ctrl-C back to Python (KeyboardInterrupt) once main() is ready to catch it."""
     if signal.getsignal(signal.SIGINT) is _record_startup_signal:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A stop asked for by a signal (SIGTERM; Ctrl-C raises KeyboardInterrupt itself), as an
+    exception that unwinds like Ctrl-C: ``signum``, and the shell's exit code 128 + signum."""
+
+    def __init__(self, signum: int = signal.SIGINT) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def interrupt_exit_code(error: KeyboardInterrupt) -> int:
+    """128 + the signal number: 130 for Ctrl-C, 143 for SIGTERM."""
+    return 128 + getattr(error, "signum", signal.SIGINT)
+
+
+def raise_on_sigterm() -> None:
+    """Let SIGTERM unwind the main thread as Ctrl-C does (:class:`Interrupted`), so ``finally``
+    blocks close what is open (files, child processes) instead of the process just ending."""
+
+    def interrupted(signum: int, _frame) -> None:
+        raise Interrupted(signum)
+
+    signal.signal(signal.SIGTERM, interrupted)
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM until the block ends (main thread only; elsewhere a no-op): a
+    Ctrl-C raised in the middle of the block (a file record half written) arrives right after
+    it instead."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def output_file_problem(path: Path) -> str | None:

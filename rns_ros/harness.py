@@ -54,7 +54,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.task import Future
 
 from rns_ros.cli import DOMAIN_ID_RANGE, one_line
@@ -126,14 +126,16 @@ def _domain(domain_id: int | None) -> int:
 
 
 class TopicLog:
-    """Every message of one topic with its receipt time (monotonic [s]).
+    """Every message of one topic with its receipt time (monotonic [s]); ``msg_type``: the
+    message class (None: not known).
 
-    A raw log (``msg_type`` given, :meth:`Harness.record` with ``raw=True``) keeps the serialized
+    A raw log (:meth:`Harness.record` with ``raw=True``) keeps the serialized
     messages and deserializes them on first use of :attr:`messages`: recording costs no Python
     message per sample, which in a fast lockstep run is CPU the stack under test needs.
     :meth:`latest_stamp` reads a raw message's header stamp without deserializing it. Bytes
     that are not a message of the type (anyone on the domain may send them) are dropped and
-    counted in :attr:`rejected`.
+    counted in :attr:`rejected`. :meth:`tap` hands each message on as it arrives (a recording
+    written during the run).
     """
 
     def __init__(self, topic: str, msg_type: type | None = None) -> None:
@@ -143,14 +145,28 @@ class TopicLog:
         self._raw: list[bytes] = []  # serialized, received after every one in _messages
         self.received: list[float] = []
         self.rejected = 0  # raw messages that did not deserialize (dropped)
+        self._tap: Callable[[bytes, float], None] | None = None
 
     def _append(self, msg) -> None:
         self._messages.append(msg)
         self.received.append(time.monotonic())
+        if self._tap is not None:
+            self._tap(serialize_message(msg), self.received[-1])
 
     def _append_raw(self, data: bytes) -> None:
         self._raw.append(data)
         self.received.append(time.monotonic())
+        if self._tap is not None:
+            self._tap(data, self.received[-1])
+
+    def tap(self, sink: Callable[[bytes, float], None]) -> None:
+        """Hand every message to ``sink(serialized bytes, receipt time [s, monotonic])``: those
+        logged so far at once, in receipt order, then each as it arrives (in the executor's
+        thread). Raw bytes go on as received, undecoded."""
+        logged = [serialize_message(msg) for msg in self._messages] + list(self._raw)
+        for data, received in zip(logged, self.received, strict=True):
+            sink(data, received)
+        self._tap = sink
 
     @property
     def messages(self) -> list[Any]:
@@ -280,6 +296,8 @@ class Harness:
         self.nodes: list[Node] = []
         self._probe: Node | None = None
         self._never = Future()  # spin_until_future_complete on it: spin for a time in one call
+        #: called with each log :meth:`record` makes from then on (e.g. ``McapRecording.add``)
+        self.on_record: list[Callable[[TopicLog], None]] = []
 
     # --- composition ----------------------------------------------------------------------------
     def add(
@@ -328,14 +346,15 @@ class Harness:
     def record(
         self, msg_type, topic: str, qos: QoSProfile = RECORD_QOS, *, raw: bool = False
     ) -> TopicLog:
-        """Start recording ``topic`` now; returns the growing :class:`TopicLog`. ``raw``: keep
-        the serialized messages and deserialize them when the log is read (cheaper while the
-        stack runs)."""
+        """Start recording ``topic`` now; returns the growing :class:`TopicLog`, handed first to
+        each of :attr:`on_record`. ``raw``: keep the serialized messages and deserialize them
+        when the log is read (cheaper while the stack runs)."""
+        log = TopicLog(topic, msg_type)
+        for hook in self.on_record:  # before the subscription: from the first message
+            hook(log)
         if raw:
-            log = TopicLog(topic, msg_type)
             self.probe().create_subscription(msg_type, topic, log._append_raw, qos, raw=True)
         else:
-            log = TopicLog(topic)
             self.probe().create_subscription(msg_type, topic, log._append, qos)
         return log
 

@@ -12,18 +12,32 @@ from pathlib import Path
 PACKAGE = "rns_ros"
 
 
-def config_dir() -> Path:
-    """The ``config`` folder: ``share/rns_ros/config`` of an install, else the source tree's."""
-    candidates = []
+def share_folders(package: str) -> list[Path]:
+    """Where ``share/<package>`` may be, in the order looked in: the ament index's (a Jazzy
+    install, or a colcon workspace sourced: needs ``AMENT_PREFIX_PATH``), then the running
+    Python environment's prefix (the PyPI wheels and ``pip install`` put the interface packages'
+    ``.msg`` files and this package's data there). Folders that do not exist are left out; a
+    console script run from the venv's ``bin/`` with nothing else set finds the second."""
+    found = []
     try:
         from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
-
-        # not installed, or no AMENT_PREFIX_PATH: fall through to the other candidates
-        with contextlib.suppress(PackageNotFoundError, OSError):
-            candidates.append(Path(get_package_share_directory(PACKAGE)) / "config")
     except ImportError:  # plain Python install without the ament index
         pass
-    candidates.append(Path(sys.prefix) / "share" / PACKAGE / "config")
+    else:
+        # not in the index, or no AMENT_PREFIX_PATH (OSError): the prefix's folder below
+        with contextlib.suppress(PackageNotFoundError, OSError, ValueError):
+            found.append(Path(get_package_share_directory(package)))
+    found.append(Path(sys.prefix) / "share" / package)
+    unique = []
+    for folder in found:
+        if folder.is_dir() and folder not in unique:
+            unique.append(folder)
+    return unique
+
+
+def config_dir() -> Path:
+    """The ``config`` folder: ``share/rns_ros/config`` of an install, else the source tree's."""
+    candidates = [folder / "config" for folder in share_folders(PACKAGE)]
     candidates.append(Path(__file__).resolve().parent.parent / "config")
     for candidate in candidates:
         if (candidate / "model.yaml").is_file():

@@ -23,7 +23,7 @@ ALLOWED = {
     "cli": {"core"},
     "resources": {"core"},
     "analysis": {"core", "control", "sim", "resources"},
-    "viz": {"core", "control", "sim"},
+    "viz": {"core", "control", "sim", "resources"},
     "harness": {"core", "cli", "resources"},
     "keyboard": {"core", "control"},
     "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard"},

@@ -24,17 +24,20 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import sys
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from rns_ros.analysis.arm_feasibility import arm_feasibility
 from rns_ros.cli import (
     add_domain_id_argument,
+    interrupt_exit_code,
     one_line,
     output_file_problem,
     output_folder_problem,
+    raise_on_sigterm,
     run_main,
     split_ros_args,
 )
@@ -228,13 +231,49 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Exit code 2 with one line on stderr for bad options or configuration; 0 after Ctrl-C."""
+    """Exit code 2 with one line on stderr for bad options or configuration; Ctrl-C (or
+    SIGTERM) once the runs started: the figures so far, the recordings closed, one line, exit
+    code 130 (143); during the imports: 0."""
     return run_main("rns_demo", lambda: _main(argv))
 
 
 def _main(argv: list[str] | None) -> int:
     args = parse_args(argv)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    raise_on_sigterm()
+    try:
+        return _scenario_runs(args)
+    except KeyboardInterrupt as exc:  # outside a method's run (claiming the domain, loading)
+        print(f"rns_demo: {_interrupt_text(exc)} before a run started", file=sys.stderr)
+        return interrupt_exit_code(exc)
+
+
+def _interrupt_text(error: KeyboardInterrupt) -> str:
+    signum = getattr(error, "signum", signal.SIGINT)
+    return "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {error}"
+
+
+@dataclass
+class Outcome:
+    """What a demo's runs came to besides their rows' figures."""
+
+    #: a method that did not finish its task (failed, or ended early): the method and why
+    unfinished: list[str] = field(default_factory=list)
+    #: a recording that could not be written (removed): why, one line each
+    unwritten: list[str] = field(default_factory=list)
+    #: the Ctrl-C / SIGTERM that stopped the runs, None when none did
+    interruption: KeyboardInterrupt | None = None
+
+    @property
+    def exit_code(self) -> int:
+        """128 + signal after an interruption, else 2 for an unfinished method, else 1 for a
+        lost recording, else 0."""
+        if self.interruption is not None:
+            return interrupt_exit_code(self.interruption)
+        return 2 if self.unfinished else 1 if self.unwritten else 0
+
+
+def _scenario_runs(args: argparse.Namespace) -> int:
     if args.scenario in PTP_SCENARIOS:
         return _claimed(args, lambda: _main_ptp(args, PTP_SCENARIOS[args.scenario]))
     if is_contact_scenario(args.scenario):
@@ -280,21 +319,22 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
         f"ROS domain {args.domain_id} (localhost only)\n",
         flush=True,
     )
-    runs, failures = [], []
+    runs, outcome = [], Outcome()
     for run in range(args.runs):
         label = f" (run {run + 1} of {args.runs})" if args.runs > 1 else ""
         rows = _run_methods(
-            args, lambda method: run_method(method, args, scenario_file), failures, label
+            args, lambda method: run_method(method, args, scenario_file), outcome, label
         )
-        if rows is None:
-            return 2
-        runs.append(rows)
-        if failures:
+        if rows:
+            runs.append(rows)
+        if outcome.unfinished or outcome.interruption is not None or not rows:
             break  # the figures so far; further runs would only repeat the failure
+    if not runs:
+        return _nothing_to_report(outcome)
+    complete = len(runs) > 1 and not outcome.unfinished and outcome.interruption is None
     table = format_table(runs[-1])
-    if len(runs) > 1 and not failures:
+    if complete:
         table += "\n\n" + format_spread(runs)
-    ended = [f"{row.method}: {row.ended}" for row in runs[-1] if row.ended]
     notes = camera_notes(runs[-1], singular_threshold(scenario), float(min(robot.velocity_limits)))
     return _report(
         args,
@@ -304,26 +344,51 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
         "".join(f"note: {line}\n" for line in notes)
         + f"ETS-VII allowed base attitude deviation: ±{ETS_VII_ALLOWED_DEVIATION_DEG} deg.",
         inspection_summary(runs),
-        failures + ended,
+        outcome,
     )
 
 
 def _run_methods(
-    args: argparse.Namespace, run: Callable, failures: list[str], label: str = ""
-) -> list | None:
+    args: argparse.Namespace, run: Callable, outcome: Outcome, label: str = ""
+) -> list:
     """``run(method)`` for each of ``--methods`` in turn, announced (``label`` after the method);
     a run whose recording came out partial is run again (up to PARTIAL_RETRIES times). A
-    method that fails is said at once on stderr and added to ``failures`` (one line); the
-    others still run. The rows of the methods that completed; None when none did."""
+    method that fails is said at once on stderr and added to ``outcome.unfinished`` (one line);
+    the others still run. Ctrl-C or SIGTERM ends the runs (``outcome.interruption``), with the
+    interrupted run's figures so far where it kept them. The rows of the methods that ran."""
     rows = []
     for method in args.methods:
         print(f"running {method}{label} ...", flush=True)
         try:
-            rows.append(_run_complete(run, method))
+            row = _run_complete(run, method)
         except RnsError as exc:
-            failures.append(one_line(exc))
-            print(f"rns_demo: {failures[-1]}", file=sys.stderr, flush=True)
-    return rows or None
+            outcome.unfinished.append(one_line(exc))
+            print(f"rns_demo: {outcome.unfinished[-1]}", file=sys.stderr, flush=True)
+            continue
+        except KeyboardInterrupt as exc:
+            outcome.interruption = exc
+            kept = getattr(exc, "row", None)
+            outcome.unwritten += getattr(exc, "unwritten", [])
+            if kept is not None:
+                rows.append(kept)
+            else:
+                outcome.unfinished.append(
+                    f"{method}: {_interrupt_text(exc)}; no figures of this run"
+                )
+            break
+        rows.append(row)
+        outcome.unwritten += list(getattr(row, "unwritten", ()))
+    return rows
+
+
+def _nothing_to_report(outcome: Outcome) -> int:
+    """No method produced figures: the lines already said why; one more after an interruption
+    or a lost recording."""
+    for line in outcome.unwritten:
+        print(f"rns_demo: {line}", file=sys.stderr)
+    if outcome.interruption is not None:
+        print(f"rns_demo: {_interrupt_text(outcome.interruption)}: no figures", file=sys.stderr)
+    return outcome.exit_code or 2
 
 
 def _run_complete(run: Callable, method: str):
@@ -340,18 +405,13 @@ def _run_complete(run: Callable, method: str):
 
 
 def _report(
-    args,
-    rows,
-    table: str,
-    problems: list[str],
-    epilogue: str,
-    summary: list,
-    unfinished: list[str] = (),
+    args, rows, table: str, problems: list[str], epilogue: str, summary: list, outcome: Outcome
 ) -> int:
     """The end of every demo: the table; exit 1 on non-finite figures (a run that produced NaN
     / inf failed, whatever the table shows); else the epilogue, the recordings and the JSON
-    ``summary`` to ``--summary``; then, exit 2, one line per method that did not finish its
-    task (``unfinished``: the method and why), whose figures above are those so far."""
+    ``summary`` to ``--summary``; then one line per method that did not finish its task (the
+    method and why; its figures above are those so far), per recording that could not be
+    written, and for an interruption; the exit code :attr:`Outcome.exit_code`."""
     print()
     print(table)
     if problems:
@@ -367,14 +427,23 @@ def _report(
     if args.summary:
         try:
             args.summary.write_text(json.dumps(summary, indent=2) + "\n")
-        except OSError as exc:  # checked at start-up; the folder went away meanwhile
+        except OSError as exc:  # checked at start-up; the folder went away, the disk filled
             print(f"rns_demo: cannot write --summary {str(args.summary)!r}: {exc.strerror}",
                   file=sys.stderr)  # fmt: skip
             return 2
         print(f"summary written to {args.summary}")
-    for line in unfinished:
+    outcome.unfinished += [line for row in rows if (line := row_ended(row))]
+    for line in outcome.unfinished + outcome.unwritten:
         print(f"rns_demo: {line}", file=sys.stderr)
-    return 2 if unfinished else 0
+    if outcome.interruption is not None:
+        print(f"rns_demo: {_interrupt_text(outcome.interruption)}", file=sys.stderr)
+    return outcome.exit_code
+
+
+def row_ended(row) -> str | None:
+    """``method: why`` for a row whose run ended before its task's end, else None."""
+    ended = getattr(row, "ended", None)
+    return f"{row.method}: {ended}" if ended else None
 
 
 def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
@@ -385,10 +454,10 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
         "(localhost only)\n",
         flush=True,
     )
-    failures: list[str] = []
-    rows = _run_methods(args, lambda method: run_ptp_method(method, scenario, args), failures)
-    if rows is None:
-        return 2
+    outcome = Outcome()
+    rows = _run_methods(args, lambda method: run_ptp_method(method, scenario, args), outcome)
+    if not rows:
+        return _nothing_to_report(outcome)
     return _report(
         args,
         rows,
@@ -397,7 +466,7 @@ def _main_ptp(args: argparse.Namespace, scenario: PtpScenario) -> int:
         "ratio: max base deviation / that of the 3-phase method. The thesis' arm geometry is "
         "not printed (ours is identified, docs/arm_identification.md): compare the ranking.",
         [asdict(row) for row in rows],
-        failures,
+        outcome,
     )
 
 
@@ -409,12 +478,12 @@ def _main_contact(args: argparse.Namespace) -> int:
         f"{args.domain_id} (localhost only)\n",
         flush=True,
     )
-    failures: list[str] = []
+    outcome = Outcome()
     rows = _run_methods(
-        args, lambda method: run_contact_method(method, args.scenario, args), failures
+        args, lambda method: run_contact_method(method, args.scenario, args), outcome
     )
-    if rows is None:
-        return 2
+    if not rows:
+        return _nothing_to_report(outcome)
     return _report(
         args,
         rows,
@@ -422,7 +491,7 @@ def _main_contact(args: argparse.Namespace) -> int:
         non_finite_figures(rows),
         contact_epilogue(args.scenario),
         contact_summary(rows),
-        failures,
+        outcome,
     )
 
 

@@ -315,9 +315,12 @@ class RerunLoggerNode(Node):
             counts = ", ".join(f"{key} {value}" for key, value in recorder.counts.items())
             # The logging context may already be shut down (Ctrl-C): the file is closed anyway.
             with contextlib.suppress(Exception):
-                self.get_logger().info(
-                    f"recording closed ({counts} messages): {recorder.sink.description}"
-                )
+                if recorder.problem is not None:
+                    self.get_logger().error(f"recording lost: {recorder.problem}")
+                else:
+                    self.get_logger().info(
+                        f"recording closed ({counts} messages): {recorder.sink.description}"
+                    )
         super().destroy_node()
 
 

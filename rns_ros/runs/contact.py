@@ -46,8 +46,8 @@ from rns_ros.core import ConfigError, RnsError
 from rns_ros.core.contact_geometry import ArcConstraint
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
-from rns_ros.runs.logger import start_logger
-from rns_ros.runs.mcap_recording import record_mcap
+from rns_ros.runs.logger import rrd_lost, start_logger
+from rns_ros.runs.mcap_recording import open_mcap
 from rns_ros.runs.recorded import latest_status_values
 
 #: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
@@ -120,6 +120,8 @@ class ContactDemoRow:
     wall_time_s: float
     recording: str | None
     mcap: str | None = None
+    #: a recording of the run that could not be written (the file removed): why, one line each
+    unwritten: tuple[str, ...] = ()
 
     def checked_figures(self) -> dict[str, float]:
         """Every figure that must be finite, by name: the recorded run's and the loop's."""
@@ -184,14 +186,16 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
     with (
         ProcessStack(args.domain_id) as processes,
         Harness(args.domain_id, args.ros_args) as stack,
+        open_mcap(args, f"{scenario.name}_{method}", stack.probe().resolve_topic_name) as mcap_file,
     ):
+        stack.on_record.append(mcap_file.add)  # each recorded topic, written as it arrives
         joints = stack.record(JointState, "joint_states")
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)
         setpoints = stack.record(WrenchStamped, "force_setpoint")
         # the operator starts once the controller and this process subscribe to both of its
         # topics (OPERATOR_SUBSCRIBERS): its first force setpoint is the task's start
-        twists = stack.record(TwistStamped, "cmd_twist", raw=True)
+        stack.record(TwistStamped, "cmd_twist", raw=True)
         recording, _ = start_logger(
             processes, f"{scenario.name}_{method}", args, model_config, ros_args=ros_args
         )
@@ -229,12 +233,8 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
                 f"{label}: the scenario did not finish within {budget:.0f} s (controller state "
                 f"{values.get('state')}){processes.exit_report()}"
             )
-        mcap = record_mcap(
-            args,
-            f"{scenario.name}_{method}",
-            [joints, errors, status, setpoints, twists],
-            stack.probe().resolve_topic_name,
-        )
+        mcap = mcap_file.close()
+    lost = rrd_lost(recording)
     _check_states(label, states, values)
     figures = _figures(label, errors, joints, setpoints, scenario)
     return ContactDemoRow(
@@ -247,8 +247,9 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
         step_time_p99_us=float(values.get("step_time_p99_us", "nan")),
         final_state=values.get("state", "unknown"),
         wall_time_s=wall,
-        recording=recording,
+        recording=None if lost else recording,
         mcap=mcap,
+        unwritten=tuple(problem for problem in (mcap_file.problem, lost) if problem),
     )
 
 

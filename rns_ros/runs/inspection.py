@@ -26,6 +26,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
 from rns_ros.analysis.recorded_run import RunFigures, run_figures
+from rns_ros.cli import signals_held
 from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import FreeFloatingModel, RnsError, load_model
 from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
@@ -33,10 +34,11 @@ from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
-from rns_ros.runs.logger import start_logger
-from rns_ros.runs.mcap_recording import record_mcap
+from rns_ros.runs.logger import rrd_lost, start_logger
+from rns_ros.runs.mcap_recording import open_mcap
 from rns_ros.runs.recorded import (
     EnergyFigures,
+    InterruptedRun,
     PartialRecordingError,
     energy_figures,
     latest_status_values,
@@ -73,8 +75,10 @@ class DemoRow:
     task_wall_s: float | None = None
     task_sim_s: float | None = None
     mcap: str | None = None
-    #: why the run ended before the task's end (a joint at its limit), None when it did not
+    #: why the run ended before the task's end (a joint at its limit, Ctrl-C), None when it did not
     ended: str | None = None
+    #: a recording of the run that could not be written (the file removed): why, one line each
+    unwritten: tuple[str, ...] = ()
 
     @property
     def real_time_factor(self) -> float | None:
@@ -181,10 +185,13 @@ def run_method(
     wheels = method.endswith(WHEELS_SUFFIX)
     ros_args = list(args.ros_args[1:]) if args.ros_args else []
     start = time.perf_counter()
+    interrupted: KeyboardInterrupt | None = None
     with (
         ProcessStack(args.domain_id) as processes,
         Harness(args.domain_id, args.ros_args, executor="events") as stack,
+        open_mcap(args, method, stack.probe().resolve_topic_name) as mcap_file,
     ):
+        stack.on_record.append(mcap_file.add)  # each recorded topic, written as it arrives
         # serialized, read after the run: this process then costs the stack little CPU
         streams = {
             "joints": stack.record(JointState, "joint_states", raw=True),
@@ -196,69 +203,127 @@ def run_method(
         recording, logger = start_logger(
             processes, method, args, model_config, sim_time=sim_time, ros_args=ros_args
         )
-        listeners = _start_nodes(
-            processes,
-            method,
-            args,
-            scenario,
-            scenario_file,
-            logger is not None,
-            ros_args,
-            model_config,
-        )
-        # the task only once the robot runs and this process and the logger record it (a
-        # recorder matched late would miss the start of the task): the operator counts this
-        # subscription among its min_subscribers
-        awaited = None
-        if sim_time and args.output_lead:
-            awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
-        _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
-        task, end, task_wall, limited = _run_task(stack, processes, streams, scenario, args, method)
-        # stopped before the recorded messages are read: in lockstep the stack would go on
-        # stepping as fast as it can meanwhile, competing with this process for the cores
-        processes.stop()  # the logger writes its summary line as it closes the recording
-        # from just before the task: the robot is at rest until the first command, and a
-        # recorder (the logger) matched a moment after the first state then has all of it
-        data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
-        if data["times"][0] > task:  # the deviations count from the first recorded state
-            # this process matched late (the operator may count a subscriber of a run just
-            # ended): the run itself is repeatable
-            raise PartialRecordingError(
-                f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
-                f"the operator's profile started at {task:.3f} s"
+        try:
+            listeners = _start_nodes(
+                processes,
+                method,
+                args,
+                scenario,
+                scenario_file,
+                logger is not None,
+                ros_args,
+                model_config,
             )
-        _check_complete(data, method, sim_time)
-        mcap = record_mcap(
-            args,
-            method,
-            [*streams.values(), *([awaited] if awaited is not None else [])],
-            stack.probe().resolve_topic_name,
-        )
-        energy = energy_figures(
-            streams["energy"], streams["attitude"] if wheels else None, until=end
-        )
-        for line in processes.problems():  # a watchdog that stopped the arm, a rejection
-            print(f"  {line}", flush=True)
-        if logger is not None:
-            closed = [
-                line for line in processes.output(logger).splitlines() if LOGGER_CLOSED_LINE in line
-            ]
-            print("\n".join(closed[-1:]), flush=True)
+            # the task only once the robot runs and this process and the logger record it (a
+            # recorder matched late would miss the start of the task): the operator counts
+            # this subscription among its min_subscribers
+            awaited = None
+            if sim_time and args.output_lead:
+                awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
+            _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
+            task, end, task_wall, limited = _run_task(
+                stack, processes, streams, scenario, args, method
+            )
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the figures so far, then stop
+            interrupted = exc
+            task, end, task_wall, limited = _task_so_far(streams, scenario), None, None, False
+        with signals_held():  # a second Ctrl-C does not cut the recordings' closing short
+            # stopped before the recorded messages are read: in lockstep the stack would go
+            # on stepping as fast as it can meanwhile, competing with this process for cores
+            processes.stop()  # the logger writes its summary line as it closes the recording
+            if interrupted is None:
+                data = _task_arrays(streams, task, end, method, sim_time)
+            else:
+                data, end = _arrays_so_far(streams, task)
+            energy = None
+            if data is not None:
+                attitude = streams["attitude"] if wheels else None
+                energy = energy_figures(streams["energy"], attitude, until=end)
+            for line in processes.problems():  # a watchdog that stopped the arm, a rejection
+                print(f"  {line}", flush=True)
+            if logger is not None:
+                closed = [
+                    line
+                    for line in processes.output(logger).splitlines()
+                    if LOGGER_CLOSED_LINE in line  # a lost recording is among the problems
+                ]
+                print("\n".join(closed[-1:]), flush=True)
+            mcap = mcap_file.close()
+    lost = rrd_lost(recording)
+    unwritten = [problem for problem in (mcap_file.problem, lost) if problem]
+    if data is None:  # interrupted before the task started: no figures
+        raise InterruptedRun(interrupted, None, unwritten)
     figures = run_figures(robot, scenario, **data, singular_threshold=singular_threshold(scenario))
     ended = None
-    if limited:
+    if interrupted is not None:
+        ended = f"interrupted {end - task:.1f} s into the task (its figures so far)"
+    elif limited:
         ended = limit_cause(robot, data["joint_positions"][-1], data["times"][-1] - task)
-    return DemoRow(
+    row = DemoRow(
         method,
         figures,
         time.perf_counter() - start,
-        recording,
+        None if lost else recording,
         energy,
         task_wall_s=task_wall,
         task_sim_s=end - task,
         mcap=mcap,
         ended=ended,
+        unwritten=tuple(unwritten),
     )
+    if interrupted is not None:
+        raise InterruptedRun(interrupted, row, unwritten)
+    return row
+
+
+def _task_arrays(
+    streams: dict[str, TopicLog], task: float, end: float, method: str, sim_time: bool
+) -> dict[str, np.ndarray]:
+    """The robot's recorded samples of a finished task (from just before its start: the robot
+    is at rest until the first command, and a recorder matched a moment after the first state
+    then has all of it).
+
+    Raises:
+        PartialRecordingError: this process matched late or missed samples (the run itself is
+            repeatable).
+    """
+    data = robot_arrays(streams, until=end, since=task - TASK_MARGIN)
+    if data["times"][0] > task:  # the deviations count from the first recorded state
+        # this process matched late (the operator may count a subscriber of a run just ended)
+        raise PartialRecordingError(
+            f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
+            f"the operator's profile started at {task:.3f} s"
+        )
+    _check_complete(data, method, sim_time)
+    return data
+
+
+def _task_so_far(streams: dict[str, TopicLog], scenario: Scenario) -> float | None:
+    """When the operator's profile started [s], or None when no moving twist was recorded."""
+    commands = streams.get("commands")
+    if commands is None:
+        return None
+    try:
+        return profile_start(commands, scenario, OPERATOR_RATE)
+    except RnsError:
+        return None
+
+
+def _arrays_so_far(
+    streams: dict[str, TopicLog], task: float | None
+) -> tuple[dict[str, np.ndarray] | None, float | None]:
+    """The robot's samples from the task's start to the newest state every stream reached,
+    and that end [s]; (None, None) before the task started or with too few samples."""
+    if task is None:
+        return None, None
+    stamps = [streams[name].latest_stamp() for name in ("joints", "odom", "momentum")]
+    if any(stamp is None for stamp in stamps) or min(stamps) <= task:
+        return None, None
+    end = min(stamps)
+    try:
+        return robot_arrays(streams, until=end, since=task - TASK_MARGIN), end
+    except RnsError:
+        return None, None
 
 
 def singular_threshold(scenario: Scenario) -> float:

@@ -8,6 +8,7 @@ import subprocess
 from pathlib import Path
 
 from rns_ros.harness import Harness, ProcessStack
+from rns_ros.viz.readback import rrd_problem
 
 
 def _recording(args: argparse.Namespace, name: str) -> tuple[Path, str]:
@@ -59,3 +60,15 @@ def add_logger(stack: Harness, name: str, args: argparse.Namespace, timing: dict
         {"sink": sink, "rrd_path": str(path), "recording_name": name, **timing},
     )
     return str(path) if sink == "save" else None
+
+
+def rrd_lost(path: str | None) -> str | None:
+    """Why the saved recording ``path`` is not one a reader can open whole (a full disk, a
+    file-size limit, a logger killed: :func:`rns_ros.viz.readback.rrd_problem`), else None
+    (also for no file: ``--no-record`` or a live viewer)."""
+    if path is None:
+        return None
+    if not Path(path).exists():  # the logger removed what it could not write whole
+        return f"cannot write {path}: rns_rerun_logger could not write it whole (its log says why)"
+    problem = rrd_problem(path)
+    return None if problem is None else f"{path} is not a complete recording: {problem}"

@@ -34,8 +34,8 @@ from rns_ros.harness import Harness, TopicLog
 from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.runs.clock import lockstep
-from rns_ros.runs.logger import add_logger
-from rns_ros.runs.mcap_recording import record_mcap
+from rns_ros.runs.logger import add_logger, rrd_lost
+from rns_ros.runs.mcap_recording import open_mcap
 
 #: rns_ptp methods in Table 4.2 order, with the thesis' labels.
 PTP_METHODS = {
@@ -100,6 +100,8 @@ class PtpDemoRow:
     wall_time_s: float
     recording: str | None
     mcap: str | None = None
+    #: a recording of the run that could not be written (the file removed): why, one line each
+    unwritten: tuple[str, ...] = ()
 
     def checked_figures(self) -> dict[str, float]:
         """Every figure that must be finite, by name (no camera error: 0)."""
@@ -126,7 +128,11 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
     sim_time = lockstep(args)
     timing = {"use_sim_time": True} if sim_time else {}
     start = time.perf_counter()
-    with Harness(args.domain_id, args.ros_args) as stack:
+    with (
+        Harness(args.domain_id, args.ros_args) as stack,
+        open_mcap(args, method, stack.probe().resolve_topic_name) as mcap_file,
+    ):
+        stack.on_record.append(mcap_file.add)  # each recorded topic, written as it arrives
         joints = stack.record(JointState, "joint_states")
         odom = stack.record(Odometry, "base_odom")
         status = stack.record(DiagnosticArray, "rns_ptp/status")
@@ -170,7 +176,8 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
         target = ptp.plan.details.get("camera_target") if ptp.plan is not None else None
         stack.spin_for(SETTLE)
         robot = ptp.robot
-        mcap = record_mcap(args, method, [joints, odom, status], stack.probe().resolve_topic_name)
+        mcap = mcap_file.close()
+    lost = rrd_lost(recording)
     deviation, error, speed = _figures(joints, odom, np.array(scenario.goal))
     camera_error = (
         None if target is None else _camera_error(robot, joints, odom, np.asarray(target))
@@ -185,8 +192,9 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
         fold_reached=final.get("fold_reached", "none"),
         max_joint_speed=speed,
         wall_time_s=time.perf_counter() - start,
-        recording=recording,
+        recording=None if lost else recording,
         mcap=mcap,
+        unwritten=tuple(problem for problem in (mcap_file.problem, lost) if problem),
     )
 
 

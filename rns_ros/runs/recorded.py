@@ -8,6 +8,7 @@ rns_observer); :func:`energy_figures` reads rns_simulator's ``energy`` topic (th
 
 from __future__ import annotations
 
+import signal
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,6 +113,23 @@ def robot_arrays(
 class PartialRecordingError(RnsError):
     """A run's recording misses samples: this process waited for a core longer than DDS held
     them. In lockstep the run itself is complete and repeatable, so it can be run again."""
+
+
+class InterruptedRun(KeyboardInterrupt):
+    """A run stopped by Ctrl-C or SIGTERM once its recordings were closed.
+
+    Attributes:
+        signum: the signal (SIGINT for Ctrl-C).
+        row: the run's figures so far (its ``ended`` says so), None when its task had not
+            started.
+        unwritten: recordings of the run that could not be written, one line each.
+    """
+
+    def __init__(self, cause: KeyboardInterrupt, row, unwritten: list[str]) -> None:
+        super().__init__(str(cause))
+        self.signum = getattr(cause, "signum", signal.SIGINT)
+        self.row = row
+        self.unwritten = list(unwritten)
 
 
 def missed_samples(stamps: np.ndarray) -> int:

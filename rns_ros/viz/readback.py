@@ -8,6 +8,7 @@ batch (one column per timeline and per component).
 
 from __future__ import annotations
 
+import contextlib
 from collections import Counter
 from pathlib import Path
 
@@ -32,6 +33,47 @@ def _reader(path: str | Path) -> RrdReader:
     if not path.is_file():
         raise InputError(f"no recording at {path}")
     return RrdReader(path)
+
+
+def rrd_problem(path: str | Path) -> str | None:
+    """Why the file at ``path`` is not a complete ``.rrd`` (missing, cut short, not rerun's
+    encoding: every chunk is decoded, as ``rerun rrd verify`` does), or None when it is one."""
+    import warnings
+
+    path = Path(path)
+    if not path.is_file():
+        return "the file does not exist"
+    try:
+        with warnings.catch_warnings():  # a file without a footer says so as a warning
+            warnings.simplefilter("ignore")
+            reader = RrdReader(path)
+            for _chunk in reader.stream():
+                pass
+    except (RuntimeError, ValueError, OSError) as exc:
+        return storage_limit(path) or " ".join(str(exc).split()).replace(f" at {path}", "")
+    return None
+
+
+#: Free space [bytes] below which a file cut short is put down to a full disk.
+FULL_DISK_MARGIN = 1 << 20
+
+
+def storage_limit(path: str | Path) -> str | None:
+    """What stopped a file at ``path`` from growing, where this process can tell: the
+    file-size limit of the process (``ulimit -f``) reached, or less than
+    :data:`FULL_DISK_MARGIN` free on its file system; else None."""
+    import os
+    import resource
+
+    path = Path(path)
+    with contextlib.suppress(OSError):
+        limit, _ = resource.getrlimit(resource.RLIMIT_FSIZE)
+        if limit != resource.RLIM_INFINITY and path.is_file() and path.stat().st_size >= limit:
+            return f"the file-size limit (ulimit -f) of {limit} bytes was reached"
+        disk = os.statvfs(path.parent)
+        if disk.f_bavail * disk.f_frsize < FULL_DISK_MARGIN:
+            return "no space left on device"
+    return None
 
 
 def recording_summary(path: str | Path, *, include_static: bool = False) -> dict[str, int]:

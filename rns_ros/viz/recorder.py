@@ -45,6 +45,7 @@ from rns_ros.viz.quantities import (
     Trail,
     achieved_angular_velocity,
 )
+from rns_ros.viz.readback import rrd_problem
 from rns_ros.viz.robot import RobotView
 from rns_ros.viz.sinks import OpenSink, SinkSettings, open_sink
 
@@ -148,6 +149,8 @@ class TelemetryRecorder:
         self.view = RobotView(robot, urdf_path)
         self._lock = threading.Lock()
         self._closed = False
+        #: why a saved recording could not be written whole (it is removed), else None
+        self.problem: str | None = None
         # A private stream with a fresh id: several recorders can live in one process.
         self.rec = rr.RecordingStream(self.settings.application_id, recording_id=uuid.uuid4())
         self.sink: OpenSink = open_sink(self.rec, sink, self._blueprint(), env)
@@ -433,19 +436,29 @@ class TelemetryRecorder:
     def close(self) -> None:
         """Send what is pending, flush, finalize the sink (idempotent).
 
-        For ``save`` the file is complete when this returns; a ``serve`` web viewer is stopped.
+        For ``save`` the file is complete when this returns, or else removed and
+        :attr:`problem` says why (a full disk or a file-size limit stops rerun's file writer:
+        the file is read back whole, as ``rerun rrd verify`` does); a ``serve`` web viewer is
+        stopped.
         """
         with self._lock:
             if self._closed:
                 return
             self._closed = True
+            stopped = None
             try:
                 self._send()
                 self.rec.flush(timeout_sec=FLUSH_TIMEOUT)
+            except RuntimeError as exc:  # "File-writer thread shut down prematurely"
+                stopped = " ".join(str(exc).split())
             finally:
                 # disconnect() finalizes file sinks (writes the footer) and closes connections.
                 self.rec.disconnect()
                 self.sink.close()
+            path = self.sink.rrd_path
+            if path is not None and (problem := rrd_problem(path) or stopped):
+                self.problem = f"cannot write {path}: {problem}; the file is removed"
+                path.unlink(missing_ok=True)
 
     # --- helpers --------------------------------------------------------------------------------
     def _accept(self, stream: str, stamp_ns: int) -> bool:

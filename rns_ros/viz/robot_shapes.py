@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from rns_ros.core.urdf_prep import inertia_matrix
 from rns_ros.core.urdf_tree import UrdfTree
+from rns_ros.resources import share_folders
 
 #: Smallest semi-axis drawn [m]: a flat or needle-like inertia still shows.
 MIN_SEMI_AXIS = 0.005
@@ -81,17 +82,14 @@ def equivalent_ellipsoid(mass: float, inertia) -> tuple[np.ndarray, np.ndarray]:
 
 def resolve_mesh(filename: str, folder: Path) -> Path | None:
     """The file a URDF mesh ``filename`` names, or None where it does not exist on this machine:
-    ``package://<package>/<path>`` in the package's share folder (ament index),
-    ``file://<path>``, or a path relative to the URDF's ``folder``."""
+    ``package://<package>/<path>`` in the package's share folder (ament index, else the
+    Python environment's prefix: :func:`rns_ros.resources.share_folders`), ``file://<path>``,
+    or a path relative to the URDF's ``folder``."""
     if filename.startswith("package://"):
         package, _, rest = filename.removeprefix("package://").partition("/")
-        try:
-            from ament_index_python.packages import get_package_share_directory
-
-            path = Path(get_package_share_directory(package)) / rest
-        except (ImportError, LookupError, ValueError, OSError):
-            return None
-    elif filename.startswith("file://"):
+        found = [share / rest for share in share_folders(package) if (share / rest).is_file()]
+        return found[0] if found else None
+    if filename.startswith("file://"):
         path = Path(filename.removeprefix("file://"))
     else:
         path = folder / filename

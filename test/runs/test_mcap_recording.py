@@ -1,8 +1,16 @@
 """rns_ros.runs.mcap_recording: a run's topics as MCAP (ROS 2 profile, CDR) read back with the
 mcap library and decoded by mcap-ros2-support from the schemas we wrote, as Foxglove and
-PlotJuggler decode them; the schemas are the installed .msg definitions."""
+PlotJuggler decode them; the schemas are the installed .msg definitions. The file grows while
+the run goes on: what a killed process leaves is read back to its last chunk, and a write that
+fails (file-size limit) leaves no file."""
 
 from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+import textwrap
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -14,9 +22,10 @@ from sensor_msgs.msg import JointState
 from rns_ros.harness import TopicLog
 from rns_ros.runs.mcap_recording import (
     SEPARATOR,
+    McapRecording,
+    message_definition,
     msg_dependencies,
     msg_file,
-    write_mcap,
 )
 
 
@@ -51,11 +60,15 @@ def recording(tmp_path):
         _log("base_odom", [odom, odom]),
         _log("rns_ptp/status", [status]),
         _log("cmd_twist", [twist] * 4, raw=True),
-        TopicLog("nothing_arrived"),
     ]
     path = tmp_path / "run.mcap"
-    counts = write_mcap(path, logs, lambda name: "/" + name)
-    return path, counts
+    with McapRecording(path, lambda name: "/" + name) as recording:
+        for log in logs:
+            recording.add(log)
+        recording.add(TopicLog("nothing_arrived", JointState))
+    assert recording.close() == str(path)
+    assert recording.problem is None
+    return path, recording.counts
 
 
 def _read(path):
@@ -76,7 +89,7 @@ def test_topics_and_counts_read_back(recording):
     topics = {c.id: c.topic for c in summary.channels.values()}
     written = {topics[cid]: n for cid, n in summary.statistics.channel_message_counts.items()}
     expected = {"/joint_states": 3, "/base_odom": 2, "/rns_ptp/status": 1, "/cmd_twist": 4}
-    assert written == expected == counts  # an empty log gets no channel
+    assert written == expected == counts  # an empty log has no messages
     assert {c.message_encoding for c in summary.channels.values()} == {"cdr"}
     assert {s.encoding for s in summary.schemas.values()} == {"ros2msg"}
     assert {s.name for s in summary.schemas.values()} == {
@@ -156,3 +169,134 @@ def test_msg_dependencies_skip_comments_constants_and_primitives():
         "float64[<=4] values\n"
     )
     assert msg_dependencies(text, "std_msgs") == ["geometry_msgs/Point", "std_msgs/Header"]
+
+
+class _Clock:
+    """A monotonic clock the test moves [s]."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def _stream_messages(data: bytes) -> list:
+    """Every message record of an MCAP file's bytes, read in order until they end (a file
+    without summary or footer ends in the middle: what ``mcap recover`` salvages)."""
+    import io
+
+    from mcap.exceptions import McapError
+    from mcap.records import Message
+    from mcap.stream_reader import StreamReader
+
+    found = []
+    try:
+        for record in StreamReader(io.BytesIO(data), skip_magic=False).records:
+            if isinstance(record, Message):
+                found.append(record)
+    except (McapError, EOFError):
+        pass
+    return found
+
+
+def test_chunks_reach_the_disk_while_the_run_goes_on(tmp_path):
+    """Before close (a process killed outright leaves exactly this), the file holds every
+    message received before the last flush, each decodable; later ones are in memory."""
+    clock = _Clock()
+    path = tmp_path / "live.mcap"
+    log = TopicLog("joint_states", JointState)
+    recording = McapRecording(path, flush_period=1.0, clock=clock)
+    recording.add(log)
+    for k in range(10):
+        log._append_raw(serialize_message(_joint_state(k)))
+    assert _stream_messages(path.read_bytes()) == []  # within the flush period: in memory
+    clock.now = 1.0
+    log._append_raw(serialize_message(_joint_state(10)))  # the period is over: written
+    for k in range(11, 15):
+        log._append_raw(serialize_message(_joint_state(k)))
+    killed = path.read_bytes()
+    messages = _stream_messages(killed)
+    assert [m.sequence for m in messages] == list(range(11))
+    from rclpy.serialization import deserialize_message
+
+    assert [deserialize_message(m.data, JointState).header.stamp.sec for m in messages] == list(
+        range(11)
+    )
+    assert recording.close() == str(path)
+    assert len(_stream_messages(path.read_bytes())) == 15
+    assert len(path.read_bytes()) > len(killed)
+
+
+def test_messages_logged_before_the_recording_and_a_second_log_of_a_topic(tmp_path):
+    early = _log("joint_states", [_joint_state(k) for k in range(3)], raw=True)
+    again = _log("joint_states", [_joint_state(7)])
+    path = tmp_path / "early.mcap"
+    with McapRecording(path) as recording:
+        recording.add(early)
+        recording.add(again)  # the same topic: left out
+        early._append_raw(serialize_message(_joint_state(3)))
+    assert recording.counts == {"joint_states": 4}
+    assert [m.sequence for m in _stream_messages(path.read_bytes())] == [0, 1, 2, 3]
+
+
+def test_a_log_without_a_type_or_definition_is_refused(tmp_path):
+    from rns_ros.core import RnsError
+
+    with McapRecording(tmp_path / "x.mcap") as recording, pytest.raises(RnsError, match="type"):
+        recording.add(TopicLog("unknown"))
+
+
+def test_a_file_that_cannot_be_opened_is_a_problem_not_an_exception(tmp_path):
+    recording = McapRecording(tmp_path)  # a folder
+    recording.add(_log("joint_states", [_joint_state(0)], raw=True))
+    assert recording.close() is None
+    assert str(tmp_path) in recording.problem
+    assert tmp_path.is_dir()
+
+
+def test_the_file_size_limit_ends_the_recording_and_removes_the_file(tmp_path):
+    """Under ``ulimit -f`` the writes fail (EFBIG; Python ignores SIGXFSZ): the recording stops
+    without an exception, close() claims no file and removes the one it could not finish."""
+    path = tmp_path / "limited.mcap"
+    script = textwrap.dedent(
+        f"""
+        from rclpy.serialization import serialize_message
+        from sensor_msgs.msg import JointState
+        from rns_ros.harness import TopicLog
+        from rns_ros.runs.mcap_recording import McapRecording
+        log = TopicLog("joint_states", JointState)
+        recording = McapRecording({str(path)!r}, flush_period=0.0)
+        recording.add(log)
+        for k in range(2000):
+            log._append_raw(serialize_message(JointState(name=["j"] * 50, position=[k] * 50)))
+        print(recording.close(), recording.problem)
+        """
+    )
+    limit = 64 * 1024
+
+    def limited() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        preexec_fn=limited,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
+    )
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    assert done.stdout.startswith(f"None cannot write {path}: File too large; the file is removed")
+    assert not path.exists()
+
+
+def test_msg_files_are_found_without_the_ament_environment(monkeypatch):
+    """A console script run from the venv's bin/ alone has no AMENT_PREFIX_PATH: the wheels'
+    .msg files are under the environment's prefix."""
+    monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
+    path = msg_file("sensor_msgs/msg/JointState")
+    assert path.is_file()
+    assert path.read_text().startswith("#")
+    assert "MSG: std_msgs/Header" in message_definition("sensor_msgs/msg/JointState")

@@ -379,3 +379,69 @@ def test_energy_and_wheel_series_come_back_by_label(open_recorder):
     assert read_scalars(rrd, paths.energy_cost("c_sum"))[1].tolist() == [12.0]
     assert read_scalars(rrd, paths.WHEEL_SPEED_AXES[2])[1].tolist() == [3.0]
     assert read_scalars(rrd, paths.WHEEL_TORQUE_AXES[2])[1].tolist() == [-0.1]
+
+
+def test_a_file_cut_short_is_not_a_complete_recording(open_recorder, tmp_path):
+    """rrd_problem reads every chunk (as ``rerun rrd verify`` does): a whole file passes, the
+    same bytes cut short or missing do not."""
+    from rns_ros.viz.readback import rrd_problem
+
+    recorder = open_recorder()
+    _feed(recorder, 50)
+    recorder.close()
+    assert recorder.problem is None
+    data = recorder.sink.rrd_path.read_bytes()
+    assert rrd_problem(recorder.sink.rrd_path) is None
+    cut = tmp_path / "cut.rrd"
+    cut.write_bytes(data[: len(data) // 2])
+    assert "exceeds file size" in rrd_problem(cut)
+    assert rrd_problem(tmp_path / "missing.rrd") == "the file does not exist"
+
+
+def test_a_recording_over_the_file_size_limit_is_said_and_removed(tmp_path):
+    """Under ``ulimit -f`` rerun's file writer stops: close() says so, naming the limit, and
+    removes the file it could not finish (no exception, no file claimed)."""
+    import os
+    import resource
+    import subprocess
+    import sys
+    import textwrap
+
+    path = tmp_path / "limited.rrd"
+    script = textwrap.dedent(
+        f"""
+        import numpy as np
+        from rns_ros.core import load_model, load_model_config
+        from rns_ros.resources import default_model_config
+        from rns_ros.viz import RecorderSettings, SinkSettings, TelemetryRecorder
+        robot = load_model(default_model_config())
+        urdf, _ = load_model_config(default_model_config())
+        sink = SinkSettings(kind="save", rrd_path={str(path)!r})
+        recorder = TelemetryRecorder(robot, urdf, sink, RecorderSettings())
+        theta = np.zeros(7)
+        for k in range(20000):
+            recorder.joint_state(k * 10_000_000, theta + 1e-4 * k, np.full(7, 0.1))
+        recorder.close()
+        print(recorder.problem)
+        """
+    )
+    limit = 256 * 1024
+
+    def limited() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        preexec_fn=limited,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr
+    assert done.stdout.strip() == (
+        f"cannot write {path}: the file-size limit (ulimit -f) of {limit} bytes was reached; "
+        "the file is removed"
+    )
+    assert not path.exists()

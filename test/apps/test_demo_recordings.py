@@ -1,0 +1,176 @@
+"""rns_demo as a user's shell runs it: the console script from the venv's bin/ with nothing else
+set, its recordings read back by readers we did not write (the PyPI ``mcap`` reader with the
+ROS 2 decoder, ``rerun rrd verify``), after a complete run, after Ctrl-C mid-task and under a
+file-size limit."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import resource
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from rns_testing import SHORT_ROLL_SCENARIO
+
+pytestmark = pytest.mark.slow
+
+BIN = Path(sys.executable).parent
+DOMAIN = os.environ.get("ROS_DOMAIN_ID", "43")
+
+
+def _clean_env() -> dict[str, str]:
+    """What a new shell has, plus the two variables every DDS test sets: no
+    AMENT_PREFIX_PATH, no venv activation, no PYTHONPATH, no RMW choice."""
+    return {
+        "HOME": os.environ.get("HOME", "/tmp"),
+        "PATH": "/usr/bin:/bin",
+        "LANG": "C.UTF-8",
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+        "ROS_DOMAIN_ID": DOMAIN,
+    }
+
+
+def _demo(folder: Path, *options: str) -> list[str]:
+    scenario = folder / "short.yaml"
+    scenario.write_text(yaml.safe_dump(SHORT_ROLL_SCENARIO))
+    return [str(BIN / "rns_demo"), "--scenario", str(scenario), "--methods", "dls",
+            "--domain-id", DOMAIN, "--output", str(folder / "out"), *options]  # fmt: skip
+
+
+def _decoded(path: Path, topic: str) -> list:
+    """The messages of ``topic`` in the MCAP file, decoded with the PyPI reader and decoder."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    with open(path, "rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        assert reader.get_summary() is not None  # closed: summary and footer written
+        return [msg for *_, msg in reader.iter_decoded_messages(topics=[topic])]
+
+
+def _verified(path: Path) -> bool:
+    """``rerun rrd verify`` (rerun's own CLI) accepts the file."""
+    done = subprocess.run(
+        [str(BIN / "rerun"), "rrd", "verify", str(path)], capture_output=True, timeout=300
+    )
+    return done.returncode == 0
+
+
+def test_the_console_script_alone_prints_its_table_and_writes_a_decodable_mcap(tmp_path):
+    summary = tmp_path / "summary.json"
+    done = subprocess.run(
+        _demo(tmp_path, "--summary", str(summary)),
+        env=_clean_env(),
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "Traceback" not in done.stderr
+    (row,) = json.loads(summary.read_text())
+    mcap = tmp_path / "out" / "dls.mcap"
+    assert f"MCAP recordings (ros2 bag, Foxglove, PlotJuggler): {mcap}" in done.stdout
+    joints = _decoded(mcap, "/joint_states")
+    assert len(joints) >= row["samples"]
+    assert all(len(msg.position) == 7 for msg in joints)
+    assert _verified(tmp_path / "out" / "dls.rrd")
+
+
+def _moving_twists(path: Path) -> int:
+    """Moving cmd_twist messages in the chunks an MCAP file being written holds so far."""
+    from geometry_msgs.msg import TwistStamped
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Message
+    from mcap.stream_reader import StreamReader
+    from rclpy.serialization import deserialize_message
+
+    if not path.is_file():
+        return 0
+    channels, moving = {}, 0
+    try:
+        for record in StreamReader(io.BytesIO(path.read_bytes()), skip_magic=False).records:
+            if isinstance(record, Channel):
+                channels[record.id] = record.topic
+            elif isinstance(record, Message) and channels.get(record.channel_id) == "/cmd_twist":
+                w = deserialize_message(record.data, TwistStamped).twist.angular
+                moving += (w.x, w.y, w.z) != (0.0, 0.0, 0.0)
+    except (McapError, EOFError):
+        pass
+    return moving
+
+
+def test_ctrl_c_mid_task_keeps_the_figures_so_far_and_closes_both_recordings(tmp_path):
+    """Ctrl-C (SIGINT to the terminal's process group) once the MCAP on disk shows the
+    operator's profile moving the arm: the figures so far, one line, exit code 130, an MCAP
+    with the joint states so far and an .rrd that rerun verifies."""
+    scenario = dict(SHORT_ROLL_SCENARIO, duration=60.0, angle_deg=120.0)
+    command = _demo(tmp_path)
+    (tmp_path / "short.yaml").write_text(yaml.safe_dump(scenario))
+    command[2] = str(tmp_path / "long.yaml")
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(scenario))
+    mcap = tmp_path / "out" / "dls.mcap"
+    with open(tmp_path / "demo.log", "w+") as log:
+        demo = subprocess.Popen(
+            command, env=_clean_env(), stdout=log, stderr=subprocess.STDOUT, text=True,
+            start_new_session=True,
+        )  # fmt: skip
+        try:
+            deadline = time.monotonic() + 300.0
+            while _moving_twists(mcap) < 20 and demo.poll() is None:
+                assert time.monotonic() < deadline, "the task never showed in the MCAP"
+                time.sleep(0.5)
+            assert demo.poll() is None, "the demo ended before the Ctrl-C"
+            os.killpg(demo.pid, signal.SIGINT)
+            code = demo.wait(timeout=120)
+        finally:
+            if demo.poll() is None:
+                os.killpg(demo.pid, signal.SIGKILL)
+        log.seek(0)
+        output = log.read()
+    assert code == 130, output[-3000:]
+    assert "Traceback" not in output
+    assert "rns_demo: interrupted (Ctrl-C)" in output
+    assert "rns_demo: dls: interrupted" in output
+    assert "s into the task" in output
+    assert any(line.startswith("dls *") for line in output.splitlines())  # its figures so far
+    joints = _decoded(mcap, "/joint_states")
+    assert len(joints) > 100
+    assert _verified(tmp_path / "out" / "dls.rrd")
+
+
+def test_a_file_size_limit_prints_the_table_and_names_each_file_it_could_not_write(tmp_path):
+    """``ulimit -f`` below the recordings' size: the figures still come, one line per
+    recording that could not be written, exit code 1, and no file is claimed or left."""
+    limit = 512 * 1024
+
+    def limited() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    done = subprocess.run(
+        _demo(tmp_path),
+        env=_clean_env(),
+        capture_output=True,
+        text=True,
+        timeout=600,
+        preexec_fn=limited,
+    )
+    assert done.returncode == 1, done.stderr[-3000:]
+    assert "Traceback" not in done.stderr
+    assert any(line.startswith("dls ") for line in done.stdout.splitlines())  # the table
+    out = tmp_path / "out"
+    lines = [line for line in done.stderr.splitlines() if line.startswith("rns_demo: ")]
+    assert f"rns_demo: cannot write {out / 'dls.rrd'}" in "\n".join(lines)
+    assert "rerun recordings" not in done.stdout  # not claimed, and removed
+    assert not (out / "dls.rrd").exists()
+    if (out / "dls.mcap").exists():  # small enough to fit: then it is whole, and claimed
+        assert "MCAP recordings" in done.stdout
+        assert _decoded(out / "dls.mcap", "/joint_states")
+    else:
+        assert f"rns_demo: cannot write {out / 'dls.mcap'}" in "\n".join(lines)

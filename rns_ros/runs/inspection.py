@@ -175,6 +175,8 @@ def run_method(
 
     Raises:
         RnsError: a node did not start, or the run did not finish in time.
+        InterruptedRun: Ctrl-C or SIGTERM; the recordings are closed, its ``row`` holds the
+            figures so far (None before the task started).
     """
     scenario = load_scenario(scenario_file)
     model_config = str(getattr(args, "model", None) or default_model_config())
@@ -251,9 +253,17 @@ def run_method(
             mcap = mcap_file.close()
     lost = rrd_lost(recording)
     unwritten = [problem for problem in (mcap_file.problem, lost) if problem]
-    if data is None:  # interrupted before the task started: no figures
+    figures = None
+    if data is not None:  # None: interrupted before the task started
+        try:
+            figures = run_figures(
+                robot, scenario, **data, singular_threshold=singular_threshold(scenario)
+            )
+        except RnsError:
+            if interrupted is None:
+                raise  # an interrupted run may have too little to show
+    if figures is None:
         raise InterruptedRun(interrupted, None, unwritten)
-    figures = run_figures(robot, scenario, **data, singular_threshold=singular_threshold(scenario))
     ended = None
     if interrupted is not None:
         ended = f"interrupted {end - task:.1f} s into the task (its figures so far)"

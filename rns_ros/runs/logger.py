@@ -8,7 +8,7 @@ import subprocess
 from pathlib import Path
 
 from rns_ros.harness import Harness, ProcessStack
-from rns_ros.viz.readback import rrd_problem
+from rns_ros.viz.readback import rrd_problem, storage_limit
 
 
 def _recording(args: argparse.Namespace, name: str) -> tuple[Path, str]:
@@ -69,6 +69,7 @@ def rrd_lost(path: str | None) -> str | None:
     if path is None:
         return None
     if not Path(path).exists():  # the logger removed what it could not write whole
-        return f"cannot write {path}: rns_rerun_logger could not write it whole (its log says why)"
+        why = storage_limit(path) or "rns_rerun_logger could not write it whole (its log says why)"
+        return f"cannot write {path}: {why}; the file is removed"
     problem = rrd_problem(path)
     return None if problem is None else f"{path} is not a complete recording: {problem}"

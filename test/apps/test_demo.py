@@ -6,6 +6,7 @@ import json
 import math
 import os
 import re
+import signal
 
 import pytest
 import yaml
@@ -385,3 +386,63 @@ def test_a_constant_rate_scenario_runs_and_its_singular_region_is_said(tmp_path,
     assert row["max_base_deviation_deg"] < 1e-4
     said = r"note: dls: the camera ends [\d.]+ deg off its target: [\d.]+ s in the singular region"
     assert re.search(said, out), out
+
+
+def test_an_interrupted_run_keeps_its_figures_so_far_and_exits_130(monkeypatch, capsys):
+    """Ctrl-C during sc: dls's figures and sc's so far (marked), no conventional run, one
+    line, exit code 128 + SIGINT."""
+    from rns_ros.runs.recorded import InterruptedRun
+
+    ran = []
+
+    def fake_run(method, _args, _file):
+        ran.append(method)
+        if method == "sc":
+            row = DemoRow(method, _figures(), 1.0, None, ended="interrupted 3.0 s into the task")
+            raise InterruptedRun(KeyboardInterrupt(), row, [])
+        return DemoRow(method, _figures(), 1.0, None)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    assert main(["--no-record", "--domain-id", DOMAIN]) == 130
+    assert ran == ["dls", "sc"]
+    out, err = capsys.readouterr()
+    rows = [line.split()[:2] for line in out.splitlines() if line.startswith(("dls", "sc"))]
+    assert rows[-2:] == [["dls", "1.000e-03"], ["sc", "*"]]
+    assert err.splitlines()[-2:] == [
+        "rns_demo: sc: interrupted 3.0 s into the task",
+        "rns_demo: interrupted (Ctrl-C)",
+    ]
+
+
+def test_sigterm_before_a_task_started_exits_143(monkeypatch, capsys):
+    from rns_ros.cli import Interrupted
+    from rns_ros.runs.recorded import InterruptedRun
+
+    def fake_run(method, _args, _file):
+        if method == "sc":
+            raise InterruptedRun(Interrupted(signal.SIGTERM), None, [])
+        return DemoRow(method, _figures(), 1.0, None)
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    assert main(["--no-record", "--domain-id", DOMAIN]) == 128 + signal.SIGTERM
+    out, err = capsys.readouterr()
+    assert any(line.startswith("dls ") for line in out.splitlines())
+    assert err.splitlines()[-2:] == [
+        "rns_demo: sc: stopped by SIGTERM; no figures of this run",
+        "rns_demo: stopped by SIGTERM",
+    ]
+
+
+def test_a_recording_that_could_not_be_written_is_said_and_exits_1(monkeypatch, capsys):
+    lost = "cannot write /x/dls.mcap: No space left on device; the file is removed"
+
+    def fake_run(method, _args, _file):
+        return DemoRow(method, _figures(), 1.0, None, unwritten=(lost,) if method == "dls" else ())
+
+    monkeypatch.setattr(demo, "run_method", fake_run)
+    assert main(["--no-record", "--domain-id", DOMAIN]) == 1
+    out, err = capsys.readouterr()
+    assert [line.split()[0] for line in out.splitlines() if line.startswith(("dls", "sc", "conv"))][
+        -3:
+    ] == ["dls", "sc", "conventional"]
+    assert err.splitlines() == [f"rns_demo: {lost}"]

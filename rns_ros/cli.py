@@ -152,7 +152,13 @@ def signals_held() -> Iterator[None]:
 def output_file_problem(path: Path) -> str | None:
     """Why a file cannot be written at ``path`` (new, or replacing one), or None: checked
     before a long run, so its result is not lost at the end."""
-    path = Path(path)
+    try:
+        return _file_problem(Path(path))
+    except OSError as exc:  # a name too long, a loop of links
+        return f"cannot be written: {exc.strerror or exc}"
+
+
+def _file_problem(path: Path) -> str | None:
     if path.is_dir():
         return "is a folder, not a file"
     folder = path.parent
@@ -165,7 +171,13 @@ def output_file_problem(path: Path) -> str | None:
 
 def output_folder_problem(path: Path) -> str | None:
     """Why ``path`` cannot be an output folder (made with its parents when missing), or None."""
-    path = Path(path)
+    try:
+        return _folder_problem(Path(path))
+    except OSError as exc:  # a name too long, a loop of links
+        return f"cannot be made: {exc.strerror or exc}"
+
+
+def _folder_problem(path: Path) -> str | None:
     existing = path
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
@@ -173,6 +185,18 @@ def output_folder_problem(path: Path) -> str | None:
         return f"cannot be a folder: {str(existing)!r} is a file"
     if not os.access(existing, os.W_OK | os.X_OK):
         return f"cannot be written: {str(existing)!r} is not writable"
+    return None
+
+
+def make_output_folder(path: Path) -> str | None:
+    """Make the output folder ``path`` with its parents now (before a long run, whose results
+    it holds); why it cannot be made, or None."""
+    if problem := output_folder_problem(path):
+        return problem
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # a file system that refuses it (/proc, a name too long, ...)
+        return f"cannot be made: {exc.strerror or exc}"
     return None
 
 

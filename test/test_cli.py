@@ -11,6 +11,7 @@ import pytest
 
 from rns_ros.cli import (
     add_domain_id_argument,
+    make_output_folder,
     output_file_problem,
     output_folder_problem,
     split_ros_args,
@@ -103,6 +104,16 @@ def test_output_folder_problem_allows_new_folders_but_not_below_a_file(tmp_path)
     assert output_folder_problem(blocker) == f"cannot be a folder: {str(blocker)!r} is a file"
     assert output_folder_problem(blocker / "sub") == (
         f"cannot be a folder: {str(blocker)!r} is a file"
+    )
+
+
+def test_make_output_folder_makes_it_or_says_why_not(tmp_path):
+    assert make_output_folder(tmp_path / "a" / "b") is None
+    assert (tmp_path / "a" / "b").is_dir()
+    assert make_output_folder(tmp_path / ("x" * 300)) == "cannot be made: File name too long"
+    (tmp_path / "file").write_text("")
+    assert make_output_folder(tmp_path / "file" / "sub") == (
+        f"cannot be a folder: {str(tmp_path / 'file')!r} is a file"
     )
 
 

@@ -34,9 +34,9 @@ from rns_ros.analysis.arm_feasibility import arm_feasibility
 from rns_ros.cli import (
     add_domain_id_argument,
     interrupt_exit_code,
+    make_output_folder,
     one_line,
     output_file_problem,
-    output_folder_problem,
     raise_on_sigterm,
     run_main,
     split_ros_args,
@@ -226,7 +226,7 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     # usage error now, not a traceback after the task
     if args.summary is not None and (problem := output_file_problem(args.summary)):
         parser.error(f"--summary {str(args.summary)!r} {problem}")
-    if not args.no_record and (problem := output_folder_problem(args.output)):
+    if not args.no_record and (problem := make_output_folder(args.output)):
         parser.error(f"--output {str(args.output)!r} {problem}")
 
 

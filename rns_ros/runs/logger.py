@@ -7,6 +7,7 @@ import argparse
 import subprocess
 from pathlib import Path
 
+from rns_ros.core import RnsError
 from rns_ros.harness import Harness, ProcessStack
 from rns_ros.viz.readback import rrd_problem, storage_limit
 
@@ -14,8 +15,21 @@ from rns_ros.viz.readback import rrd_problem, storage_limit
 def _recording(args: argparse.Namespace, name: str) -> tuple[Path, str]:
     """``<output>/<name>.rrd`` (its folder made) and the logger's sink: ``spawn`` (a live viewer)
     with ``--viewer``, else ``save``."""
-    args.output.mkdir(parents=True, exist_ok=True)
+    output_folder(args)
     return args.output / f"{name}.rrd", "spawn" if args.viewer else "save"
+
+
+def output_folder(args: argparse.Namespace) -> Path:
+    """``--output``, made if it went away since the start-up check (one line if it cannot be).
+
+    Raises:
+        RnsError: the folder cannot be made.
+    """
+    try:
+        args.output.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RnsError(f"cannot make the --output folder {args.output}: {exc.strerror}") from None
+    return args.output
 
 
 def start_logger(

@@ -33,6 +33,7 @@ from rns_ros.cli import signals_held
 from rns_ros.core import RnsError
 from rns_ros.harness import TopicLog
 from rns_ros.resources import share_folders
+from rns_ros.runs.logger import output_folder
 
 #: Longest wall time a received message waits in memory before its chunk is written [s].
 FLUSH_PERIOD = 1.0
@@ -270,6 +271,5 @@ def open_mcap(
     if args.no_record:
         yield NoRecording()
         return
-    args.output.mkdir(parents=True, exist_ok=True)
-    with McapRecording((args.output / f"{name}.mcap").resolve(), resolve) as recording:
+    with McapRecording((output_folder(args) / f"{name}.mcap").resolve(), resolve) as recording:
         yield recording

@@ -303,3 +303,48 @@ def test_unknown_ros_arguments_are_explained():
     with pytest.raises(_rclpy.UnknownROSArgsError) as caught:
         remove_ros_args(["x", "--ros-args", "--bogus"])
     assert describe_ros_error(caught.value).startswith("unknown ROS arguments ['--bogus']; ")
+
+
+def _shell_env() -> dict[str, str]:
+    """A new shell's environment: no AMENT_PREFIX_PATH, no activated venv, no PYTHONPATH."""
+    return {"HOME": os.environ.get("HOME", "/tmp"), "PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"}
+
+
+@pytest.mark.parametrize("executable", sorted(EXECUTABLES))
+def test_every_console_script_runs_from_the_venv_alone(executable, tmp_path):
+    done = subprocess.run(
+        [str(BIN / executable), "--help"],
+        env=_shell_env(),
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.startswith(f"usage: {executable}")
+    assert "Traceback" not in done.stderr
+
+
+def test_the_shipped_files_are_found_from_the_venv_alone(tmp_path):
+    """Without AMENT_PREFIX_PATH the package's config files (the reproduction list, the
+    default model) come from the venv's share folder."""
+    listing = subprocess.run(
+        [str(BIN / "rns_reproduce"), "list"],
+        env=_shell_env(),
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert listing.returncode == 0, listing.stderr[-2000:]
+    assert "table4.2" in listing.stdout
+    model = subprocess.run(
+        [str(BIN / "rns_model"), "check", str(default_model_config())],
+        env=_shell_env(),
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert model.returncode == 0, model.stderr[-2000:]
+    assert "Traceback" not in model.stderr

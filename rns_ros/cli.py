@@ -22,6 +22,9 @@ from pathlib import Path
 
 #: ROS 2 domain IDs accepted here (the range that maps to valid UDP ports on every platform).
 DOMAIN_ID_RANGE = (0, 101)
+#: Environment variable naming the process (pid) whose end stops a node started by it as Ctrl-C
+#: does (rns_ros.harness.ProcessStack sets it; rns_ros.nodes.runner reads it).
+STOP_WITH_PARENT = "RNS_STOP_WITH_PARENT"
 
 
 #: The console scripts of setup.py (test/test_startup.py keeps the two in sync).

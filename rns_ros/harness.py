@@ -57,7 +57,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.task import Future
 
-from rns_ros.cli import DOMAIN_ID_RANGE, one_line
+from rns_ros.cli import DOMAIN_ID_RANGE, STOP_WITH_PARENT, one_line
 from rns_ros.core.errors import ConfigError, RnsError
 from rns_ros.resources import apply_loopback_profile
 
@@ -491,6 +491,9 @@ class ProcessStack:
         base_env: Mapping[str, str] | None = None,
     ) -> None:
         self.env = ros_environment(domain_id, base_env)
+        # a process that ends without stopping its stack (kill -9) takes the stack with it:
+        # each node then closes what it writes, as on Ctrl-C
+        self.env[STOP_WITH_PARENT] = str(os.getpid())
         self.bin_dir = Path(bin_dir) if bin_dir else Path(sys.executable).parent
         self.processes: list[subprocess.Popen] = []
         self._logs: dict[int, Any] = {}

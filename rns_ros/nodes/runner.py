@@ -3,11 +3,13 @@ last words of a node going down (a final zero command, its worker thread stopped
 
 from __future__ import annotations
 
+import ctypes
+import os
 import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Protocol
 
 import rclpy
@@ -23,6 +25,7 @@ from rclpy.task import Future
 from rclpy.utilities import remove_ros_args
 
 from rns_ros.cli import (
+    STOP_WITH_PARENT,
     check_domain_id_environment,
     describe_ros_error,
     one_line,
@@ -108,6 +111,37 @@ def start_node(executable: str, factory: Callable[[], Node], argv: Sequence[str]
     return node
 
 
+#: prctl option: the signal the kernel sends this process when its parent ends (Linux).
+PR_SET_PDEATHSIG = 1
+
+
+def stop_with_parent(env: Mapping[str, str] | None = None) -> bool:
+    """When ``STOP_WITH_PARENT`` (:mod:`rns_ros.cli`) names this process's parent, have the
+    kernel send it SIGINT once the parent ends (Linux ``prctl(PR_SET_PDEATHSIG)``): a node
+    started by ``rns_demo`` or a test stops and closes its files, as on Ctrl-C, when that
+    process is killed outright, instead of running on unseen. A named process already gone is
+    the same SIGINT at once. Returns whether the kernel watches the parent."""
+    text = (os.environ if env is None else env).get(STOP_WITH_PARENT, "")
+    if not sys.platform.startswith("linux") or not text.isdigit():
+        return False
+    parent = int(text)
+    if os.getppid() != parent:  # started through another process, or the parent ended
+        try:
+            os.kill(parent, 0)
+        except ProcessLookupError:
+            os.kill(os.getpid(), signal.SIGINT)
+        except OSError:
+            pass
+        return False
+    try:
+        armed = ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGINT) == 0
+    except (OSError, AttributeError):
+        return False
+    if armed and os.getppid() != parent:  # it ended between the two looks
+        os.kill(os.getpid(), signal.SIGINT)
+    return armed
+
+
 def run_node(
     factory: Callable[[], Node],
     parameters: NodeParameters,
@@ -135,6 +169,7 @@ def run_node(
     }
     if startup_interrupted():  # Ctrl-C while the imports ran (rns_ros.cli)
         stop.set()
+    stop_with_parent()
     executable = parameters.NODE_NAME
     node = executor = None
     try:

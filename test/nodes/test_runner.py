@@ -3,6 +3,7 @@ node code, while the Context still works, so destroy_node() can publish a final 
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import os
 import re
@@ -208,3 +209,63 @@ def test_a_worker_is_woken_and_joined():
     assert stop.is_set()
     assert wake.is_set()
     assert not thread.is_alive()
+
+
+#: A parent that starts rns_rerun_logger (saving an .rrd) as ProcessStack does, prints its pid
+#: and waits to be killed.
+_PARENT = """
+import os, subprocess, sys, time
+env = dict(os.environ, RNS_STOP_WITH_PARENT=str(os.getpid()))
+logger = subprocess.Popen(
+    [sys.argv[1], "--ros-args", "-p", "sink:=save", "-p", "rrd_path:=" + sys.argv[2]],
+    env=env, stdout=open(sys.argv[3], "w"), stderr=subprocess.STDOUT,
+)
+print(logger.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def _ended(pid: int) -> bool:
+    """The process is gone or a zombie nobody reaped yet."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] in ("Z", "X")
+    except FileNotFoundError:
+        return True
+
+
+def test_a_node_stops_and_closes_its_recording_when_its_starter_is_killed(tmp_path):
+    """kill -9 of the process that started a node (rns_demo, a test) with STOP_WITH_PARENT:
+    the kernel's SIGINT stops the node as Ctrl-C does, and the .rrd it saved is complete."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from rns_ros.viz.readback import rrd_problem
+
+    rrd, log = tmp_path / "run.rrd", tmp_path / "logger.log"
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env.pop("RNS_STOP_WITH_PARENT", None)
+    logger_bin = str(Path(sys.executable).parent / "rns_rerun_logger")
+    parent = subprocess.Popen(
+        [sys.executable, "-c", _PARENT, logger_bin, str(rrd), str(log)],
+        stdout=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    pid = int(parent.stdout.readline())
+    try:
+        deadline = time.monotonic() + 120.0
+        while "recording to" not in log.read_text():
+            assert time.monotonic() < deadline, log.read_text()
+            time.sleep(0.1)
+        parent.kill()
+        parent.wait()
+        while not _ended(pid):
+            assert time.monotonic() < deadline + 60.0, "the node runs on without its starter"
+            time.sleep(0.1)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+    assert "recording closed" in log.read_text()
+    assert rrd_problem(rrd) is None

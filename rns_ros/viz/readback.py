@@ -44,13 +44,17 @@ def rrd_problem(path: str | Path) -> str | None:
     if not path.is_file():
         return "the file does not exist"
     try:
-        with warnings.catch_warnings():  # a file without a footer says so as a warning
-            warnings.simplefilter("ignore")
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
             reader = RrdReader(path)
             for _chunk in reader.stream():
                 pass
     except (RuntimeError, ValueError, OSError) as exc:
         return storage_limit(path) or " ".join(str(exc).split()).replace(f" at {path}", "")
+    # a file sink that was closed writes a footer: without it the file was cut short, maybe at
+    # a frame boundary, where every chunk still decodes
+    if any("no footer" in str(warning.message) for warning in said):
+        return storage_limit(path) or "the file ends before rerun's footer: it was cut short"
     return None
 
 

@@ -48,6 +48,9 @@ before the first). The three 1 kHz streams are logged at most at ``contact_log_r
 
 Sinks (``sink``): ``spawn`` a native viewer, ``connect`` to one, ``serve`` a local web viewer,
 ``save`` an .rrd, or ``auto`` (spawn with a display, else save). Everything binds 127.0.0.1.
+Samples are sent in blocks, one chunk per entity every ``flush_tick`` seconds of wall time to a
+viewer (it lags by about that much; large chunks keep a browser's memory small), every
+``file_flush_tick`` to a file.
 ``destroy_node()`` sends what is buffered and closes the recording: a saved file is complete.
 """
 
@@ -84,8 +87,9 @@ from rns_ros.viz.contact import (
 from rns_ros.viz.recorder import RecorderSettings, TelemetryRecorder
 from rns_ros.viz.sinks import SinkSettings
 
-#: Wall time between batches sent to the sink [s] (samples are sent as columns).
-SEND_PERIOD = 0.1
+#: Wall time between two checks whether a block of samples is due [s]: a sample waits at most
+#: the flush tick plus this before it is sent, also when no more messages come.
+DUE_CHECK_PERIOD = 0.1
 
 
 class RerunLoggerNode(Node):
@@ -105,7 +109,7 @@ class RerunLoggerNode(Node):
                 self.robot, params["world_frame"], params["default_twist_frame"]
             )
         sink = from_parameters(SinkSettings, params, kind=params["sink"])
-        settings = from_parameters(RecorderSettings, params, send_period=SEND_PERIOD)
+        settings = from_parameters(RecorderSettings, params)
         # From here on the recording is open: close it if the rest of the set-up is interrupted
         # (Ctrl-C during start-up), or the file would lack its footer.
         if self.fixed_base:
@@ -123,10 +127,12 @@ class RerunLoggerNode(Node):
                 self._subscribe_contact(qos, params["force_errors_topic"])
             else:
                 self._subscribe_free_floating(qos, params)
-            # A quiet system still shows its newest samples: send the buffer periodically, by
+            # A quiet system still shows its newest samples: send a due block from a timer, by
             # wall time (a sim-time timer would fire 100x as often at real_time_factor 100).
             self._timer = self.create_timer(
-                SEND_PERIOD, self.recorder.send, clock=Clock(clock_type=ClockType.STEADY_TIME)
+                DUE_CHECK_PERIOD,
+                self.recorder.send_due,
+                clock=Clock(clock_type=ClockType.STEADY_TIME),
             )
             self.get_logger().info(f"{self.robot.name}: {self.recorder.sink.description}")
         except BaseException:

@@ -85,6 +85,23 @@ PARAMETERS = (
         10000.0,
     ),
     ParameterSpec(
+        "flush_tick",
+        1.0,
+        "Longest wall time a sample waits before it is sent to a live viewer (its lag; longer: "
+        "bigger chunks)",
+        "[s]",
+        0.05,
+        60.0,
+    ),
+    ParameterSpec(
+        "file_flush_tick",
+        10.0,
+        "The same for sink save (nobody waits for a file; longer: bigger chunks)",
+        "[s]",
+        0.05,
+        60.0,
+    ),
+    ParameterSpec(
         "force_errors_topic",
         "/rns_force_controller/errors",
         "Float64MultiArray task errors of the force controller (fixed-base arms only)",

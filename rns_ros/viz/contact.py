@@ -300,6 +300,7 @@ class ContactRecorder(TelemetryRecorder):
         sink, settings, env: as :class:`~rns_ros.viz.recorder.TelemetryRecorder` (``max_rate``
             limits ``joint_states``).
         contact: :class:`ContactSettings`.
+        clock: as :class:`~rns_ros.viz.recorder.TelemetryRecorder`.
 
     Only :meth:`joint_state`, :meth:`environment`, :meth:`contact`, :meth:`wrist_wrench` and
     :meth:`force_errors` apply to a fixed-base arm (the free-floating inputs are not fed).
@@ -315,9 +316,10 @@ class ContactRecorder(TelemetryRecorder):
         settings=None,
         env=None,
         contact: ContactSettings | None = None,
+        clock=None,
     ) -> None:
         self.contact_settings = contact or ContactSettings()
-        super().__init__(robot, urdf_path, sink, settings, env)
+        super().__init__(robot, urdf_path, sink, settings, env, clock)
         rate = self.contact_settings.contact_log_rate
         # contact and errors are limited by their own ``time`` (the timeline stamp is the newest
         # joint state's, shared by several samples); the wrench by its header stamp.
@@ -400,7 +402,7 @@ class ContactRecorder(TelemetryRecorder):
             if not self._accept("joints", stamp_ns):
                 return
             self.counts["joints"] += 1
-            self._arm.add(stamp_ns, theta)
+            self._add(self._arm, stamp_ns, theta)
             if theta_dot is not None:
                 for joint, value in zip(self.robot.joint_names, theta_dot, strict=True):
                     self._scalar(paths.joint_velocity(joint), stamp_ns, value)
@@ -468,7 +470,7 @@ class ContactRecorder(TelemetryRecorder):
                 return False
             self._scalar(paths.CONTACT_NORMAL_FORCE, stamp_ns, sample.normal_force)
             self._scalar(paths.CONTACT_GAP, stamp_ns, sample.gap)
-            self._points.add(stamp_ns, (sample.point, CONTACT_STATE_COLORS[sample.state]))
+            self._add(self._points, stamp_ns, (sample.point, CONTACT_STATE_COLORS[sample.state]))
             self._send_if_due()
             return True
 
@@ -490,7 +492,7 @@ class ContactRecorder(TelemetryRecorder):
             self.counts["wrench"] += 1
             position, rotation = pose
             vector = rotation @ force * self.contact_settings.force_arrow_scale
-            self._measured.add(stamp_ns, (position, vector))
+            self._add(self._measured, stamp_ns, (position, vector))
             self._send_if_due()
             return True
 
@@ -520,7 +522,8 @@ class ContactRecorder(TelemetryRecorder):
             pose = self._ee_pose()
             if pose is not None:
                 scale = self.contact_settings.force_arrow_scale
-                self._desired.add(stamp_ns, (pose[0], sample.force_desired * sample.normal * scale))
+                arrow = (pose[0], sample.force_desired * sample.normal * scale)
+                self._add(self._desired, stamp_ns, arrow)
             self._send_if_due()
             return True
 
@@ -535,15 +538,18 @@ class ContactRecorder(TelemetryRecorder):
         self.counts[stream] += 1
         return True
 
-    def _send(self) -> None:
-        super()._send()
+    def _buffers(self) -> list[_Rows]:
+        return [*super()._buffers(), self._arm, self._points, self._measured, self._desired]
+
+    def _send(self, minimum_rows: int = 1) -> None:
+        super()._send(minimum_rows)
         rec, view = self.rec, self.view
-        stamps, rows = self._arm.take()
+        stamps, rows = self._arm.take(minimum_rows)
         if stamps:
             times = self._time_column(stamps)
             for path, columns in view.joint_columns(np.array(rows)):
                 rec.send_columns(path, indexes=[times], columns=columns)
-        stamps, rows = self._points.take()
+        stamps, rows = self._points.take(minimum_rows)
         if stamps:
             points, colors = zip(*rows, strict=True)
             rec.send_columns(
@@ -557,7 +563,7 @@ class ContactRecorder(TelemetryRecorder):
             (paths.FORCE_MEASURED_ARROW, self._measured),
             (paths.FORCE_DESIRED_ARROW, self._desired),
         ):
-            stamps, rows = pending.take()
+            stamps, rows = pending.take(minimum_rows)
             if stamps:
                 origins, vectors = (np.array(part) for part in zip(*rows, strict=True))
                 rec.send_columns(

@@ -6,10 +6,19 @@ happens here, so tests drive it directly and read the ``.rrd`` back. Entity path
 :mod:`rns_ros.viz.paths`.
 
 Samples are buffered per entity and sent as columns (``send_columns`` with an explicit
-``ros_time`` column) every ``send_period`` of wall time, and on :meth:`TelemetryRecorder.send` /
-:meth:`TelemetryRecorder.close`: a ``log`` call per sample and entity costs 40-140 µs in rerun
-0.41, which at 100 Hz on ~40 entities would take a third of a core (and of the GIL of a process
-that may also run the simulator). Columns cost a few µs per sample.
+``ros_time`` column) in blocks: once per flush tick of wall time, as soon as one entity holds
+``flush_num_rows`` rows, and on :meth:`TelemetryRecorder.send` / :meth:`TelemetryRecorder.close`.
+A ``log`` call per sample and entity costs 40-140 µs in rerun 0.41, which at 100 Hz on ~40
+entities would take a third of a core (and of the GIL of a process that may also run the
+simulator); columns cost a few µs per sample.
+
+Each block becomes one chunk: rerun sends ``send_columns`` data as it is given, past its chunk
+batcher. Small chunks are what a viewer pays for: every chunk carries its own schema, row ids
+and index entries. The rows still logged one at a time (camera trail, controller and ptp logs,
+ghost arm, static data) go through the private stream's batcher, configured with the same
+thresholds (:meth:`RecorderSettings.batcher_config`). The tick is what a live viewer waits at
+most (``flush_tick``, 1 s: a 100 Hz stream arrives in chunks of 100 rows); a file has no one
+waiting and gets the longer ``file_flush_tick``.
 
 Methods are thread-safe (one lock: the node's executor may run callbacks on several threads).
 :meth:`TelemetryRecorder.close` sends what is pending, flushes and finalizes the sink: a saved
@@ -22,8 +31,9 @@ import threading
 import time
 import uuid
 from collections import defaultdict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from datetime import timedelta
 from pathlib import Path
 
 import numpy as np
@@ -47,12 +57,14 @@ from rns_ros.viz.quantities import (
 )
 from rns_ros.viz.readback import rrd_problem
 from rns_ros.viz.robot import RobotView
-from rns_ros.viz.sinks import OpenSink, SinkSettings, open_sink
+from rns_ros.viz.sinks import OpenSink, SinkKind, SinkSettings, open_sink, resolve_kind
 
 #: Stamps below this [ns] (2001-09-09) are simulated time: logged as durations, not timestamps.
 SIM_TIME_LIMIT_NS = 10**18
 #: Longest wait for buffered data to reach the sink when closing [s].
 FLUSH_TIMEOUT = 10.0
+#: Largest accepted flush tick [s]: beyond it a live view would look stopped.
+MAX_FLUSH_TICK = 60.0
 _TEXT_LEVEL = {0: rr.TextLogLevel.INFO, 1: rr.TextLogLevel.WARN, 2: rr.TextLogLevel.ERROR}
 _STREAMS = (
     "joints",
@@ -73,7 +85,7 @@ GHOST_JOINT_RADIUS = 0.06
 
 @dataclass(frozen=True)
 class RecorderSettings:
-    """What to record and how densely.
+    """What to record, how densely, and in what chunks.
 
     Attributes:
         application_id: rerun application id (recordings with the same id share a blueprint).
@@ -81,7 +93,17 @@ class RecorderSettings:
         trail_length: camera trail points kept [-]; 0 disables the trail.
         trail_period: stamp time between two trail points [s].
         max_rate: highest logged rate per input stream [Hz]; 0 logs every message.
-        send_period: wall time between two batches sent to the sink [s]; 0 sends every sample.
+        flush_tick: longest wall time a sample waits in this process before it is sent to a
+            live sink (spawn, connect, serve) [s]: the period of the column blocks and the tick
+            of rerun's chunk batcher. A viewer shows a sample within about this time; a 100 Hz
+            stream is sent in chunks of ``100 * flush_tick`` rows.
+        file_flush_tick: the same for the ``save`` sink [s]: longer, as nobody watches the
+            file grow, so a run slower than real time still makes chunks of many rows.
+        flush_num_rows: rows of one entity that are sent at once, before the tick [-]: the
+            largest chunk. The default is the row limit up to which rerun's chunk store
+            compacts chunks, so a viewer keeps these chunks as they are.
+        flush_num_bytes: bytes of one entity's rows logged one at a time (camera trail, logs)
+            that make rerun's batcher send them before the tick [bytes]; rerun 0.41's default.
     """
 
     application_id: str = "rns_ros"
@@ -89,17 +111,43 @@ class RecorderSettings:
     trail_length: int = 300
     trail_period: float = 0.1
     max_rate: float = 200.0
-    send_period: float = 0.1
+    flush_tick: float = 1.0
+    file_flush_tick: float = 10.0
+    flush_num_rows: int = 4096
+    flush_num_bytes: int = 2 << 20
 
     def __post_init__(self) -> None:
         if not self.application_id:
             raise ConfigError("application_id must not be empty")
         if self.trail_length < 0:
             raise ConfigError(f"trail_length must be >= 0, got {self.trail_length}")
-        for name in ("trail_period", "max_rate", "send_period"):
+        for name in ("trail_period", "max_rate"):
             value = getattr(self, name)
             if not value >= 0.0:
                 raise ConfigError(f"{name} must be >= 0, got {value}")
+        for name in ("flush_tick", "file_flush_tick"):
+            value = getattr(self, name)
+            if not 0.0 < value <= MAX_FLUSH_TICK:
+                raise ConfigError(f"{name} must be in (0, {MAX_FLUSH_TICK}] s, got {value}")
+        for name in ("flush_num_rows", "flush_num_bytes"):
+            value = getattr(self, name)
+            if value < 1:
+                raise ConfigError(f"{name} must be >= 1, got {value}")
+
+    def tick(self, kind: SinkKind | str) -> float:
+        """The flush tick for a sink of ``kind`` [s]: ``file_flush_tick`` for ``save``, else
+        ``flush_tick``."""
+        return self.file_flush_tick if SinkKind.parse(kind) is SinkKind.SAVE else self.flush_tick
+
+    def batcher_config(self, kind: SinkKind | str) -> rr.ChunkBatcherConfig:
+        """The thresholds of rerun's chunk batcher for the rows logged one at a time to a sink
+        of ``kind`` (given to the stream explicitly, they also apply to network sinks, whose
+        default tick is 8 ms, and win over rerun's ``RERUN_FLUSH_*`` variables)."""
+        return rr.ChunkBatcherConfig(
+            flush_tick=timedelta(seconds=self.tick(kind)),
+            flush_num_bytes=self.flush_num_bytes,
+            flush_num_rows=self.flush_num_rows,
+        )
 
 
 class _Rows:
@@ -111,11 +159,19 @@ class _Rows:
         self.stamps: list[int] = []
         self.rows: list = []
 
-    def add(self, stamp_ns: int, row) -> None:
+    def __len__(self) -> int:
+        return len(self.stamps)
+
+    def add(self, stamp_ns: int, row) -> int:
+        """Append one sample; returns the number now waiting."""
         self.stamps.append(stamp_ns)
         self.rows.append(row)
+        return len(self.stamps)
 
-    def take(self) -> tuple[list[int], list]:
+    def take(self, minimum: int = 1) -> tuple[list[int], list]:
+        """All waiting samples when there are at least ``minimum``, else none (kept)."""
+        if len(self.stamps) < minimum:
+            return [], []
         stamps, rows = self.stamps, self.rows
         self.stamps, self.rows = [], []
         return stamps, rows
@@ -130,6 +186,8 @@ class TelemetryRecorder:
         sink: where the recording goes.
         settings: :class:`RecorderSettings`.
         env: environment for ``auto`` sink resolution (tests); None = ``os.environ``.
+        clock: wall clock [s] that times the flush tick (tests pace a run with it); None =
+            ``time.monotonic``. rerun's batcher keeps its own clock.
 
     Raises:
         ModelError: rerun cannot read the URDF or its joints do not match ``robot``.
@@ -143,17 +201,25 @@ class TelemetryRecorder:
         sink: SinkSettings,
         settings: RecorderSettings | None = None,
         env: Mapping[str, str] | None = None,
+        clock: Callable[[], float] | None = None,
     ) -> None:
         self.robot = robot
         self.settings = settings or RecorderSettings()
+        self._clock = clock or time.monotonic
         self.view = RobotView(robot, urdf_path)
         self._lock = threading.Lock()
         self._closed = False
         #: why a saved recording could not be written whole (it is removed), else None
         self.problem: str | None = None
         # A private stream with a fresh id: several recorders can live in one process.
-        self.rec = rr.RecordingStream(self.settings.application_id, recording_id=uuid.uuid4())
+        self.rec = rr.RecordingStream(
+            self.settings.application_id,
+            recording_id=uuid.uuid4(),
+            batcher_config=self.settings.batcher_config(resolve_kind(sink.kind, env)),
+        )
         self.sink: OpenSink = open_sink(self.rec, sink, self._blueprint(), env)
+        #: Wall time between two blocks [s] (a spawn that fell back to save: the file's).
+        self.flush_tick = self.settings.tick(self.sink.kind)
         if self.settings.recording_name:
             self.rec.send_recording_name(self.settings.recording_name)
         self.view.log_static(self.rec)
@@ -167,7 +233,8 @@ class TelemetryRecorder:
         self._scalars: defaultdict[str, _Rows] = defaultdict(_Rows)
         self._joints = _Rows()  # (theta, camera origin, camera +z axis)
         self._base = _Rows()  # (position, quaternion xyzw)
-        self._last_send = time.monotonic()
+        self._last_send = self._clock()
+        self._full = False  # some entity holds flush_num_rows rows
         self._trail = Trail(self.settings.trail_length, self.settings.trail_period)
         self._attitude = AttitudeDeviation()
         self._base_position = np.zeros(3)
@@ -220,10 +287,10 @@ class TelemetryRecorder:
             self._state = state
             self.counts["joints"] += 1
             if not self._base_logged:  # connect the robot to the world before any odometry
-                self._base.add(stamp_ns, (self._base_position, self._base_orientation))
+                self._add(self._base, stamp_ns, (self._base_position, self._base_orientation))
                 self._base_logged = True
             camera = state.camera
-            self._joints.add(stamp_ns, (state.theta, camera.position, camera.rotation[:, 2]))
+            self._add(self._joints, stamp_ns, (state.theta, camera.position, camera.rotation[:, 2]))
             if self._trail.add(stamp_ns, camera.position):
                 self._set_time(stamp_ns)
                 self.view.log_trail(self.rec, self._trail.strip())
@@ -254,7 +321,7 @@ class TelemetryRecorder:
             if not self._accept("odom", stamp_ns):
                 return
             self.counts["odom"] += 1
-            self._base.add(stamp_ns, (position, self._base_orientation))
+            self._add(self._base, stamp_ns, (position, self._base_orientation))
             self._base_logged = True
             deviation = self._attitude(rotation)
             for path, value in zip(paths.BASE_ATTITUDE_SERIES, deviation, strict=True):
@@ -426,12 +493,24 @@ class TelemetryRecorder:
             )
 
     # --- sending, closing -----------------------------------------------------------------------
+    @property
+    def pending_rows(self) -> int:
+        """Rows waiting in this process to be sent (the largest count over the entities)."""
+        with self._lock:
+            return max((len(rows) for rows in self._buffers()), default=0)
+
     def send(self) -> None:
-        """Send every buffered sample to the sink now (the node calls this from a timer so a
-        quiet system still shows its last samples)."""
+        """Send every buffered sample to the sink now."""
         with self._lock:
             if not self._closed:
                 self._send()
+
+    def send_due(self) -> None:
+        """Send the buffered samples if :attr:`flush_tick` has passed since the last block
+        (the node calls this from a timer, so a quiet system still shows its newest samples)."""
+        with self._lock:
+            if not self._closed:
+                self._send_if_due()
 
     def close(self) -> None:
         """Send what is pending, flush, finalize the sink (idempotent).
@@ -483,34 +562,49 @@ class TelemetryRecorder:
             return rr.TimeColumn(paths.TIMELINE, duration=stamps.astype("timedelta64[ns]"))
         return rr.TimeColumn(paths.TIMELINE, timestamp=stamps.astype("datetime64[ns]"))
 
+    def _add(self, pending: _Rows, stamp_ns: int, row) -> None:
+        if pending.add(stamp_ns, row) >= self.settings.flush_num_rows:
+            self._full = True
+
     def _scalar(self, path: str, stamp_ns: int, value) -> None:
-        self._scalars[path].add(stamp_ns, float(value))
+        self._add(self._scalars[path], stamp_ns, float(value))
 
     def _vector(self, entity_paths: tuple[str, ...], stamp_ns: int, vector) -> None:
         for path, value in zip(entity_paths, vector, strict=True):
-            self._scalars[path].add(stamp_ns, float(value))
+            self._add(self._scalars[path], stamp_ns, float(value))
+
+    def _buffers(self) -> list[_Rows]:
+        """Every buffer of samples (subclasses add theirs)."""
+        return [*self._scalars.values(), self._base, self._joints]
 
     def _send_if_due(self) -> None:
-        if time.monotonic() - self._last_send >= self.settings.send_period:
+        if self._clock() - self._last_send >= self.flush_tick:
             self._send()
+        elif self._full:
+            # only the full entities: the others keep filling their blocks until the tick
+            self._send(minimum_rows=self.settings.flush_num_rows)
 
-    def _send(self) -> None:
-        self._last_send = time.monotonic()
+    def _send(self, minimum_rows: int = 1) -> None:
+        """Send the buffers holding at least ``minimum_rows`` rows, each as one chunk per
+        entity (1: all, and the next tick starts now)."""
+        if minimum_rows <= 1:
+            self._last_send = self._clock()
+        self._full = False
         rec, view = self.rec, self.view
         for path, pending in self._scalars.items():
-            stamps, values = pending.take()
+            stamps, values = pending.take(minimum_rows)
             if stamps:
                 rec.send_columns(
                     path,
                     indexes=[self._time_column(stamps)],
                     columns=rr.Scalars.columns(scalars=np.asarray(values)),
                 )
-        stamps, rows = self._base.take()
+        stamps, rows = self._base.take(minimum_rows)
         if stamps:
             positions, quaternions = zip(*rows, strict=True)
             columns = view.base_pose_columns(np.array(positions), np.array(quaternions))
             rec.send_columns(paths.BASE_POSE, indexes=[self._time_column(stamps)], columns=columns)
-        stamps, rows = self._joints.take()
+        stamps, rows = self._joints.take(minimum_rows)
         if stamps:
             theta, origins, axes = (np.array(part) for part in zip(*rows, strict=True))
             times = self._time_column(stamps)

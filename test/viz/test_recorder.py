@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections import defaultdict
+from datetime import timedelta
 
 import numpy as np
 import pinocchio as pin
@@ -43,9 +45,9 @@ def open_recorder(robot, tmp_path):
     urdf, _ = load_model_config(default_model_config())
     recorders = []
 
-    def factory(name="run", **settings):
+    def factory(name="run", clock=None, **settings):
         sink = SinkSettings(kind="save", rrd_path=tmp_path / f"{name}.rrd")
-        recorder = TelemetryRecorder(robot, urdf, sink, RecorderSettings(**settings))
+        recorder = TelemetryRecorder(robot, urdf, sink, RecorderSettings(**settings), clock=clock)
         recorders.append(recorder)
         return recorder
 
@@ -78,10 +80,23 @@ def _base_quaternion(k: int) -> np.ndarray:
     return np.array([0.0, 0.0, math.sin(half), math.cos(half)])
 
 
-def _feed(recorder, samples: int, start_ns: int = 0) -> None:
-    """What the simulator + controller + operator publish at 100 Hz, for ``samples`` periods."""
+class _Clock:
+    """The recorder's wall clock, set by the test [s]."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def _feed(recorder, samples: int, start_ns: int = 0, clock: _Clock | None = None) -> None:
+    """What the simulator + controller + operator publish at 100 Hz, for ``samples`` periods;
+    with ``clock``, the recorder's wall clock follows the stamps (a run as it happens)."""
     for k in range(samples):
         stamp = start_ns + k * PERIOD_NS
+        if clock is not None:
+            clock.now = k * PERIOD_NS * 1e-9
         recorder.base_odom(stamp, [0.1, 0.0, 0.0], _base_quaternion(k), [0.0, 0.0, 0.001])
         recorder.joint_state(stamp, _theta(k), np.full(7, 0.2))
         recorder.momentum(stamp, [0.0, 0.0, 0.0], [1e-12, 0.0, 0.0])
@@ -298,11 +313,100 @@ def test_bad_inputs_raise_typed_errors_and_leave_the_recording_usable(open_recor
         ({"trail_length": -1}, "trail_length"),
         ({"max_rate": -5.0}, "max_rate"),
         ({"application_id": ""}, "application_id"),
+        ({"flush_tick": 0.0}, "flush_tick"),
+        ({"flush_tick": 3600.0}, "flush_tick"),
+        ({"file_flush_tick": -1.0}, "file_flush_tick"),
+        ({"flush_num_rows": 0}, "flush_num_rows"),
+        ({"flush_num_bytes": 0}, "flush_num_bytes"),
     ],
 )
 def test_bad_settings_are_config_errors(settings, message):
     with pytest.raises(ConfigError, match=message):
         RecorderSettings(**settings)
+
+
+def _rows_per_chunk(path, *, static: bool = False) -> dict[str, list[int]]:
+    """{entity path: rows of each of its chunks, in file order} of the file's recording; static
+    chunks only with ``static``."""
+    rows = defaultdict(list)
+    for chunk in RrdReader(path).stream():
+        if static or not chunk.is_static:
+            rows[chunk.entity_path.lstrip("/") or "/"].append(chunk.num_rows)
+    return rows
+
+
+@pytest.mark.parametrize("tick", ["file_flush_tick", "flush_tick"])
+def test_a_run_at_its_own_pace_is_saved_in_chunks_of_many_rows(open_recorder, robot, tick):
+    """25 s at 100 Hz with the recorder's clock following the stamps: each 100 Hz entity is
+    sent once per tick (a file's, or a live viewer's 1 s: 100 rows a chunk), no sample lost."""
+    clock = _Clock()
+    recorder = open_recorder(clock=clock, file_flush_tick=getattr(RecorderSettings(), tick))
+    _feed(recorder, 2500, clock=clock)
+    recorder.close()
+    every = _rows_per_chunk(recorder.sink.rrd_path, static=True)
+    chunks = [count for counts in every.values() for count in counts]
+    assert sum(chunks) / len(chunks) >= 50  # static chunks (URDF, styles) included
+    rows = _rows_per_chunk(recorder.sink.rrd_path)
+    blocks = math.ceil(25.0 / recorder.flush_tick) + 1
+    for path in [*_series_paths(robot), paths.BASE_POSE, paths.CAMERA_POINTING]:
+        assert sum(rows[path]) == 2500, path
+        assert len(rows[path]) <= blocks, (path, rows[path])
+    for joint in robot.joint_names:
+        assert sum(rows[paths.joint_transform(joint)]) == 2500
+        assert len(rows[paths.joint_transform(joint)]) <= blocks
+    # logged one row at a time: batched by rerun into few chunks too
+    assert sum(rows[paths.CAMERA_TRAIL]) == 250
+    assert len(rows[paths.CAMERA_TRAIL]) < 250
+    times, yaw = read_scalars(recorder.sink.rrd_path, paths.BASE_ATTITUDE_YAW)
+    assert times == pytest.approx(np.arange(2500) * 0.01)
+    assert yaw == pytest.approx(0.01 * np.arange(2500), abs=1e-9)
+
+
+def test_an_entity_with_flush_num_rows_rows_is_sent_before_the_tick(open_recorder, robot):
+    """The clock stands still: blocks go out when they are full (and the rest on close); rows
+    logged one at a time obey the same limit in rerun's batcher."""
+    recorder = open_recorder(clock=_Clock(), flush_num_rows=20, file_flush_tick=60.0)
+    _feed(recorder, 50)
+    assert recorder.pending_rows == 10
+    recorder.close()
+    rows = _rows_per_chunk(recorder.sink.rrd_path)
+    for path in [*_series_paths(robot), paths.BASE_POSE, paths.joint_transform("joint_4")]:
+        assert rows[path] == [20, 20, 10], path
+    assert all(count <= 20 for count in rows[paths.CAMERA_TRAIL])
+
+
+def test_a_sample_waits_at_most_one_flush_tick(open_recorder):
+    """The node's timer calls send_due: samples leave once flush_tick has passed since the last
+    block, also when no further message comes."""
+    clock = _Clock()
+    recorder = open_recorder(clock=clock, file_flush_tick=0.5)
+    assert recorder.flush_tick == 0.5
+    config = recorder.settings.batcher_config("save")
+    assert config.flush_tick == timedelta(seconds=0.5)  # rerun's batcher ticks alike
+    assert config.flush_num_rows == recorder.settings.flush_num_rows
+    recorder.joint_state(0, _theta(0), np.zeros(7))
+    assert recorder.pending_rows == 1
+    clock.now = 0.49
+    recorder.send_due()
+    assert recorder.pending_rows == 1
+    clock.now = 0.5
+    recorder.send_due()
+    assert recorder.pending_rows == 0
+    recorder.joint_state(PERIOD_NS, _theta(1), np.zeros(7))  # a new block, a new tick
+    clock.now = 0.9
+    recorder.send_due()
+    assert recorder.pending_rows == 1
+    recorder.close()
+    assert recording_summary(recorder.sink.rrd_path)[paths.joint_transform("joint_1")] == 2
+
+
+def test_live_sinks_get_the_short_tick_and_files_the_long_one():
+    settings = RecorderSettings()
+    for kind in ("spawn", "connect", "serve"):
+        assert settings.tick(kind) == settings.flush_tick == 1.0
+        assert settings.batcher_config(kind).flush_tick == timedelta(seconds=1.0)
+    assert settings.tick("save") == settings.file_flush_tick == 10.0
+    assert settings.batcher_config("save").flush_num_bytes == settings.flush_num_bytes
 
 
 def test_ptp_phase_progress_and_log_follow_the_status(open_recorder):

@@ -25,6 +25,7 @@ CONSOLE_SCRIPTS = [
     "rns_service = rns_ros.apps.service:service_main",
     "rns_reproduce = rns_ros.apps.reproduce:main",
     "rns_model = rns_ros.apps.model_check:main",
+    "rns_bag = rns_ros.apps.bag:main",
 ]
 
 HERE = os.path.dirname(os.path.abspath(__file__))

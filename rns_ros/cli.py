@@ -20,8 +20,14 @@ import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-#: ROS 2 domain IDs accepted here (the range that maps to valid UDP ports on every platform).
-DOMAIN_ID_RANGE = (0, 101)
+#: Largest domain ID Fast DDS can map to UDP ports (7400 + 250 d + offsets <= 65535); above it,
+#: creating a node ends the process with exit code 1 and an RTPS error, from C++.
+DDS_MAX_DOMAIN_ID = 232
+#: ROS 2 domain IDs accepted here: what rcl accepts with Fast DDS.
+DOMAIN_ID_RANGE = (0, DDS_MAX_DOMAIN_ID)
+#: Largest domain ID whose UDP ports lie below every platform's ephemeral ports (Linux hands
+#: out 32768 and up to outgoing connections, which may then hold a port a participant needs).
+PORTABLE_MAX_DOMAIN_ID = 101
 #: Environment variable naming the process (pid) whose end stops a node started by it as Ctrl-C
 #: does (rns_ros.harness.ProcessStack sets it; rns_ros.nodes.runner reads it).
 STOP_WITH_PARENT = "RNS_STOP_WITH_PARENT"
@@ -46,6 +52,7 @@ EXECUTABLES = frozenset(
         "rns_service",
         "rns_reproduce",
         "rns_model",
+        "rns_bag",
     }
 )
 
@@ -290,11 +297,6 @@ def run_main(program: str, body: Callable[[], int]) -> int:
         return 0
 
 
-#: Largest domain ID Fast DDS can map to UDP ports (7400 + 250 d + offsets <= 65535); above it,
-#: creating a node ends the process with exit code 1 and an RTPS error, from C++.
-DDS_MAX_DOMAIN_ID = 232
-
-
 def check_domain_id_environment(env: dict[str, str] | None = None) -> None:
     """Raise ConfigError for an integer ``ROS_DOMAIN_ID`` above :data:`DDS_MAX_DOMAIN_ID`.
 
@@ -308,10 +310,9 @@ def check_domain_id_environment(env: dict[str, str] | None = None) -> None:
     if not 0 <= value <= DDS_MAX_DOMAIN_ID:
         from rns_ros.core.errors import ConfigError
 
-        low, high = DOMAIN_ID_RANGE
         raise ConfigError(
             f"ROS_DOMAIN_ID={text} is out of range: DDS takes [0, {DDS_MAX_DOMAIN_ID}] "
-            f"([{low}, {high}] on every platform)"
+            f"([0, {PORTABLE_MAX_DOMAIN_ID}] on every platform)"
         )
 
 
@@ -338,5 +339,7 @@ def add_domain_id_argument(parser: argparse.ArgumentParser, fallback: int, what:
         "--domain-id",
         type=domain_id,
         default=os.environ.get("ROS_DOMAIN_ID", str(fallback)),  # argparse converts it
-        help=f"ROS domain {what} [{low}, {high}] (default: ROS_DOMAIN_ID, else {fallback})",
+        help=f"ROS domain {what} [{low}, {high}] as rcl takes it (up to "
+        f"{PORTABLE_MAX_DOMAIN_ID} its UDP ports stay clear of the ephemeral ports; "
+        f"default: ROS_DOMAIN_ID, else {fallback})",
     )

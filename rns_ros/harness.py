@@ -249,7 +249,7 @@ class Harness:
     """Nodes in this process on one executor with a private Context (see the module docstring).
 
     Args:
-        domain_id: ROS domain [0, 101]; default: ``ROS_DOMAIN_ID`` of the environment, else 0.
+        domain_id: ROS domain [0, 232]; default: ``ROS_DOMAIN_ID`` of the environment, else 0.
         ros_args: global ROS arguments for every node of the stack, as a command line gives them
             (``["--ros-args", "-p", "rate:=50.0", "-r", "joint_states:=arm/joint_states"]``).
             Parameters given to :meth:`add` take precedence over them.

@@ -1,6 +1,6 @@
 """ROS messages as YAML both ways, and interface types by name: what the PyPI-only tools share.
 
-``rns_topic echo`` prints messages as YAML; ``rns_topic pub`` and ``rns_service call`` fill a
+``rns_topic echo`` prints messages as YAML or CSV; ``rns_topic pub`` and ``rns_service call`` fill a
 message from the YAML text of the command line, as ros2cli does (``"{data: true}"``,
 ``"{name: [joint_1], position: [0.5]}"``). ros2cli's own converter (rosidl_runtime_py) is not
 among the PyPI wheels, so this module holds a strict one: an unknown field, a value of the wrong
@@ -11,6 +11,7 @@ As in ros2cli, a ``builtin_interfaces/Time`` field given as ``now`` is the curre
 
 from __future__ import annotations
 
+import array
 import importlib
 from collections.abc import Callable
 from typing import Any
@@ -25,44 +26,163 @@ _FLOATING = ("float", "double", "long double")
 _TIME, _HEADER = "builtin_interfaces/Time", "std_msgs/Header"
 
 
-def message_to_dict(msg: Any, truncate: int | None = TRUNCATE_LENGTH) -> Any:
-    """A ROS message as plain dicts / lists / scalars (field order kept) for YAML output.
+def message_to_dict(
+    msg: Any,
+    truncate: int | None = TRUNCATE_LENGTH,
+    *,
+    no_arr: bool = False,
+    no_str: bool = False,
+) -> Any:
+    """A ROS message as plain dicts / lists / scalars (field order kept) for YAML output, as
+    ``ros2 topic echo`` converts it (rosidl_runtime_py's ``message_to_ordereddict``).
 
-    Strings and sequences longer than ``truncate`` end in ``'...'`` (None: full length), as
-    ``ros2 topic echo`` prints them; a ``byte`` field is its integer value.
+    Strings and sequences longer than ``truncate`` end in ``'...'`` (None: full length);
+    ``no_arr``: every array or sequence field is its abbreviation
+    (``<sequence type: double, length: 7>``), ``no_str``: every string is its length
+    (``<string length: <4>>``). A ``byte`` field is its integer value (ros2: a one-character
+    string).
     """
-    if hasattr(msg, "get_fields_and_field_types"):
+    if _is_message(msg):
+        fields = msg.get_fields_and_field_types()
         return {
-            field: message_to_dict(getattr(msg, field), truncate)
-            for field in msg.get_fields_and_field_types()
+            name: _field_to_plain(getattr(msg, name), slot, truncate, no_arr, no_str)
+            for name, slot in zip(fields, msg.SLOT_TYPES, strict=True)
         }
-    if isinstance(msg, bytes):  # `byte` fields (length 1) and byte sequences
-        msg = list(msg)
-        if len(msg) == 1:
-            return msg[0]
-    if hasattr(msg, "tolist"):  # numpy arrays (fixed size), array.array (sequences), numpy scalars
-        msg = msg.tolist()
-    if isinstance(msg, list | tuple):
-        items = [message_to_dict(item, truncate) for item in msg]
-        if truncate is not None and len(items) > truncate:
-            items = [*items[:truncate], "..."]
-        return items
-    if isinstance(msg, str) and truncate is not None and len(msg) > truncate:
-        return msg[:truncate] + "..."
-    return msg
+    return _field_to_plain(msg, None, truncate, no_arr, no_str)
 
 
-def message_to_yaml(msg: Any, truncate: int | None = TRUNCATE_LENGTH) -> str:
-    """``msg`` as the block YAML ``ros2 topic echo`` prints (without the ``---`` separator)."""
+def _is_message(value: Any) -> bool:
+    return hasattr(value, "get_fields_and_field_types")
+
+
+def _field_to_plain(value: Any, slot: Any, truncate, no_arr: bool, no_str: bool) -> Any:
+    """One field's ``value`` for :func:`message_to_dict` (``slot``: its rosidl type, None for
+    the items of a sequence)."""
+    if _is_message(value):
+        return message_to_dict(value, truncate, no_arr=no_arr, no_str=no_str)
+    if isinstance(value, bytes):  # `byte` fields (length 1) and byte sequences
+        value = list(value)
+        if len(value) == 1:
+            return value[0]
+    if isinstance(value, str):
+        if no_str:
+            return f"<string length: <{len(value)}>>"
+        if truncate is not None and len(value) > truncate:
+            return value[:truncate] + "..."
+        return value
+    value = _plain_sequence(value)
+    if isinstance(value, list | tuple):
+        if no_arr and slot is not None:
+            return _abbreviated(value, slot)
+        cut = truncate is not None and len(value) > truncate
+        items = [
+            _field_to_plain(item, None, truncate, no_arr, no_str)
+            for item in (value[:truncate] if cut else value)
+        ]
+        return [*items, "..."] if cut else items
+    return value
+
+
+def _plain_sequence(value: Any) -> Any:
+    """numpy arrays (fixed-size fields) and array.array (numeric sequences) as lists, numpy
+    scalars as Python numbers; anything else as it is."""
+    if isinstance(value, array.array) or getattr(value, "ndim", 0) >= 1:
+        return value.tolist()
+    if getattr(value, "ndim", None) == 0 and hasattr(value, "item"):
+        return value.item()
+    return value
+
+
+def _abbreviated(value, slot) -> str:
+    """What ``--no-arr`` prints for an array or sequence field, as ros2 does."""
+    from rosidl_parser.definition import Array, BoundedSequence
+
+    element = _element_type_name(slot.value_type)
+    if isinstance(slot, Array):
+        return f"<array type: {element}[{slot.size}]>"
+    if isinstance(slot, BoundedSequence):
+        return f"<sequence type: {element}[{slot.maximum_size}], length: {len(value)}>"
+    return f"<sequence type: {element}, length: {len(value)}>"
+
+
+def _element_type_name(value_type) -> str:
+    from rosidl_parser.definition import (
+        AbstractString,
+        AbstractWString,
+        BasicType,
+        NamedType,
+        NamespacedType,
+    )
+
+    if isinstance(value_type, BasicType):
+        return value_type.typename
+    if isinstance(value_type, AbstractString):
+        return "string"
+    if isinstance(value_type, AbstractWString):
+        return "wstring"
+    if isinstance(value_type, NamedType):
+        return value_type.name
+    if isinstance(value_type, NamespacedType):
+        return "/".join(value_type.namespaced_name())
+    return "unknown"
+
+
+def message_to_yaml(
+    msg: Any,
+    truncate: int | None = TRUNCATE_LENGTH,
+    *,
+    no_arr: bool = False,
+    no_str: bool = False,
+    flow_style: bool = False,
+) -> str:
+    """``msg`` as the YAML ``ros2 topic echo`` prints (without the ``---`` separator): block
+    style, or one flow-style line with ``flow_style``; the options of :func:`message_to_dict`."""
     import yaml
 
     return yaml.safe_dump(
-        message_to_dict(msg, truncate),
+        message_to_dict(msg, truncate, no_arr=no_arr, no_str=no_str),
         sort_keys=False,
-        default_flow_style=False,
+        default_flow_style=flow_style,
         allow_unicode=True,
         width=1 << 30,  # no line folding
     )
+
+
+def message_to_csv(
+    msg: Any, truncate: int | None = TRUNCATE_LENGTH, *, no_arr: bool = False, no_str: bool = False
+) -> str:
+    """``msg`` as the one line of comma-separated values ``ros2 topic echo --csv`` prints: every
+    field depth first, sequences item by item; the options of :func:`message_to_dict`."""
+    fields = msg.get_fields_and_field_types()
+    return ",".join(
+        _csv_value(getattr(msg, name), slot, truncate, no_arr, no_str)
+        for name, slot in zip(fields, msg.SLOT_TYPES, strict=True)
+    )
+
+
+def _csv_value(value: Any, slot: Any, truncate, no_arr: bool, no_str: bool) -> str:
+    if _is_message(value):
+        return message_to_csv(value, truncate, no_arr=no_arr, no_str=no_str)
+    if isinstance(value, bytes) and len(value) == 1:
+        return str(value[0])  # a `byte`: its integer value, as in the YAML
+    if isinstance(value, bytes):
+        value = list(value)
+    value = _plain_sequence(value)
+    if isinstance(value, list | tuple):
+        if no_arr and slot is not None:
+            return _abbreviated(value, slot)
+        cut = truncate is not None and len(value) > truncate
+        items = [
+            _csv_value(item, None, truncate, no_arr, no_str)
+            for item in (value[:truncate] if cut else value)
+        ]
+        return ",".join([*items, "..."] if cut else items)
+    if isinstance(value, str):
+        if no_str:
+            return f"<string length: <{len(value)}>>"
+        if truncate is not None and len(value) > truncate:
+            return value[:truncate] + "..."
+    return str(value)
 
 
 def import_interface(type_name: str, kind: str = "msg"):

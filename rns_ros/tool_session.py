@@ -4,10 +4,12 @@ ros2cli is not on PyPI, so whoever installed rns_ros from wheels has no ``ros2``
 console scripts (:mod:`rns_ros.apps.param`, :mod:`.topic`, :mod:`.service`) cover what
 operating the rns_ros nodes needs, built only on rclpy and the installed message packages. They
 join the ROS domain of the environment like ``ros2`` does (``ROS_DOMAIN_ID``,
-``ROS_AUTOMATIC_DISCOVERY_RANGE``, ``RMW_IMPLEMENTATION``). Exit codes: 0 on success and after
-Ctrl-C; 1 when the node, parameter, topic or service is not found within ``--timeout`` (one
-line on stderr) or ``set`` is refused (``Setting parameter failed: <the node's reason>`` on
-stdout, as ros2 prints it); 2 for bad usage or a ROS environment rcl rejects (one line on stderr).
+``ROS_AUTOMATIC_DISCOVERY_RANGE``, ``RMW_IMPLEMENTATION``). Arguments and output are ros2cli
+Jazzy's for the commands a teleop session uses (docs/ros2_integration.md lists what differs).
+Exit codes: 0 on success and after Ctrl-C; 1 when the node, parameter, topic or service is not
+found within ``--timeout`` or the request cannot be carried out (one line on stderr); 2 for bad
+usage or a ROS environment rcl rejects (one line on stderr). A parameter the node refuses is
+exit code 0 with ``Setting parameter failed: <the node's reason>`` on stderr, as with ros2.
 
 Only the standard library is imported at module level: rclpy loads inside :func:`run_tool` after
 its Ctrl-C handler is in place, so an early Ctrl-C is a quiet exit.
@@ -58,7 +60,7 @@ class ToolSession:
     ``stop`` is set by Ctrl-C; every wait below reads it at least every 50 ms.
     """
 
-    def __init__(self, program: str, stop: threading.Event) -> None:
+    def __init__(self, program: str, stop: threading.Event, node_name: str | None = None) -> None:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
@@ -74,7 +76,7 @@ class ToolSession:
         self.executor = SingleThreadedExecutor(context=self.context)
         # A leading underscore hides the node from `ros2 node list`, like ros2cli's own nodes.
         self.node = rclpy.create_node(
-            f"_{program}_{os.getpid()}",
+            node_name or f"_{program}_{os.getpid()}",
             context=self.context,
             start_parameter_services=False,
         )
@@ -98,10 +100,12 @@ class ToolSession:
 
     def discover(self, spin_time: float, timeout: float) -> None:
         """Let discovery fill the graph: spin until another node shows up (at most ``timeout``
-        [s]), then ``spin_time`` [s] more for the rest.
+        [s]), then until the graph (nodes, topics, services) has not changed for ``spin_time``
+        [s] (at most ``timeout`` more).
 
         A fixed spin time alone is not enough: a new DDS participant is usually matched within
-        0.1 s on loopback, but now and then only at the next periodic announcement, ~3 s later.
+        0.1 s on loopback, but now and then only at the next periodic announcement, ~3 s later;
+        and on a loaded machine a node's endpoints come well after the node itself.
         """
         me = self.node.get_fully_qualified_name()
 
@@ -112,7 +116,25 @@ class ToolSession:
             )
 
         self.spin_until(others, timeout)
-        self.spin_for(spin_time)
+        end = time.monotonic() + timeout
+        last, quiet_since = self._graph(), time.monotonic()
+
+        def settled() -> bool:
+            nonlocal last, quiet_since
+            graph, now = self._graph(), time.monotonic()
+            if graph != last:
+                last, quiet_since = graph, now
+            return now - quiet_since >= spin_time or now >= end
+
+        self.spin_until(settled, None)
+
+    def _graph(self) -> tuple:
+        """What discovery has found so far: node, topic and service names with their types."""
+        return (
+            sorted(self.node.get_node_names_and_namespaces()),
+            sorted((name, tuple(types)) for name, types in self.node.get_topic_names_and_types()),
+            sorted((name, tuple(types)) for name, types in self.node.get_service_names_and_types()),
+        )
 
     def close(self) -> None:
         import rclpy
@@ -150,10 +172,45 @@ def positive_int(text: str) -> int:
     return value
 
 
+def positive_rate(text: str) -> float:
+    """argparse type: a finite rate > 0 [Hz]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a rate > 0 Hz, got {text!r}")
+    return value
+
+
+def positive_seconds(text: str) -> float:
+    """argparse type: a finite number of seconds > 0."""
+    value = seconds(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected seconds > 0, got {text!r}")
+    return value
+
+
+def count(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
 def run_tool(
-    program: str, parser: argparse.ArgumentParser, argv: Sequence[str] | None, body: Callable
+    program: str,
+    parser: argparse.ArgumentParser,
+    argv: Sequence[str] | None,
+    body: Callable,
+    node_name: Callable[[argparse.Namespace], str | None] = lambda _args: None,
 ) -> int:
     """Parse ``argv``, run ``body(args, session)`` under the exit-code contract (module docstring).
+    ``node_name(args)``: the session node's name (None: a hidden one of its own).
 
     Ctrl-C and SIGTERM set a flag (installed before rclpy is imported) instead of raising inside
     rclpy's C extension, where a KeyboardInterrupt can surface as a RuntimeError.
@@ -174,10 +231,18 @@ def run_tool(
             return exc.code if isinstance(exc.code, int) else 0
         if stop.is_set():
             return 0
+        from rclpy.exceptions import NameValidationException
         from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+        from rclpy.validate_node_name import validate_node_name
 
+        name = node_name(args)
         try:
-            session = ToolSession(program, stop)
+            if name is not None:  # before rcl, which warns twice about a node it did not make
+                validate_node_name(name)
+            session = ToolSession(program, stop, name)
+        except NameValidationException as exc:
+            print(f"{program}: invalid node name {name!r}: {rcl_one_line(exc)}", file=sys.stderr)
+            return 2
         except (_rclpy.RCLError, _rclpy.RMWError, _rclpy.RCUtilsError, ValueError) as exc:
             # e.g. ROS_DOMAIN_ID=abc, or an unknown RMW_IMPLEMENTATION
             print(f"{program}: cannot join ROS: {rcl_one_line(exc)}", file=sys.stderr)
@@ -209,13 +274,26 @@ def rcl_one_line(error: BaseException) -> str:
     return " ".join(text.split()).removesuffix(" ^")
 
 
-def add_listing_arguments(listing: argparse.ArgumentParser) -> None:
-    """The options of a ``list`` subcommand (``rns_topic list``, ``rns_service list``)."""
+def add_listing_arguments(listing: argparse.ArgumentParser, what: str) -> None:
+    """The options of ``rns_topic list`` / ``rns_service list`` (``what``: topic or service),
+    ros2's ``-t``, ``-c`` and ``-a`` with our ``--spin-time``."""
     listing.add_argument(
-        "-t",
-        "--show-types",
+        "-t", "--show-types", action="store_true", help=f"additionally show the {what} type"
+    )
+    counts = ("-c", "--count-topics", "--count") if what == "topic" else ("-c", "--count-services")
+    listing.add_argument(
+        *counts,
+        dest="count",
         action="store_true",
-        help="accepted for ros2 compatibility: types are always shown",
+        help=f"only display the number of {what}s discovered",
+    )
+    listing.add_argument(
+        "-a",
+        f"--include-hidden-{what}s",
+        *(["--all"] if what == "topic" else []),
+        dest="include_hidden",
+        action="store_true",
+        help=f"consider hidden {what}s as well (a name part starting with '_')",
     )
     listing.add_argument(
         "--spin-time",
@@ -224,6 +302,11 @@ def add_listing_arguments(listing: argparse.ArgumentParser) -> None:
         metavar="SEC",
         help=f"discovery time after the first node appeared (default {DEFAULT_SPIN_TIME:g})",
     )
+
+
+def is_hidden(name: str) -> bool:
+    """A hidden topic or service (a name part starting with '_'), as ros2 lists them."""
+    return any(part.startswith("_") for part in name.split("/"))
 
 
 def _timeout_parser(what: str) -> argparse.ArgumentParser:

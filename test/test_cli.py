@@ -47,10 +47,16 @@ def test_domain_id_comes_from_option_then_environment_then_fallback(monkeypatch)
     assert _parser(42).parse_args(["--domain-id", "101"]).domain_id == 101
 
 
+def test_domain_id_takes_what_rcl_takes_with_fast_dds():
+    """102-232: Fast DDS maps them to UDP ports (rcl takes them); 233 would not fit."""
+    assert _parser().parse_args(["--domain-id", "150"]).domain_id == 150
+    assert _parser().parse_args(["--domain-id", "232"]).domain_id == 232
+
+
 @pytest.mark.parametrize(
     ("argv", "env", "bad"),
     [
-        (["--domain-id", "102"], "5", "'102'"),
+        (["--domain-id", "233"], "5", "'233'"),
         (["--domain-id", "-1"], "5", "'-1'"),
         ([], "abc", "'abc'"),
     ],
@@ -61,7 +67,7 @@ def test_bad_domain_id_is_a_usage_error_naming_the_range(monkeypatch, capsys, ar
         _parser().parse_args(argv)
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
-    assert "--domain-id: must be an integer in [0, 101]" in err
+    assert "--domain-id: must be an integer in [0, 232]" in err
     assert bad in err
 
 

@@ -173,7 +173,7 @@ def test_environment_stays_on_localhost():
     assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
     assert "ROS_STATIC_PEERS" not in env  # static peers would reach other machines
     assert env["ROS_DOMAIN_ID"] == "12"
-    with pytest.raises(ConfigError, match=r"domain_id must be an integer in \[0, 101\], got 250"):
+    with pytest.raises(ConfigError, match=r"domain_id must be an integer in \[0, 232\], got 250"):
         Harness(domain_id=250)
 
 

@@ -1,7 +1,8 @@
 """The package's rooms: imports point down only, no import circles, no ROS below nodes/.
 
 Rooms (docs/architecture.md): core < control, sim < analysis < viz and the libraries (cli,
-resources, harness, keyboard, tool_session, ros_messages) < nodes < runs < apps (the programs).
+resources, harness, keyboard, tool_session, ros_messages, bag) < nodes < runs < apps (the
+programs).
 A module may import its own room and the rooms listed for it; control and sim are side by side
 and do not import each other.
 """
@@ -26,10 +27,22 @@ ALLOWED = {
     "viz": {"core", "control", "sim", "resources"},
     "harness": {"core", "cli", "resources"},
     "keyboard": {"core", "control"},
-    "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard"},
+    "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard", "bag"},
     "tool_session": {"core", "cli", "resources"},
     "ros_messages": {"core", "cli", "resources", "tool_session"},
-    "runs": {"core", "control", "sim", "analysis", "viz", "cli", "resources", "harness", "nodes"},
+    "bag": {"core", "cli", "resources"},
+    "runs": {
+        "core",
+        "control",
+        "sim",
+        "analysis",
+        "viz",
+        "cli",
+        "resources",
+        "harness",
+        "nodes",
+        "bag",
+    },
 }
 #: the programs may import every room; test/apps/test_apps_apart.py keeps them apart
 ALLOWED["apps"] = set(ALLOWED) | {"tool_session", "runs"}

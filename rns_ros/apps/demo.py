@@ -160,7 +160,10 @@ def _parser() -> argparse.ArgumentParser:
         "RK4 step gives the same figures, ten times cheaper)",
     )
     parser.add_argument(
-        "--output", type=Path, default=Path("rns_demo_recordings"), help="folder for .rrd files"
+        "--output",
+        type=Path,
+        default=Path("rns_demo_recordings"),
+        help="folder for the recordings: rerun .rrd files and ROS 2 bags of the topics",
     )
     parser.add_argument("--no-record", action="store_true", help="no rerun recording")
     parser.add_argument("--viewer", action="store_true", help="live rerun viewer (needs display)")
@@ -423,7 +426,8 @@ def _report(
         print("rerun recordings (open with `rerun <file>`): " + ", ".join(recordings))
     mcaps = [row.mcap for row in rows if row.mcap]
     if mcaps:
-        print("MCAP recordings (ros2 bag, Foxglove, PlotJuggler): " + ", ".join(mcaps))
+        print("ROS 2 bags (rns_bag, ros2 bag; their .mcap in Foxglove, PlotJuggler): "
+              + ", ".join(mcaps))  # fmt: skip
     if args.summary:
         try:
             args.summary.write_text(json.dumps(summary, indent=2) + "\n")

@@ -1,11 +1,11 @@
-"""``rns_topic``: ``ros2 topic`` for a PyPI-only install.
+"""``rns_topic``: ``ros2 topic`` for a PyPI-only install, with ros2cli Jazzy's arguments and output.
 
 ::
 
-    rns_topic list                        topic names with their types
-    rns_topic echo TOPIC [--once] [--count N]
+    rns_topic list [-t] [-v] [-c] [-a]        topic names (with [types]: -t)
+    rns_topic echo TOPIC [TYPE] [--once] [--field F] [--csv] [--filter EXPR] [--qos-profile P]
     rns_topic hz TOPIC [--window N]
-    rns_topic pub TOPIC TYPE ['YAML'] [--once | --times N] [--rate HZ]
+    rns_topic pub TOPIC TYPE ['YAML'] [-1 | -t N] [-r HZ] [-w N] [--max-wait-time-secs SEC]
 
 Domain, exit codes and Ctrl-C: :mod:`rns_ros.tool_session`.
 """
@@ -13,27 +13,35 @@ Domain, exit codes and Ctrl-C: :mod:`rns_ros.tool_session`.
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import sys
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from rns_ros.ros_messages import (  # noqa: F401  (message_to_dict: part of this module's API)
     TRUNCATE_LENGTH,
     import_interface,
     message_from_fields,
+    message_to_csv,
     message_to_dict,
     message_to_yaml,
     parse_fields,
 )
 from rns_ros.tool_session import (
+    DEFAULT_TIMEOUT,
     ToolError,
     ToolSession,
-    absolute_name,
+    UsageError,
     add_listing_arguments,
+    count,
+    is_hidden,
     positive_int,
+    positive_rate,
+    positive_seconds,
+    rcl_one_line,
     run_tool,
     seconds,
     tool_parser,
@@ -46,11 +54,43 @@ DEFAULT_PUB_RATE = 1.0
 #: Seconds ``rns_topic pub`` stays after its last message of ``--once`` / ``--times`` (ros2's
 #: ``--keep-alive``), once every matched subscription acknowledged it.
 DEFAULT_KEEP_ALIVE = 0.1
+#: Seconds between ``pub``'s "Waiting for at least N matching subscription(s)..." lines (ros2's).
+WAIT_NOTE_PERIOD = 1.0
+#: rclpy's QoS presets and policies by short key (``QoSPresetProfiles.short_keys()`` and the
+#: policies'), the choices of ros2's ``--qos-*`` options; spelled out because the parser is built
+#: before rclpy is imported.
+QOS_PROFILES = (
+    "unknown",
+    "default",
+    "system_default",
+    "sensor_data",
+    "services_default",
+    "parameters",
+    "parameter_events",
+    "action_status_default",
+    "best_available",
+)
+QOS_HISTORY = ("system_default", "keep_last", "keep_all", "unknown")
+QOS_RELIABILITY = ("system_default", "reliable", "best_effort", "unknown", "best_available")
+QOS_DURABILITY = ("system_default", "transient_local", "volatile", "unknown", "best_available")
+QOS_LIVELINESS = ("system_default", "automatic", "manual_by_topic", "unknown", "best_available")
+#: The QoS preset of ``echo`` and of ``pub`` without ``--qos-profile`` (ros2's).
+ECHO_QOS_PROFILE, PUB_QOS_PROFILE = "sensor_data", "default"
+
+
+def _expanded(session: ToolSession, topic: str) -> str:
+    """``topic`` as the graph names it (``x`` -> ``/x``, ``~/x`` -> ``/<node>/x``)."""
+    from rclpy.expand_topic_name import expand_topic_name
+
+    try:
+        return expand_topic_name(topic, session.node.get_name(), session.node.get_namespace())
+    except ValueError as exc:
+        raise UsageError(rcl_one_line(exc)) from None
 
 
 def _topic_type(session: ToolSession, topic: str, timeout: float) -> tuple[str, Any]:
-    """(absolute name, message class) of ``topic`` once it is in the graph, else ToolError."""
-    topic = absolute_name(topic)
+    """(expanded name, message class) of ``topic`` once it is in the graph, else ToolError."""
+    topic = _expanded(session, topic)
     types: list[str] = []
 
     def known() -> bool:
@@ -59,8 +99,8 @@ def _topic_type(session: ToolSession, topic: str, timeout: float) -> tuple[str, 
 
     if not session.spin_until(known, timeout):
         raise ToolError(
-            f"topic {topic} not found within {timeout:g} s (see `rns_topic list`; check "
-            "ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE)"
+            f"topic {topic} not found within {timeout:g} s, its type unknown (see `rns_topic "
+            "list`, give TYPE, or check ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE)"
         )
     if len(types) > 1:
         raise ToolError(f"topic {topic} has more than one type: {', '.join(types)}")
@@ -68,7 +108,7 @@ def _topic_type(session: ToolSession, topic: str, timeout: float) -> tuple[str, 
 
 
 def _subscription_qos(session: ToolSession, topic: str):
-    """QoS that matches every publisher of ``topic`` and gets what they offer.
+    """QoS that matches every publisher of ``topic`` and gets what they offer (``hz``).
 
     Reliable only if every publisher is (a reliable reader matches no best-effort writer);
     transient local only if every publisher is, so latched messages (robot_description) arrive.
@@ -92,31 +132,148 @@ def _subscription_qos(session: ToolSession, topic: str):
     return qos
 
 
+def _add_qos_arguments(parser: argparse.ArgumentParser, verb: str, profile: str) -> None:
+    """ros2's ``--qos-*`` options (``verb``: subscribe or publish; ``profile``: the preset)."""
+    adapted = "; default: what every publisher offers" if verb == "subscribe" else ""
+    parser.add_argument(
+        "--qos-profile",
+        choices=QOS_PROFILES,
+        default=profile,
+        help=f"QoS preset profile to {verb} with (default: {profile})",
+    )
+    parser.add_argument(
+        "--qos-depth", metavar="N", type=int, help=f"queue size to {verb} with (overrides the "
+        "profile's)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--qos-history", choices=QOS_HISTORY, help="history (overrides the profile's)"
+    )
+    parser.add_argument(
+        "--qos-reliability",
+        choices=QOS_RELIABILITY,
+        help=f"reliability (overrides the profile's{adapted})",
+    )
+    parser.add_argument(
+        "--qos-durability",
+        choices=QOS_DURABILITY,
+        help=f"durability (overrides the profile's{adapted})",
+    )
+    parser.add_argument(
+        "--qos-liveliness", choices=QOS_LIVELINESS, help="liveliness (overrides the profile's)"
+    )
+    parser.add_argument(
+        "--qos-liveliness-lease-duration-seconds",
+        type=float,
+        metavar="SEC",
+        help="liveliness lease duration (overrides the profile's)",
+    )
+
+
+def _qos_overridden(args) -> bool:
+    """Whether a ``--qos-*`` policy option was given (``--qos-profile`` alone is not)."""
+    return any(
+        value is not None
+        for value in (
+            args.qos_reliability,
+            args.qos_durability,
+            args.qos_depth,
+            args.qos_history,
+            args.qos_liveliness,
+            args.qos_liveliness_lease_duration_seconds,
+        )
+    )
+
+
+def configured_qos(args):
+    """The ``--qos-profile`` preset with the ``--qos-*`` overrides, as ros2 builds it (a depth
+    <= 0 keeps the preset's; transient local with depth 0 gets depth 1)."""
+    from rclpy.duration import Duration
+    from rclpy.qos import (
+        DurabilityPolicy,
+        HistoryPolicy,
+        LivelinessPolicy,
+        QoSPresetProfiles,
+        ReliabilityPolicy,
+    )
+
+    # rclpy hands out the preset object itself: a copy keeps the preset intact
+    qos = copy.copy(QoSPresetProfiles.get_from_short_key(args.qos_profile))
+    if args.qos_history:
+        qos.history = HistoryPolicy.get_from_short_key(args.qos_history)
+    if args.qos_durability:
+        qos.durability = DurabilityPolicy.get_from_short_key(args.qos_durability)
+    if args.qos_reliability:
+        qos.reliability = ReliabilityPolicy.get_from_short_key(args.qos_reliability)
+    if args.qos_liveliness:
+        qos.liveliness = LivelinessPolicy.get_from_short_key(args.qos_liveliness)
+    lease = args.qos_liveliness_lease_duration_seconds
+    if lease and lease >= 0:
+        qos.liveliness_lease_duration = Duration(seconds=lease)
+    if args.qos_depth and args.qos_depth >= 0:
+        qos.depth = args.qos_depth
+    elif qos.durability == DurabilityPolicy.TRANSIENT_LOCAL and qos.depth == 0:
+        qos.depth = 1
+    policies = {
+        "history": HistoryPolicy,
+        "reliability": ReliabilityPolicy,
+        "durability": DurabilityPolicy,
+        "liveliness": LivelinessPolicy,
+    }
+    unknown = [name for name, kind in policies.items() if getattr(qos, name) == kind.UNKNOWN]
+    if unknown:  # rcl refuses them, with a page of C error state
+        raise UsageError(f"QoS {', '.join(unknown)} 'unknown': no endpoint can be created with it")
+    return qos
+
+
+def _echo_qos(args, session: ToolSession, topic: str):
+    """ros2 topic echo's QoS: the options' if a policy is given, else the preset made reliable
+    (transient local) if every publisher of ``topic`` is, so it matches them all."""
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+    qos = configured_qos(args)
+    publishers = session.node.get_publishers_info_by_topic(topic)
+    if _qos_overridden(args) or not publishers:
+        return qos
+    for policy, strong, weak in (
+        ("reliability", ReliabilityPolicy.RELIABLE, ReliabilityPolicy.BEST_EFFORT),
+        ("durability", DurabilityPolicy.TRANSIENT_LOCAL, DurabilityPolicy.VOLATILE),
+    ):
+        offering = sum(getattr(p.qos_profile, policy) == strong for p in publishers)
+        if offering == len(publishers):
+            setattr(qos, policy, strong)
+            continue
+        if offering:
+            kind = type(strong).__name__.removesuffix("Policy")
+            print(
+                f"Some, but not all, publishers are offering QoS{kind}Policy.{strong.name}. "
+                f"Falling back to QoS{kind}Policy.{weak.name} as it will connect to all "
+                "publishers"
+            )
+        setattr(qos, policy, weak)
+    return qos
+
+
 def _topic_parser() -> argparse.ArgumentParser:
     parser, commands, common = tool_parser(
         "rns_topic",
-        "List, print and time ROS 2 topics, like `ros2 topic` (which is not on PyPI). Joins the "
-        "domain of ROS_DOMAIN_ID / ROS_AUTOMATIC_DISCOVERY_RANGE.",
+        "List, print, time and publish ROS 2 topics with the arguments of `ros2 topic` (which is "
+        "not on PyPI). Joins the domain of ROS_DOMAIN_ID / ROS_AUTOMATIC_DISCOVERY_RANGE.",
         "exit codes: 0 ok or Ctrl-C; 1 topic not found, its type not installed or (pub) no "
-        "subscription matched; 2 bad usage or a message that does not fit its type",
+        "subscription matched in --max-wait-time-secs; 2 bad usage or a message that does not "
+        "fit its type",
         "wait this long for TOPIC (list: any node) to appear",
     )
     listing = commands.add_parser(
         "list",
         parents=[common],
-        help="topic names and types",
+        help="topic names (-t: and types)",
         description="Waits up to --timeout for the first other node, then --spin-time more.",
     )
-    add_listing_arguments(listing)
-    echo = commands.add_parser("echo", parents=[common], help="print messages as YAML")
-    echo.add_argument("topic", metavar="TOPIC")
-    echo.add_argument("--once", action="store_true", help="print one message and exit")
-    echo.add_argument("--count", type=positive_int, metavar="N", help="exit after N messages")
-    echo.add_argument(
-        "--full-length",
-        action="store_true",
-        help=f"do not shorten strings and arrays longer than {TRUNCATE_LENGTH}",
+    add_listing_arguments(listing, "topic")
+    listing.add_argument(
+        "-v", "--verbose", action="store_true", help="publishers and subscribers of each topic"
     )
+    _add_echo_parser(commands)
     hz = commands.add_parser("hz", parents=[common], help="publishing rate, every second")
     hz.add_argument("topic", metavar="TOPIC")
     hz.add_argument(
@@ -133,41 +290,92 @@ def _topic_parser() -> argparse.ArgumentParser:
         metavar="SEC",
         help="exit after SEC seconds (default: run until Ctrl-C)",
     )
-    _add_pub_parser(commands, common)
+    _add_pub_parser(commands)
     return parser
 
 
-def positive_rate(text: str) -> float:
-    """argparse type: a finite rate > 0 [Hz]."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a rate > 0 Hz, got {text!r}")
-    return value
+def _add_echo_parser(commands) -> None:
+    echo = commands.add_parser(
+        "echo",
+        help="print messages as YAML (or CSV)",
+        description="Print the messages of TOPIC as `ros2 topic echo` does: YAML documents "
+        "ended by ---. TYPE is learnt from the graph when not given.",
+    )
+    echo.add_argument("topic", metavar="TOPIC")
+    echo.add_argument(
+        "message_type", metavar="TYPE", nargs="?", help="message type, e.g. std_msgs/msg/String"
+    )
+    _add_qos_arguments(echo, "subscribe", ECHO_QOS_PROFILE)
+    echo.add_argument(
+        "--csv", action="store_true", help="one line of comma-separated values per message"
+    )
+    echo.add_argument(
+        "--field", metavar="FIELD", help="print this field only; '.' selects sub-fields "
+        "(e.g. pose.pose.position)",
+    )  # fmt: skip
+    echo.add_argument(
+        "-f",
+        "--full-length",
+        action="store_true",
+        help="do not shorten strings and arrays longer than --truncate-length",
+    )
+    echo.add_argument(
+        "-l",
+        "--truncate-length",
+        type=count,
+        default=TRUNCATE_LENGTH,
+        metavar="N",
+        help=f"length strings and arrays are cut to (default {TRUNCATE_LENGTH})",
+    )
+    echo.add_argument("--no-arr", action="store_true", help="don't print array fields")
+    echo.add_argument("--no-str", action="store_true", help="don't print string fields")
+    echo.add_argument(
+        "--flow-style", action="store_true", help="each message as one flow-style YAML line"
+    )
+    echo.add_argument(
+        "--no-lost-messages", action="store_true", help="don't report when a message is lost"
+    )
+    echo.add_argument("--raw", action="store_true", help="print the serialized bytes")
+    echo.add_argument(
+        "--filter",
+        dest="filter_expr",
+        metavar="EXPR",
+        help="print only messages for which this Python expression of m (the message, or "
+        "its --field) is true, e.g. 'm.data > 0'",
+    )
+    echo.add_argument("--once", action="store_true", help="print one message and exit")
+    echo.add_argument("--count", type=positive_int, metavar="N", help="exit after N messages")
+    echo.add_argument(
+        "--timeout",
+        type=positive_seconds,
+        metavar="SEC",
+        help="exit after SEC (code 0); without TYPE also how long TOPIC may take to appear "
+        f"(default {DEFAULT_TIMEOUT:g} s for that)",
+    )
+    echo.add_argument(
+        "-i",
+        "--include-message-info",
+        action="store_true",
+        help="print each message's info (timestamps, sequence numbers) too",
+    )
 
 
-def _add_pub_parser(commands, common: argparse.ArgumentParser) -> None:
+def _add_pub_parser(commands) -> None:
     pub = commands.add_parser(
         "pub",
-        parents=[common],
         help="publish a message given as YAML",
         description="Publish TYPE on TOPIC, filled from the YAML mapping of its fields, like "
         "`ros2 topic pub` (e.g. rns_topic pub --once /ptp_goal sensor_msgs/msg/JointState "
         "'{name: [joint_1], position: [0.5]}'). A Time field takes `now`, a Header `auto`. "
-        "--once / --times first wait up to --timeout for a subscription to match.",
+        "--once / --times first wait for a subscription, as long as it takes unless "
+        "--max-wait-time-secs.",
     )
     pub.add_argument("topic", metavar="TOPIC")
     pub.add_argument("type", metavar="TYPE", help="message type, e.g. std_msgs/msg/Bool")
     pub.add_argument(
         "values", metavar="YAML", nargs="?", default="{}", help="the fields (default '{}')"
     )
-    count = pub.add_mutually_exclusive_group()
-    count.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
-    count.add_argument(
-        "-t", "--times", type=positive_int, metavar="N", help="publish N messages and exit"
-    )
+    pub.add_argument("--stdin", action="store_true", help="read the YAML from standard input")
     pub.add_argument(
         "-r",
         "--rate",
@@ -177,16 +385,39 @@ def _add_pub_parser(commands, common: argparse.ArgumentParser) -> None:
         help=f"publishing rate (default {DEFAULT_PUB_RATE:g})",
     )
     pub.add_argument(
-        "-p", "--print", type=positive_int, default=1, metavar="N", help="print every N-th message"
+        "-p",
+        "--print",
+        type=count,
+        default=1,
+        metavar="N",
+        help="print every N-th message (0: none; default 1)",
+    )
+    times = pub.add_mutually_exclusive_group()
+    times.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
+    times.add_argument(
+        "-t",
+        "--times",
+        type=count,
+        default=0,
+        metavar="N",
+        help="publish N messages and exit (0: until Ctrl-C)",
     )
     pub.add_argument(
         "-w",
         "--wait-matching-subscriptions",
-        type=int,
+        type=count,
         default=None,
         metavar="N",
         help="subscriptions to wait for before publishing (default 1 with --once / --times, "
         "else 0)",
+    )
+    pub.add_argument(
+        "--max-wait-time-secs",
+        type=positive_seconds,
+        default=None,
+        metavar="SEC",
+        help="give up (exit 1) when the subscriptions did not match within SEC (default: wait "
+        "as long as it takes)",
     )
     pub.add_argument(
         "--keep-alive",
@@ -195,38 +426,180 @@ def _add_pub_parser(commands, common: argparse.ArgumentParser) -> None:
         metavar="SEC",
         help=f"stay this long after the last message (default {DEFAULT_KEEP_ALIVE:g})",
     )
-    pub.add_argument("--qos-depth", type=positive_int, default=10, metavar="N")
-    pub.add_argument("--qos-reliability", choices=("reliable", "best_effort"), default="reliable")
-    pub.add_argument(
-        "--qos-durability", choices=("volatile", "transient_local"), default="volatile"
-    )
+    pub.add_argument("-n", "--node-name", metavar="NAME", help="name of the publishing node")
+    _add_qos_arguments(pub, "publish", PUB_QOS_PROFILE)
 
 
 def _topic_list(args, session: ToolSession) -> int:
     session.discover(args.spin_time, args.timeout)
-    for name, types in sorted(session.node.get_topic_names_and_types()):
-        print(f"{name} [{', '.join(types)}]")
+    topics = [
+        (name, types)
+        for name, types in sorted(session.node.get_topic_names_and_types())
+        if args.include_hidden or not is_hidden(name)
+    ]
+    if args.count:
+        print(len(topics))
+    elif args.verbose:
+        for publishers in (True, False):
+            print(_endpoint_counts(session, topics, publishers))
+    else:
+        for name, types in topics:
+            print(f"{name} [{', '.join(types)}]" if args.show_types else name)
     sys.stdout.flush()
     return 0
 
 
+def _endpoint_counts(session: ToolSession, topics, publishers: bool) -> str:
+    """``ros2 topic list -v``'s block of published (or subscribed) topics with their counts."""
+    kind = "publisher" if publishers else "subscriber"
+    lines = [("Published" if publishers else "Subscribed") + " topics:"]
+    for name, types in topics:
+        n = (
+            session.node.count_publishers(name)
+            if publishers
+            else session.node.count_subscribers(name)
+        )
+        if n:
+            lines.append(f" * {name} [{', '.join(types)}] {n} {kind}{'s' if n > 1 else ''}")
+    return "\n".join(lines) + "\n"
+
+
+def _field_path(text: str | None) -> list[str] | None:
+    """``--field a.b`` as ['a', 'b'] (None: the whole message)."""
+    if text is None:
+        return None
+    path = [name for name in text.split(".") if name]
+    if not path:
+        raise UsageError(f"Invalid field value '{text}'")
+    return path
+
+
+def _select(msg: Any, path: list[str] | None) -> Any:
+    """The ``--field`` of ``msg``, or ToolError naming the field, as ros2 does."""
+    for name in path or ():
+        try:
+            msg = getattr(msg, name)
+        except AttributeError as exc:
+            raise ToolError(f"Invalid field '{'.'.join(path)}': {exc}") from None
+    return msg
+
+
+def message_filter(expr: str | None) -> Callable[[Any], bool] | None:
+    """``--filter EXPR`` as a test of ``m`` (None: every message passes), as ros2 evaluates it:
+    Python with its builtins. A syntax error is a usage error; an expression that raises on a
+    message ends the echo (ToolError, one line)."""
+    if not expr:
+        return None
+    try:
+        code = compile(expr, "--filter", "eval")
+    except SyntaxError as exc:
+        raise UsageError(f"--filter {expr!r} is not a Python expression: {exc.msg}") from None
+
+    def keep(m) -> bool:
+        try:
+            # m among the globals: generator expressions in EXPR see it too
+            return bool(eval(code, {"m": m}))
+        except Exception as exc:
+            raise ToolError(
+                f"--filter {expr!r} failed on a message: {type(exc).__name__}: {exc}"
+            ) from None
+
+    return keep
+
+
+def _is_message(value: Any) -> bool:
+    return hasattr(value, "get_fields_and_field_types")
+
+
+def echo_text(value: Any, args, info: dict | None = None) -> str:
+    """What ``echo`` prints for one message (or its ``--field``, or its raw bytes) as ros2
+    does: YAML then ``---``, one CSV line, or a field's Python value then ``---``; ``info``:
+    the message info of ``-i``."""
+    import yaml
+
+    truncate = None if args.full_length else args.truncate_length
+    if not _is_message(value):
+        if info is None:
+            return f"{value}\n---\n"
+        return f"---Got new message, message info:---\n{info}\n---Message data:---\n{value}\n---\n"
+    if args.csv:
+        line = message_to_csv(value, truncate, no_arr=args.no_arr, no_str=args.no_str)
+        if info is not None:
+            line = ",".join(str(x) for x in info.values()) + "," + line
+        return line + "\n"
+    head = "" if info is None else yaml.safe_dump(info) + "---\n"
+    text = message_to_yaml(
+        value, truncate, no_arr=args.no_arr, no_str=args.no_str, flow_style=args.flow_style
+    )
+    return head + text + "---\n"
+
+
 def _topic_echo(args, session: ToolSession) -> int:
-    topic, msg_type = _topic_type(session, args.topic, args.timeout)
+    path = _field_path(args.field)
+    keep = message_filter(args.filter_expr)
+    start = time.monotonic()
+    if args.message_type is None:
+        wait = DEFAULT_TIMEOUT if args.timeout is None else args.timeout
+        topic, msg_type = _topic_type(session, args.topic, wait)
+    else:
+        msg_type = import_interface(args.message_type, "msg")
+        topic = _expanded(session, args.topic)
+        # the publishers' QoS decides ours: give discovery its time, without requiring one
+        wait = DEFAULT_TIMEOUT if args.timeout is None else min(DEFAULT_TIMEOUT, args.timeout)
+        session.spin_until(lambda: bool(session.node.get_publishers_info_by_topic(topic)), wait)
+    _select(b"" if args.raw else msg_type(), path)  # a bad --field fails now, not per message
+    deadline = None if args.timeout is None else start + args.timeout
     limit = 1 if args.once else args.count
-    truncate = None if args.full_length else TRUNCATE_LENGTH
     printed = 0
 
-    def on_message(msg) -> None:
+    def on_message(msg, info=None) -> None:
         nonlocal printed
         if limit is not None and printed >= limit:
             return  # more may be queued in the same spin
+        value = _select(msg, path)
+        if keep is not None and not keep(value):
+            return
         printed += 1
-        sys.stdout.write(message_to_yaml(msg, truncate) + "---\n")
+        sys.stdout.write(echo_text(value, args, info))
         sys.stdout.flush()
 
-    session.node.create_subscription(msg_type, topic, on_message, _subscription_qos(session, topic))
-    session.spin_until(lambda: limit is not None and printed >= limit, None)
+    callback = (
+        (lambda msg, info: on_message(msg, info)) if args.include_message_info else on_message
+    )
+    _subscribe(session, msg_type, topic, callback, _echo_qos(args, session, topic), args)
+
+    def done() -> bool:
+        if limit is not None and printed >= limit:
+            return True
+        return deadline is not None and time.monotonic() >= deadline
+
+    session.spin_until(done, None)
     return 0
+
+
+def _subscribe(session: ToolSession, msg_type, topic: str, callback, qos, args) -> None:
+    """``echo``'s subscription, reporting lost messages as ros2 does unless
+    ``--no-lost-messages``; a QoS rclpy refuses is a usage error."""
+    from rclpy.event_handler import SubscriptionEventCallbacks, UnsupportedEventTypeError
+
+    def lost(status) -> None:
+        print(
+            f"A message was lost!!!\n\ttotal count change:{status.total_count_change}"
+            f"\n\ttotal count: {status.total_count}",
+            end="---\n",
+            flush=True,
+        )
+
+    events = None if args.no_lost_messages else SubscriptionEventCallbacks(message_lost=lost)
+    try:
+        try:
+            session.node.create_subscription(
+                msg_type, topic, callback, qos, event_callbacks=events, raw=args.raw
+            )
+        except UnsupportedEventTypeError:  # an RMW without the message-lost event
+            session.node.create_subscription(msg_type, topic, callback, qos, raw=args.raw)
+    except (ValueError, RuntimeError) as exc:  # rcl's errors are RuntimeErrors
+        raise UsageError(f"cannot subscribe to {topic}: {rcl_one_line(exc)}") from None
 
 
 class RateStats:
@@ -310,10 +683,11 @@ def _check_graph_type(session: ToolSession, topic: str, msg_type: type) -> None:
 
 def _topic_pub(args, session: ToolSession) -> int:
     from rclpy.duration import Duration
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     msg_type = import_interface(args.type, "msg")
-    values = parse_fields(args.values)
+    if args.stdin and args.values != "{}":
+        raise UsageError("give the YAML either as an argument or with --stdin, not both")
+    values = parse_fields(sys.stdin.read() if args.stdin else args.values)
 
     def message():
         return message_from_fields(
@@ -321,60 +695,76 @@ def _topic_pub(args, session: ToolSession) -> int:
         )
 
     message()  # a message that does not fit its type is a usage error before any waiting
-    topic = absolute_name(args.topic)
-    limit = 1 if args.once else args.times
+    times = 1 if args.once else args.times
     wait = args.wait_matching_subscriptions
     if wait is None:
-        wait = 1 if limit is not None else 0
-    qos = QoSProfile(
-        depth=args.qos_depth,
-        reliability=ReliabilityPolicy.RELIABLE
-        if args.qos_reliability == "reliable"
-        else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL
-        if args.qos_durability == "transient_local"
-        else DurabilityPolicy.VOLATILE,
-    )
-    publisher = session.node.create_publisher(msg_type, topic, qos)
-
-    def matched() -> bool:
-        _check_graph_type(session, topic, msg_type)
-        return publisher.get_subscription_count() >= wait
-
-    if wait > 0 and not session.spin_until(matched, args.timeout):
-        raise ToolError(
-            f"{publisher.get_subscription_count()} of {wait} subscription(s) to {topic} matched "
-            f"within {args.timeout:g} s (is the subscribing node running? check ROS_DOMAIN_ID "
-            "and ROS_AUTOMATIC_DISCOVERY_RANGE)"
+        wait = 1 if times else 0
+    if wait == 0 and args.max_wait_time_secs is not None:
+        raise UsageError(
+            "--max-wait-time-secs is only effective with --wait-matching-subscriptions, "
+            "--once or --times"
         )
+    topic = _expanded(session, args.topic)
+    try:
+        publisher = session.node.create_publisher(msg_type, topic, configured_qos(args))
+    except (ValueError, RuntimeError) as exc:  # rcl's errors are RuntimeErrors
+        raise UsageError(f"cannot publish on {topic}: {rcl_one_line(exc)}") from None
+    _wait_for_subscriptions(session, publisher, topic, msg_type, wait, args.max_wait_time_secs)
     _check_graph_type(session, topic, msg_type)
     print("publisher: beginning loop", flush=True)
     start, published = time.monotonic(), 0
-    while limit is None or published < limit:
+    while not times or published < times:
         due = start + published / args.rate
         session.spin_until(lambda due=due: time.monotonic() >= due, None)
         msg = message()
         publisher.publish(msg)
         published += 1
-        if published % args.print == 0:
+        if args.print and published % args.print == 0:
             print(f"publishing #{published}: {msg!r}\n", flush=True)
     # a reliable publisher leaves once every matched subscription has the messages
-    deadline = time.monotonic() + args.timeout
+    deadline = time.monotonic() + DEFAULT_TIMEOUT
     while not publisher.wait_for_all_acked(Duration(nanoseconds=50_000_000)):
         if time.monotonic() >= deadline:
             raise ToolError(
-                f"the messages to {topic} were not acknowledged within {args.timeout:g} s"
+                f"the messages to {topic} were not acknowledged within {DEFAULT_TIMEOUT:g} s"
             )
         session.spin_for(0.0)  # reads the Ctrl-C flag
     session.spin_for(args.keep_alive)
     return 0
 
 
+def _wait_for_subscriptions(
+    session: ToolSession, publisher, topic: str, msg_type, wait: int, max_wait: float | None
+) -> None:
+    """Wait until ``wait`` subscriptions matched ``publisher``, saying so every second as ros2
+    does; ToolError after ``max_wait`` [s] (None: no limit) or when the topic has another type."""
+    start = time.monotonic()
+    next_note = start
+    while publisher.get_subscription_count() < wait:
+        _check_graph_type(session, topic, msg_type)
+        now = time.monotonic()
+        if max_wait is not None and now - start >= max_wait:
+            raise ToolError(
+                f"Timed out waiting for subscribers: Expected {wait} subscribers but only got "
+                f"{publisher.get_subscription_count()} subscribers on {topic} (is the "
+                "subscribing node running? check ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE)"
+            )
+        if now >= next_note:
+            print(f"Waiting for at least {wait} matching subscription(s)...", flush=True)
+            next_note += WAIT_NOTE_PERIOD
+        step = 0.1 if max_wait is None else min(0.1, max(0.0, start + max_wait - now))
+        session.spin_until(lambda: publisher.get_subscription_count() >= wait, step)
+
+
 def topic_main(argv: Sequence[str] | None = None) -> int:
     """``rns_topic list|echo|hz|pub [TOPIC] [TYPE YAML]``; returns the exit code."""
     commands = {"list": _topic_list, "echo": _topic_echo, "hz": _topic_hz, "pub": _topic_pub}
     return run_tool(
-        "rns_topic", _topic_parser(), argv, lambda args, s: commands[args.command](args, s)
+        "rns_topic",
+        _topic_parser(),
+        argv,
+        lambda args, s: commands[args.command](args, s),
+        node_name=lambda args: getattr(args, "node_name", None),
     )
 
 

@@ -2,7 +2,7 @@
 
 A state stream repeats one layout at every message: the simulator's ``joint_states`` always
 names the same joints, ``base_odom`` always carries the same frame ids, the controller's
-JointTrajectory always has one point of n positions and n velocities. Only the stamp and the
+JointTrajectory always has the same three points of n values each. Only the stamp and the
 float64 values change. rclpy converts each message from Python to C and serializes it on every
 ``publish``; at a lockstep run's thousand periods per second that conversion was a large part
 of the nodes' CPU (an Odometry: ~27 us to convert, ~3 us to publish its bytes).
@@ -33,6 +33,8 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from rns_ros.bag.cdr import installed_layout
+from rns_ros.bag.definitions import DefinitionError
 from rns_ros.core.errors import InputError, RnsError
 from rns_ros.nodes.robot_io import trajectory_end
 
@@ -116,7 +118,9 @@ class SerializedTemplate:
                 stamp(message, *marks)
             families.append((bytes(serialize_message(message)), markers, marks))
         (data, markers, _), (data_b, markers_b, _) = families
-        self._buffer = bytearray(data)
+        # rclpy's serializer sizes its buffer by an estimate: a few bytes past the content
+        # would go on the wire, which strict CDR readers (rosbags) refuse
+        self._buffer = bytearray(data[: _content_size(type(message), data)])
         self._slots: dict[str, np.ndarray] = {}
         for name, values in markers.items():
             offset = _find_once(
@@ -166,6 +170,18 @@ class SerializedTemplate:
         if stamp is not None and self._stamp is not None:
             self._stamp[0][0], self._stamp[1][0] = stamp
         return bytes(self._buffer)
+
+
+def _content_size(message_type: type, data: bytes) -> int:
+    """Bytes of ``data``'s CDR content (what a publish of the message puts on the wire)."""
+    type_name = f"{message_type.__module__.split('.')[0]}/msg/{message_type.__name__}"
+    try:
+        size = installed_layout(type_name).content_size(data)
+    except DefinitionError as exc:
+        raise TemplateError(f"{type_name}: {exc}") from None
+    if size is None:
+        raise TemplateError(f"{type_name}: the serialized message does not walk as its type")
+    return size
 
 
 def _find_once(data: tuple[bytes, bytes], patterns: tuple[bytes, bytes], label: str) -> int:

@@ -47,7 +47,7 @@ from rns_ros.core.contact_geometry import ArcConstraint
 from rns_ros.harness import Harness, ProcessStack, TopicLog
 from rns_ros.resources import config_dir, scenario_path
 from rns_ros.runs.logger import rrd_lost, start_logger
-from rns_ros.runs.mcap_recording import open_mcap
+from rns_ros.runs.mcap_recording import open_mcap, record_robot_model
 from rns_ros.runs.recorded import latest_status_values
 
 #: rns_demo method -> (rns_force_controller method, os_variant, label of rns_reproduce).
@@ -186,9 +186,10 @@ def run_contact_method(method: str, scenario_name: str, args: argparse.Namespace
     with (
         ProcessStack(args.domain_id) as processes,
         Harness(args.domain_id, args.ros_args) as stack,
-        open_mcap(args, f"{scenario.name}_{method}", stack.probe().resolve_topic_name) as mcap_file,
+        open_mcap(args, f"{scenario.name}_{method}", stack) as mcap_file,
     ):
         stack.on_record.append(mcap_file.add)  # each recorded topic, written as it arrives
+        record_robot_model(stack, mcap_file)  # what a viewer draws the arm from
         joints = stack.record(JointState, "joint_states")
         errors = stack.record(Float64MultiArray, ERRORS_TOPIC)
         status = stack.record(DiagnosticArray, STATUS_TOPIC)

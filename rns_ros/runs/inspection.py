@@ -35,7 +35,7 @@ from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import rrd_lost, start_logger
-from rns_ros.runs.mcap_recording import open_mcap
+from rns_ros.runs.mcap_recording import open_mcap, record_robot_model
 from rns_ros.runs.recorded import (
     EnergyFigures,
     InterruptedRun,
@@ -191,9 +191,10 @@ def run_method(
     with (
         ProcessStack(args.domain_id) as processes,
         Harness(args.domain_id, args.ros_args, executor="events") as stack,
-        open_mcap(args, method, stack.probe().resolve_topic_name) as mcap_file,
+        open_mcap(args, method, stack) as mcap_file,
     ):
         stack.on_record.append(mcap_file.add)  # each recorded topic, written as it arrives
+        record_robot_model(stack, mcap_file)  # what a viewer draws the arm from
         # serialized, read after the run: this process then costs the stack little CPU
         streams = {
             "joints": stack.record(JointState, "joint_states", raw=True),

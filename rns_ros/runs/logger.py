@@ -86,4 +86,6 @@ def rrd_lost(path: str | None) -> str | None:
         why = storage_limit(path) or "rns_rerun_logger could not write it whole (its log says why)"
         return f"cannot write {path}: {why}; the file is removed"
     problem = rrd_problem(path)
-    return None if problem is None else f"{path} is not a complete recording: {problem}"
+    if problem is None:
+        return None
+    return f"cannot write {path} whole: {problem} (what was written is kept, not listed)"

@@ -35,7 +35,7 @@ from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.simulator import SimulatorNode
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.logger import add_logger, rrd_lost
-from rns_ros.runs.mcap_recording import open_mcap
+from rns_ros.runs.mcap_recording import open_mcap, record_robot_model
 
 #: rns_ptp methods in Table 4.2 order, with the thesis' labels.
 PTP_METHODS = {
@@ -130,9 +130,10 @@ def run_ptp_method(method: str, scenario: PtpScenario, args: argparse.Namespace)
     start = time.perf_counter()
     with (
         Harness(args.domain_id, args.ros_args) as stack,
-        open_mcap(args, method, stack.probe().resolve_topic_name) as mcap_file,
+        open_mcap(args, method, stack) as mcap_file,
     ):
         stack.on_record.append(mcap_file.add)  # each recorded topic, written as it arrives
+        record_robot_model(stack, mcap_file)  # what a viewer draws the arm from
         joints = stack.record(JointState, "joint_states")
         odom = stack.record(Odometry, "base_odom")
         status = stack.record(DiagnosticArray, "rns_ptp/status")

@@ -87,15 +87,15 @@ def test_demo_recordings_load_back_with_the_documented_entities(demo_run):
 
 
 def test_demo_mcap_recordings_hold_the_recorded_topics(demo_run):
-    """Next to each .rrd, an MCAP of the topics the figures come from; every robot state of the
-    figures' window is in it, and it decodes with the ROS 2 decoder."""
+    """Next to each .rrd, a bag of the topics the figures come from; every robot state of the
+    figures' window is in its MCAP file, which decodes with the ROS 2 decoder."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     _, rows = demo_run
     for method, row in rows.items():
-        assert row["mcap"].endswith(f"{method}.mcap")
-        with open(row["mcap"], "rb") as stream:
+        assert row["mcap"].endswith(f"/{method}")  # the bag folder
+        with open(f"{row['mcap']}/{method}_0.mcap", "rb") as stream:
             reader = make_reader(stream, decoder_factories=[DecoderFactory()])
             summary = reader.get_summary()
             topics = {c.id: c.topic for c in summary.channels.values()}
@@ -434,7 +434,7 @@ def test_sigterm_before_a_task_started_exits_143(monkeypatch, capsys):
 
 
 def test_a_recording_that_could_not_be_written_is_said_and_exits_1(monkeypatch, capsys):
-    lost = "cannot write /x/dls.mcap: No space left on device; the file is removed"
+    lost = "cannot write /x/dls: No space left on device; the bag is removed"
 
     def fake_run(method, _args, _file):
         return DemoRow(method, _figures(), 1.0, None, unwritten=(lost,) if method == "dls" else ())

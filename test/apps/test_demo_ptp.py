@@ -12,6 +12,7 @@ import pytest
 from rns_ros.analysis.ptp_runs import run_plan
 from rns_ros.apps import demo
 from rns_ros.apps.demo import main
+from rns_ros.bag import open_bag
 from rns_ros.control.ptp import PtpSettings
 from rns_ros.control.ptp_planner import plan_ptp
 from rns_ros.core import load_model
@@ -134,5 +135,10 @@ def test_short_task_over_dds_matches_the_core_and_reaches_the_goal(monkeypatch, 
         assert row["final_joint_error_deg"] < 0.5
         assert row["max_base_deviation_deg"] == pytest.approx(core, rel=0.2)
         assert os.path.isfile(row["recording"] or "")
+        # the bag beside it carries what a viewer draws the arm from
+        topics = open_bag(row["mcap"]).topics
+        assert topics["/robot_description"].message_count == 1
+        assert topics["/tf_static"].message_count == 1
+        assert topics["/tf"].message_count > 0
     # both folds of the 3-phase plan reach the thesis' -180 deg from -170 deg
     assert rows["three_phase"]["fold_reached"] == "I: -180 deg, III: -180 deg"

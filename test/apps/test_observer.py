@@ -95,7 +95,7 @@ def test_rate_falls_back_to_arrivals_without_stamps():
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["--domain-id", "200"], "--domain-id: must be an integer in [0, 101]"),
+        (["--domain-id", "233"], "--domain-id: must be an integer in [0, 232]"),
         (["--idle", "-1"], "--idle"),
     ],
 )

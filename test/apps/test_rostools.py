@@ -1,13 +1,15 @@
-"""rns_param / rns_topic (rns_ros.apps.param, .topic): ros2 param / ros2 topic without ros2cli.
+"""rns_param / rns_topic (rns_ros.apps.param, .topic): ros2 param / ros2 topic without ros2cli,
+with ros2cli Jazzy's arguments and output.
 
 The controller runs in this process in a Harness spun by a background thread; the tools' main()
 is called in the main thread (their own Context, joining the domain of the environment, as the
 console scripts do). A few checks run the installed executables as a user would.
-Domain 72 on loopback only, whatever the caller's environment says.
+Domain: ROS_DOMAIN_ID + 4, loopback only.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import signal
 import subprocess
@@ -19,7 +21,7 @@ from types import SimpleNamespace
 
 import pytest
 
-DOMAIN_ID = 72
+DOMAIN_ID = int(os.environ.get("ROS_DOMAIN_ID", "43")) + 4
 REPO = Path(__file__).resolve().parents[2]
 BIN = Path(sys.executable).parent
 ENV = {
@@ -60,8 +62,11 @@ class _Background:
 @pytest.fixture(scope="module")
 def stack():
     """``.node``: the controller (/rns_controller); ``.probe``: a node publishing
-    /rns_rostools_test at 50 Hz."""
-    from std_msgs.msg import String
+    /rns_rostools_test (String ``tick``) at 50 Hz, and at 20 Hz /rns_rostools_joints (JointState
+    of joints a, b at 0.5, 1.5 rad, frame ``base``) and /rns_rostools_counter (Int32 counting
+    up)."""
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Int32, String
 
     from rns_ros.harness import Harness
     from rns_ros.nodes.controller import ControllerNode
@@ -73,7 +78,19 @@ def stack():
             controller = harness.add(ControllerNode)
             probe = harness.probe("rns_rostools_probe")
             publisher = probe.create_publisher(String, "rns_rostools_test", 10)
+            joints = probe.create_publisher(JointState, "rns_rostools_joints", 10)
+            counter = probe.create_publisher(Int32, "rns_rostools_counter", 10)
+            count = iter(range(1 << 30))
+
+            def publish_more() -> None:
+                state = JointState(name=["a", "b"], position=[0.5, 1.5])
+                state.header.frame_id = "base"
+                state.header.stamp = probe.get_clock().now().to_msg()
+                joints.publish(state)
+                counter.publish(Int32(data=next(count)))
+
             probe.create_timer(0.02, lambda: publisher.publish(String(data="tick")))
+            probe.create_timer(0.05, publish_more)
             background = _Background(harness)
             background.start()
             try:
@@ -108,20 +125,119 @@ def test_set_changes_the_controller_method_and_get_round_trips(stack, capsys):
 
 
 def test_set_refuses_an_invalid_value_with_the_controllers_reason(stack, capsys):
+    """As ros2 param set: the refusal on stderr, exit code 0."""
     from rns_ros.apps.param import param_main
 
     before = stack.node.get_parameter("method").value
-    code, out, _ = _run(capsys, param_main, "set", "/rns_controller", "method", "foo")
-    assert code == 1
-    assert out.startswith("Setting parameter failed: ")
-    assert "one of" in out
-    assert "'foo'" in out
+    code, out, err = _run(capsys, param_main, "set", "/rns_controller", "method", "foo")
+    assert (code, out) == (0, "")
+    assert err.startswith("Setting parameter failed: ")
+    assert err.count("\n") == 1
+    assert "one of" in err
+    assert "'foo'" in err
     assert stack.node.get_parameter("method").value == before
 
     # out of the descriptor's range: rclpy's reason
-    code, out, _ = _run(capsys, param_main, "set", "/rns_controller", "epsilon", "50")
-    assert code == 1
-    assert "out of range" in out
+    code, out, err = _run(capsys, param_main, "set", "/rns_controller", "epsilon", "50")
+    assert (code, out) == (0, "")
+    assert "out of range" in err
+
+
+def test_get_prints_arrays_as_ros2_does(stack, capsys):
+    """Python's list: strings quoted, booleans True / False."""
+    from rns_ros.apps.param import param_main
+
+    code, out, err = _run(capsys, param_main, "get", "/rns_controller", "joints")
+    assert (code, err) == (0, ""), err
+    names = ", ".join(f"'joint_{k}'" for k in range(1, 8))
+    assert out == f"String values are: [{names}]\n"
+    code, out, _ = _run(capsys, param_main, "get", "/rns_controller", "joints", "--hide-type")
+    assert out == f"[{names}]\n"
+    code, out, _ = _run(capsys, param_main, "get", "/rns_controller", "immediate_reaction")
+    assert out == "Boolean value is: True\n"
+
+
+def test_dump_prints_a_params_file_that_yaml_reads_back(stack, capsys, tmp_path):
+    """ros2 param dump's layout: /NODE: ros__parameters: with every parameter, sorted, then a
+    blank line; --output-dir writes the same YAML to DIR/<node>.yaml."""
+    import yaml
+
+    from rns_ros.apps.param import param_main
+
+    code, out, err = _run(capsys, param_main, "dump", "/rns_controller")
+    assert (code, err) == (0, ""), err
+    assert out.startswith("/rns_controller:\n  ros__parameters:\n")
+    assert out.endswith("\n\n")
+    parameters = yaml.safe_load(out)["/rns_controller"]["ros__parameters"]
+    assert list(parameters) == sorted(parameters)
+    for name in ("method", "epsilon", "joints", "rate", "immediate_reaction"):
+        assert parameters[name] == stack.node.get_parameter(name).value, name
+    assert isinstance(parameters["epsilon"], float)
+
+    code, out, err = _run(
+        capsys, param_main, "dump", "rns_controller", "--output-dir", str(tmp_path / "params")
+    )
+    written = tmp_path / "params" / "rns_controller.yaml"
+    assert (code, err) == (0, ""), err
+    assert out == f"Saving to:  {written}\n"
+    assert yaml.safe_load(written.read_text())["/rns_controller"]["ros__parameters"] == parameters
+
+
+def test_load_restores_the_dumped_values_and_reports_each(stack, capsys, tmp_path):
+    """Each parameter of the file set one by one, as ros2 param load: successes on stdout,
+    refusals (read-only parameters) on stderr, exit code 0."""
+    from rns_ros.apps.param import param_main
+
+    code, out, _ = _run(capsys, param_main, "dump", "/rns_controller")
+    assert code == 0
+    saved = tmp_path / "controller.yaml"
+    saved.write_text(out)
+    before = {n: stack.node.get_parameter(n).value for n in ("method", "epsilon", "state_timeout")}
+    for name, value in (("method", "sc"), ("epsilon", "0.5"), ("state_timeout", "0.4")):
+        assert _run(capsys, param_main, "set", "/rns_controller", name, value)[0] == 0
+    assert stack.node.get_parameter("method").value == "sc"
+
+    code, out, err = _run(capsys, param_main, "load", "/rns_controller", str(saved))
+    assert code == 0, err
+    after = {n: stack.node.get_parameter(n).value for n in before}
+    assert after == before
+    assert "Set parameter method successful\n" in out
+    assert "Set parameter epsilon successful\n" in out
+    assert re.search(r"^Set parameter rate failed: .*read-only", err, re.M), err
+    assert all(line.startswith("Set parameter ") for line in (out + err).splitlines())
+
+
+def test_load_names_a_file_without_the_node_and_refuses_a_non_params_file(capsys, tmp_path):
+    from rns_ros.apps.param import param_main
+
+    other = tmp_path / "other.yaml"
+    other.write_text("/rns_simulator:\n  ros__parameters:\n    rate: 100.0\n")
+    code, out, err = _run(capsys, param_main, "load", "/rns_controller", str(other))
+    assert (code, out) == (1, "")
+    assert "has no section for /rns_controller (its sections: /rns_simulator)" in err
+    assert err.count("\n") == 1
+    plain = tmp_path / "plain.yaml"
+    plain.write_text("[1, 2]\n")
+    code, out, err = _run(capsys, param_main, "load", "/rns_controller", str(plain))
+    assert (code, out) == (2, "")
+    assert "not a params file" in err
+    assert err.count("\n") == 1
+
+
+def test_file_parameters_nest_groups_and_apply_the_wildcard_first(tmp_path):
+    from rns_ros.apps.param import file_parameters
+
+    params = tmp_path / "params.yaml"
+    params.write_text(
+        "/**:\n  ros__parameters:\n    use_sim_time: true\n    rate: 10.0\n"
+        "rns_controller:\n  ros__parameters:\n    rate: 100.0\n    gains: {k: 2, d: [1, 2]}\n"
+    )
+    node = {"rate": 100.0, "gains.k": 2, "gains.d": [1, 2]}
+    assert file_parameters(params, "/rns_controller") == node
+    assert file_parameters(params, "/rns_controller", use_wildcard=True) == {
+        "use_sim_time": True,
+        **node,
+    }
 
 
 def test_set_types_values_like_ros2_param(stack, capsys):
@@ -257,12 +373,35 @@ def test_bad_usage_is_one_line_exit_2(argv, capsys):
 
 
 # --- rns_topic -----------------------------------------------------------------------------------
-def test_topic_list_shows_names_and_types(stack, capsys):
+def test_topic_list_prints_names_and_with_t_types(stack, capsys):
+    """As ros2 topic list: one name a line (scripts read them); -t adds [type]; -c counts."""
     from rns_ros.apps.topic import topic_main
 
     code, out, _ = _run(capsys, topic_main, "list")
     assert code == 0
+    lines = out.splitlines()
+    assert "/rns_controller/status" in lines
+    assert all(re.fullmatch(r"/\S+", line) for line in lines), out
+    code, out, _ = _run(capsys, topic_main, "list", "-t")
+    assert code == 0
     assert "/rns_controller/status [diagnostic_msgs/msg/DiagnosticArray]" in out.splitlines()
+    code, out, _ = _run(capsys, topic_main, "list", "--count-topics")
+    assert code == 0
+    assert int(out) >= 5  # the controller's and the probe's
+
+
+def test_topic_list_verbose_counts_publishers_and_subscribers(stack, capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, _ = _run(capsys, topic_main, "list", "-v")
+    assert code == 0
+    published, subscribed = out.split("\n\n")[:2]
+    assert published.startswith("Published topics:\n")
+    assert " * /rns_controller/status [diagnostic_msgs/msg/DiagnosticArray] 1 publisher" in (
+        published.splitlines()
+    )
+    assert subscribed.startswith("Subscribed topics:\n")
+    assert " * /cmd_twist [geometry_msgs/msg/TwistStamped] 1 subscriber" in subscribed.splitlines()
 
 
 def test_echo_once_prints_the_controller_status_as_yaml(stack, capsys):
@@ -287,6 +426,190 @@ def test_echo_count(stack, capsys):
     code, out, _ = _run(capsys, topic_main, "echo", "rns_rostools_test", "--count", "3")
     assert code == 0
     assert out == "data: tick\n---\n" * 3
+
+
+def test_echo_takes_the_type_as_second_argument(stack, capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(
+        capsys, topic_main, "echo", "rns_rostools_test", "std_msgs/msg/String", "--once"
+    )
+    assert (code, err) == (0, ""), err
+    assert out == "data: tick\n---\n"
+
+
+def test_echo_field_prints_the_field_as_ros2(stack, capsys):
+    """A message field as YAML; a string its text; a sequence Python's value of it."""
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(
+        capsys, topic_main, "echo", "/rns_rostools_joints", "--field", "header.frame_id", "--once"
+    )
+    assert (code, err, out) == (0, "", "base\n---\n")
+    code, out, _ = _run(
+        capsys, topic_main, "echo", "/rns_rostools_joints", "--field", "header.stamp", "--once"
+    )
+    assert re.fullmatch(r"sec: \d+\nnanosec: \d+\n---\n", out), out
+    code, out, _ = _run(
+        capsys, topic_main, "echo", "/rns_rostools_joints", "--field", "position", "--once"
+    )
+    assert out == "array('d', [0.5, 1.5])\n---\n"
+
+
+def test_echo_a_field_the_type_lacks_is_one_line_exit_1(stack, capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(capsys, topic_main, "echo", "/rns_rostools_joints", "--field", "pose.x")
+    assert (code, out) == (1, "")
+    assert err == (
+        "rns_topic: Invalid field 'pose.x': 'JointState' object has no attribute 'pose'\n"
+    )
+
+
+def test_echo_csv_is_one_line_of_every_field(stack, capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(
+        capsys, topic_main, "echo", "/rns_rostools_joints", "--csv", "--count", "2"
+    )
+    assert (code, err) == (0, ""), err
+    lines = out.splitlines()
+    assert len(lines) == 2
+    for line in lines:  # stamp, frame_id, name[], position[], velocity[] (empty), effort[]
+        assert re.fullmatch(r"\d+,\d+,base,a,b,0\.5,1\.5,,", line), line
+
+
+def test_echo_no_arr_no_str_and_flow_style(stack, capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(
+        capsys, topic_main, "echo", "/rns_rostools_joints", "--no-arr", "--no-str", "--once"
+    )
+    assert (code, err) == (0, ""), err
+    lines = out.splitlines()
+    assert "  frame_id: '<string length: <4>>'" in lines
+    assert "name: '<sequence type: string, length: 2>'" in lines
+    assert "position: '<sequence type: double, length: 2>'" in lines
+    code, out, _ = _run(capsys, topic_main, "echo", "rns_rostools_test", "--flow-style", "--once")
+    assert out == "{data: tick}\n---\n"
+
+
+def test_echo_filter_prints_only_the_messages_it_accepts(stack, capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(
+        capsys, topic_main, "echo", "/rns_rostools_counter", "--filter", "m.data % 5 == 0",
+        "--count", "3",
+    )  # fmt: skip
+    assert (code, err) == (0, ""), err
+    values = [int(v) for v in re.findall(r"^data: (\d+)$", out, re.M)]
+    assert len(values) == 3
+    assert all(v % 5 == 0 for v in values)
+    assert values == sorted(values)
+
+
+@pytest.mark.parametrize(
+    ("expr", "code", "words"),
+    [("m.data ==", 2, "is not a Python expression"), ("m.nope", 1, "AttributeError")],
+)
+def test_echo_a_bad_filter_is_one_line(stack, capsys, expr, code, words):
+    from rns_ros.apps.topic import topic_main
+
+    got, out, err = _run(capsys, topic_main, "echo", "/rns_rostools_counter", "--filter", expr)
+    assert (got, out) == (code, "")
+    assert err.startswith("rns_topic: --filter ")
+    assert words in err
+    assert err.count("\n") == 1
+
+
+def test_echo_message_info_comes_before_each_message(stack, capsys):
+    import yaml
+
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(capsys, topic_main, "echo", "rns_rostools_test", "-i", "--once")
+    assert (code, err) == (0, ""), err
+    info, message, rest = out.split("---\n")
+    assert rest == ""
+    assert {"source_timestamp", "received_timestamp"} <= set(yaml.safe_load(info))
+    assert message == "data: tick\n"
+
+
+def test_echo_qos_options_override_what_the_publishers_offer(stack, capsys):
+    """A latched message: --qos-durability transient_local gets it; volatile does not, and
+    --timeout then ends the echo with exit code 0, as ros2."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+    from std_msgs.msg import String
+
+    from rns_ros.apps.topic import topic_main
+
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    publisher = stack.probe.create_publisher(String, "rns_rostools_latched_qos", latched)
+    publisher.publish(String(data="urdf"))
+    code, out, err = _run(
+        capsys, topic_main, "echo", "rns_rostools_latched_qos", "std_msgs/msg/String",
+        "--qos-profile", "system_default", "--qos-reliability", "reliable",
+        "--qos-durability", "transient_local", "--qos-depth", "1", "--once",
+    )  # fmt: skip
+    assert (code, err, out) == (0, "", "data: urdf\n---\n")
+    code, out, err = _run(
+        capsys, topic_main, "echo", "rns_rostools_latched_qos", "std_msgs/msg/String",
+        "--qos-durability", "volatile", "--timeout", "2",
+    )  # fmt: skip
+    assert (code, err, out) == (0, "", "")
+
+
+def test_qos_choices_are_rclpys_short_keys():
+    """Spelled out for the parser (built before rclpy loads): kept equal to rclpy's."""
+    from rclpy import qos
+
+    from rns_ros.apps import topic
+
+    ours = [
+        topic.QOS_PROFILES,
+        topic.QOS_HISTORY,
+        topic.QOS_RELIABILITY,
+        topic.QOS_DURABILITY,
+        topic.QOS_LIVELINESS,
+    ]
+    kinds = [
+        qos.QoSPresetProfiles,
+        qos.QoSHistoryPolicy,
+        qos.QoSReliabilityPolicy,
+        qos.QoSDurabilityPolicy,
+        qos.QoSLivelinessPolicy,
+    ]
+    assert ours == [tuple(kind.short_keys()) for kind in kinds]
+
+
+def test_configured_qos_overrides_a_copy_of_the_preset():
+    from rclpy.qos import DurabilityPolicy, QoSPresetProfiles, ReliabilityPolicy
+
+    from rns_ros.apps.topic import _topic_parser, configured_qos
+
+    args = _topic_parser().parse_args(
+        ["pub", "/x", "std_msgs/msg/Bool", "--qos-profile", "sensor_data", "--qos-depth", "3",
+         "--qos-durability", "transient_local"]
+    )  # fmt: skip
+    qos = configured_qos(args)
+    assert (qos.depth, qos.reliability) == (3, ReliabilityPolicy.BEST_EFFORT)
+    assert qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    preset = QoSPresetProfiles.get_from_short_key("sensor_data")
+    assert (preset.depth, preset.durability) == (5, DurabilityPolicy.VOLATILE)
+
+
+def test_messages_as_ros2_prints_them_with_no_arr_and_csv():
+    from geometry_msgs.msg import PoseWithCovariance
+    from std_msgs.msg import UInt8MultiArray
+
+    from rns_ros.ros_messages import message_to_csv, message_to_dict
+
+    pose = PoseWithCovariance()
+    assert message_to_dict(pose, no_arr=True)["covariance"] == "<array type: double[36]>"
+    assert message_to_csv(pose, 2) == "0.0,0.0,0.0,0.0,0.0,0.0,1.0,0.0,0.0,..."
+    data = UInt8MultiArray(data=[1, 2, 3])
+    assert message_to_dict(data, no_arr=True)["data"] == "<sequence type: uint8, length: 3>"
+    assert message_to_csv(data) == ",0,1,2,3"  # layout: no dims, offset 0; then the data
 
 
 def test_echo_gets_a_latched_message_published_before_it_started(stack, capsys):

@@ -1,16 +1,22 @@
 """rns_topic pub / rns_service call (rns_ros.apps.topic, .service): what the README's operator does
-with ``ros2 topic pub`` / ``ros2 service call``, without ros2cli, against our own nodes.
+with ``ros2 topic pub`` / ``ros2 service call``, without ros2cli, against our own nodes, with
+ros2cli Jazzy's arguments, output and waits.
 
 rns_simulator and rns_ptp run on the wall clock in a Harness spun by a background thread; the
 tools' main() runs in the main thread on its own Context, joining the domain of the environment
-as the console scripts do. Domain: ROS_DOMAIN_ID + 2, loopback only.
+as the console scripts do; the waits for a late peer run the installed executables. Domain:
+ROS_DOMAIN_ID + 2, loopback only.
 """
 
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -20,6 +26,7 @@ DOMAIN_ID = int(os.environ.get("ROS_DOMAIN_ID", "43")) + 2
 ENV = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_DOMAIN_ID": str(DOMAIN_ID)}
 #: A goal 0.3 rad from the simulator's start on every joint [rad]: a plan of a few seconds.
 GOAL_OFFSET = 0.3
+BIN = Path(sys.executable).parent
 
 
 @pytest.fixture(autouse=True)
@@ -31,8 +38,8 @@ def _environment(monkeypatch):
 
 @pytest.fixture(scope="module")
 def stack():
-    """``.simulator``, ``.ptp``; ``.joints`` / ``.status`` / ``.twists``: the latest
-    joint_states, rns_ptp status values and every cmd_twist, as a probe received them."""
+    """``.simulator``, ``.ptp``, ``.probe``; ``.joints`` / ``.status`` / ``.twists``: the latest
+    joint_states, rns_ptp status values and every cmd_twist, as the probe received them."""
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import TwistStamped
     from sensor_msgs.msg import JointState
@@ -67,7 +74,7 @@ def stack():
             thread = threading.Thread(target=spin, daemon=True)
             thread.start()
             try:
-                yield SimpleNamespace(simulator=simulator, ptp=ptp, seen=seen)
+                yield SimpleNamespace(simulator=simulator, ptp=ptp, probe=probe, seen=seen)
             finally:
                 stop.set()
                 thread.join(timeout=5.0)
@@ -119,7 +126,9 @@ def test_a_goal_moves_the_arm_cancel_stops_it_and_reset_puts_it_back(stack, caps
 
     code, out, err = _run(capsys, service_main, "call", "/rns_ptp/cancel", "std_srvs/srv/Trigger")
     assert (code, err) == (0, ""), err
-    assert out.startswith("requester: making request: std_srvs.srv.Trigger_Request()")
+    # ros2's line while the client is not yet matched (almost always: a new node)
+    request = out.removeprefix("waiting for service to become available...\n")
+    assert request.startswith("requester: making request: std_srvs.srv.Trigger_Request()")
     assert "response:\nstd_srvs.srv.Trigger_Response(success=True, message='decelerating" in out
     assert _wait(lambda: stack.seen.status.get("state") in ("IDLE", "CANCELLED", "DONE"))
     stopped = _positions(stack)
@@ -164,14 +173,146 @@ def test_a_twist_at_a_rate_with_an_auto_header(stack, capsys):
     assert stamps[2] - began >= 2 / 20 - 1e-3, (began, stamps)  # due at start + k / rate
 
 
-def test_service_list_shows_our_services(stack, capsys):
+def test_service_list_prints_names_and_with_t_types(stack, capsys):
     from rns_ros.apps.service import service_main
 
     code, out, _ = _run(capsys, service_main, "list")
     assert code == 0
     lines = out.splitlines()
+    assert "/rns_simulator/reset" in lines
+    assert "/rns_ptp/cancel" in lines
+    assert not any("[" in line for line in lines)
+    code, out, _ = _run(capsys, service_main, "list", "--show-types")
+    lines = out.splitlines()
     assert "/rns_simulator/reset [std_srvs/srv/Trigger]" in lines
     assert "/rns_ptp/cancel [std_srvs/srv/Trigger]" in lines
+
+
+def test_pub_qos_profile_and_node_name_leave_the_positionals_alone(stack, capsys):
+    """`--qos-profile sensor_data -n NAME -t 3` before TOPIC TYPE YAML, as ros2 parses them: a
+    best-effort publisher of that name, three messages, each received."""
+    from rclpy.qos import QoSPresetProfiles, ReliabilityPolicy
+    from std_msgs.msg import String
+
+    from rns_ros.apps.topic import topic_main
+
+    received = []
+
+    def on_message(msg) -> None:
+        publishers = stack.probe.get_publishers_info_by_topic("rns_pub_named")
+        received.append((msg.data, {(p.node_name, p.qos_profile.reliability) for p in publishers}))
+
+    stack.probe.create_subscription(
+        String, "rns_pub_named", on_message, QoSPresetProfiles.SENSOR_DATA.value
+    )
+    code, out, err = _run(
+        capsys, topic_main, "pub", "--qos-profile", "sensor_data", "-n", "rns_named_pub",
+        "-t", "3", "-r", "20", "rns_pub_named", "std_msgs/msg/String", "{data: hi}",
+    )  # fmt: skip
+    assert (code, err) == (0, ""), err
+    assert out.count("publishing #") == 3
+    assert _wait(lambda: len(received) >= 3)
+    assert [data for data, _ in received] == ["hi"] * 3
+    assert ("rns_named_pub", ReliabilityPolicy.BEST_EFFORT) in received[-1][1]
+
+
+def test_max_wait_time_without_a_wait_is_a_usage_error(capsys):
+    from rns_ros.apps.topic import topic_main
+
+    code, out, err = _run(
+        capsys, topic_main, "pub", "/x", "std_msgs/msg/Bool", "--max-wait-time-secs", "1"
+    )
+    assert (code, out) == (2, "")
+    assert "only effective with --wait-matching-subscriptions, --once or --times" in err
+    assert err.count("\n") == 1
+
+
+# --- waiting for a late peer, as ros2 does (no 5 s limit) ---------------------------------------
+def _start(*argv: str) -> subprocess.Popen:
+    script = BIN / argv[0]
+    if not script.exists():
+        pytest.skip(f"{script} not installed (run `make venv`)")
+    return subprocess.Popen(
+        [str(script), *argv[1:]],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, **ENV},
+    )
+
+
+def _read_until(process: subprocess.Popen, line: str, times: int = 1) -> None:
+    """Read ``process``'s stdout until ``line`` came ``times`` times (fails if it ends first)."""
+    seen = 0
+    while seen < times:
+        got = process.stdout.readline()
+        assert got, f"ended ({process.wait()}) before {line!r} x{times}: {process.stderr.read()}"
+        seen += got.rstrip("\n") == line
+
+
+def test_pub_once_waits_for_a_late_subscriber_then_delivers(stack):
+    """`pub --once` with nobody subscribed says it waits, once a second, past the 5 s an older
+    version gave up after; a subscription made then gets the message and pub exits 0."""
+    from std_msgs.msg import String
+
+    process = _start("rns_topic", "pub", "--once", "rns_pub_late", "std_msgs/msg/String",
+                     "{data: late}")  # fmt: skip
+    try:
+        _read_until(process, "Waiting for at least 1 matching subscription(s)...", times=7)
+        assert process.poll() is None  # still waiting, 6 s after the first line
+        received = []
+        stack.probe.create_subscription(String, "rns_pub_late", received.append, 10)
+        out, err = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert (process.returncode, err) == (0, ""), err
+    assert "publishing #1: std_msgs.msg.String(data='late')" in out
+    assert _wait(lambda: len(received) == 1)
+    assert received[0].data == "late"
+
+
+def test_service_call_waits_for_a_late_service(stack):
+    from std_srvs.srv import Trigger
+
+    process = _start("rns_service", "call", "/rns_late_service", "std_srvs/srv/Trigger")
+    try:
+        _read_until(process, "waiting for service to become available...")
+        time.sleep(6.0)  # longer than the 5 s an older version waited
+        assert process.poll() is None
+
+        def answer(_request, response):
+            response.success, response.message = True, "late"
+            return response
+
+        stack.probe.create_service(Trigger, "rns_late_service", answer)
+        out, err = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert (process.returncode, err) == (0, ""), err
+    assert out.startswith("requester: making request: std_srvs.srv.Trigger_Request()\n\n")
+    assert "response:\nstd_srvs.srv.Trigger_Response(success=True, message='late')\n" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "line"),
+    [
+        (["rns_topic", "pub", "--once", "/rns_nobody", "std_msgs/msg/Bool"],
+         "Waiting for at least 1 matching subscription(s)..."),
+        (["rns_service", "call", "/rns_nobody", "std_srvs/srv/Trigger"],
+         "waiting for service to become available..."),
+    ],
+)  # fmt: skip
+def test_ctrl_c_ends_a_wait_quietly_with_exit_0(argv, line):
+    process = _start(*argv)
+    try:
+        _read_until(process, line)
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=20)
+    finally:
+        process.kill()
+    assert (process.returncode, err) == (0, "")
+    assert "publishing" not in out
+    assert "requester" not in out
 
 
 # --- errors: one line, exit 1 (not found, refused) or 2 (the command line is wrong) ----------
@@ -201,7 +342,11 @@ def test_bad_requests_are_one_line(argv, code, words, capsys):
     from rns_ros.apps.topic import topic_main
 
     main, program = (topic_main, "rns_topic") if argv[0] == "pub" else (service_main, "rns_service")
-    got, out, err = _run(capsys, main, *argv, "--timeout", "0.3")
+    # pub waits for a subscription with --once only, and never past --max-wait-time-secs
+    extra = (
+        ["--once", "--max-wait-time-secs", "0.3"] if main is topic_main else ["--timeout", "0.3"]
+    )
+    got, out, err = _run(capsys, main, *argv, *extra)
     assert (got, out) == (code, ""), err
     assert err.startswith(f"{program}: "), err
     assert err.count("\n") == 1, err
@@ -221,10 +366,14 @@ def test_not_found_and_wrong_types_in_the_graph_are_exit_1(stack, capsys):
     )
     assert code == 1
     assert "has type std_srvs/srv/Trigger, not std_srvs/srv/SetBool" in err
-    code, _, err = _run(capsys, topic_main, "pub", "--once", "/nobody_listens", "std_msgs/msg/Bool",
-                        "{data: true}", "--timeout", "0.3")  # fmt: skip
+    argv = ["pub", "--once", "/nobody_listens", "std_msgs/msg/Bool", "{data: true}"]
+    code, out, err = _run(capsys, topic_main, *argv, "--max-wait-time-secs", "0.3")
     assert code == 1
-    assert "0 of 1 subscription(s) to /nobody_listens matched within 0.3 s" in err
+    assert out == "Waiting for at least 1 matching subscription(s)...\n"
+    assert err.startswith(
+        "rns_topic: Timed out waiting for subscribers: Expected 1 subscribers but only got 0"
+    )
+    assert err.count("\n") == 1
     code, _, err = _run(capsys, topic_main, "pub", "--once", "/joint_states", "std_msgs/msg/String")
     assert code == 1
     assert "has type sensor_msgs/msg/JointState, not std_msgs/msg/String" in err

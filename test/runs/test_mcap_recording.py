@@ -19,14 +19,9 @@ from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 
+from rns_ros.bag.definitions import SEPARATOR, message_definition, msg_dependencies, msg_file
 from rns_ros.harness import TopicLog
-from rns_ros.runs.mcap_recording import (
-    SEPARATOR,
-    McapRecording,
-    message_definition,
-    msg_dependencies,
-    msg_file,
-)
+from rns_ros.runs.mcap_recording import McapRecording
 
 
 def _log(topic: str, messages: list, raw: bool = False) -> TopicLog:
@@ -300,3 +295,35 @@ def test_msg_files_are_found_without_the_ament_environment(monkeypatch):
     assert path.is_file()
     assert path.read_text().startswith("#")
     assert "MSG: std_msgs/Header" in message_definition("sensor_msgs/msg/JointState")
+
+
+def test_a_bag_folder_with_the_offers_of_each_topic_that_rosbags_reads(tmp_path):
+    """``bag=True`` (rns_demo's recordings): a rosbag2 folder, each topic entered with its
+    first message and the QoS its publishers offer then; every message decodes with rosbags,
+    JointState included (rclpy's buffers carry bytes after its content)."""
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    from rns_ros.bag.qos import profile
+
+    asked = []
+
+    def offers(topic: str) -> list[dict]:
+        asked.append(topic)
+        return [profile(depth=1, durability="transient_local")] if topic == "/a" else []
+
+    folder = tmp_path / "dls"
+    folder.mkdir()
+    (folder / "dls_0.mcap").write_bytes(b"an earlier run")
+    with McapRecording(folder, lambda name: "/" + name, offers=offers, bag=True) as recording:
+        recording.add(_log("a", [_joint_state(k) for k in range(3)], raw=True))
+        recording.add(TopicLog("never", JointState))
+    assert recording.close() == str(folder)
+    assert asked == ["/a"]
+    assert sorted(p.name for p in folder.iterdir()) == ["dls_0.mcap", "metadata.yaml"]
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(folder) as reader:
+        (connection,) = reader.connections
+        assert connection.ext.offered_qos_profiles[0].depth == 1
+        decoded = [typestore.deserialize_cdr(raw, c.msgtype) for c, _, raw in reader.messages()]
+    assert [msg.header.stamp.sec for msg in decoded] == [0, 1, 2]

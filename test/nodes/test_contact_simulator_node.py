@@ -130,7 +130,7 @@ def test_saturated_torque_is_clipped_and_counted(ros):
         command.publish(Float64MultiArray(data=tau.tolist()))
         return joints.messages[-1].effort[0] == 176.0
 
-    assert ros.spin_until(clipped, timeout=10.0)
+    assert ros.spin_until(clipped, timeout=60.0)
     expected = np.clip(tau, -node.robot.effort_limits, node.robot.effort_limits)
     assert np.array_equal(joints.messages[-1].effort, expected)
     assert ros.spin_until(lambda: contacts.messages[-1].data[LABEL["saturated_joints"]] == 2.0)
@@ -154,7 +154,7 @@ def test_bad_torques_are_rejected_and_the_brake_takes_over(ros, data, reason):
         command.publish(Float64MultiArray(data=tau.tolist()))
         return joints.messages and np.array_equal(joints.messages[-1].effort, tau)
 
-    assert ros.spin_until(pushing, timeout=10.0)
+    assert ros.spin_until(pushing, timeout=60.0)
 
     def bad():
         command.publish(Float64MultiArray(data=data))
@@ -162,7 +162,7 @@ def test_bad_torques_are_rejected_and_the_brake_takes_over(ros, data, reason):
 
     # bad messages never reach the arm and do not feed the watchdog: after command_timeout the
     # brake holds (zero torque at rest without gravity)
-    assert ros.spin_until(bad, timeout=10.0), errors
+    assert ros.spin_until(bad, timeout=60.0), errors
     count = len(joints.messages)
     assert ros.spin_until(lambda: len(joints.messages) > count + 50)  # still running
     assert contacts.messages[-1].data[LABEL["normal_force"]] == pytest.approx(0.0, abs=1e-6)
@@ -192,14 +192,14 @@ def test_killed_controller_mid_push_releases_within_the_timeout(ros):
             and np.abs(joints.messages[-1].velocity).max() > 0.05
         )
 
-    assert ros.spin_until(sliding, timeout=10.0), "the controller never pushed and slid"
+    assert ros.spin_until(sliding, timeout=60.0), "the controller never pushed and slid"
     killed = node.simulator.time  # the last command went out before this instant
     assert ros.spin_until(
         lambda: (
             abs(contacts.messages[-1].data[LABEL["normal_force"]]) < 0.5
             and np.abs(joints.messages[-1].velocity).max() < 1e-3
         ),
-        timeout=10.0,
+        timeout=60.0,
     )
     released = contacts.messages[-1].data[LABEL["time"]] - killed
     print(f"released {released:.3f} s of simulated time after the last command ({timeout} s)")
@@ -238,7 +238,7 @@ def test_free_arm_accelerates_as_the_core_says(ros):
         command.publish(Float64MultiArray(data=tau.tolist()))
         return sum(np.array_equal(m.effort, tau) for m in joints.messages[count:]) >= 2
 
-    assert ros.spin_until(two_steps, timeout=10.0)
+    assert ros.spin_until(two_steps, timeout=60.0)
     first, second = [m for m in joints.messages[count:] if np.array_equal(m.effort, tau)][:2]
     dt = (second.header.stamp.nanosec - first.header.stamp.nanosec) * 1e-9 % 1.0
     assert dt == pytest.approx(0.001, abs=1e-9)
@@ -349,20 +349,20 @@ def test_a_diverged_step_holds_the_last_state_until_reset(ros):
         raise SimulationDivergedError("contact simulation diverged (forced): non-finite v")
 
     node.simulator.step = diverge
-    assert ros.spin_until(lambda: node._fault, timeout=5.0)
+    assert ros.spin_until(lambda: node._fault, timeout=30.0)
     count = len(joints.messages)
-    assert ros.spin_until(lambda: len(joints.messages) > count + 10, timeout=5.0)
+    assert ros.spin_until(lambda: len(joints.messages) > count + 10, timeout=30.0)
     held = joints.messages[-5:]
     assert len({_sim_seconds(m) for m in held}) == 1  # simulated time stopped
     assert not np.any([m.velocity for m in held])
     assert not np.any([m.effort for m in held])
-    assert ros.spin_until(lambda: any("diverged" in e for e in errors), timeout=5.0), errors
+    assert ros.spin_until(lambda: any("diverged" in e for e in errors), timeout=30.0), errors
     assert sum("diverged" in e for e in errors) == 1, errors
     assert _all_finite(joints, wrenches, contacts)
 
     assert client.wait_for_service(timeout_sec=5.0)
     future = client.call_async(Trigger.Request())
-    assert ros.spin_until(future.done, timeout=5.0)
+    assert ros.spin_until(future.done, timeout=30.0)
     assert future.result().success
-    assert ros.spin_until(lambda: not node._fault and node.simulator.time > 0.1, timeout=5.0)
+    assert ros.spin_until(lambda: not node._fault and node.simulator.time > 0.1, timeout=30.0)
     assert np.allclose(joints.messages[-1].position, WALL_TASK_RAD, atol=1e-12)

@@ -12,6 +12,7 @@ As in ros2cli, a ``builtin_interfaces/Time`` field given as ``now`` is the curre
 from __future__ import annotations
 
 import array
+import functools
 import importlib
 from collections.abc import Callable
 from typing import Any
@@ -58,6 +59,7 @@ def _is_message(value: Any) -> bool:
 def _field_to_plain(value: Any, slot: Any, truncate, no_arr: bool, no_str: bool) -> Any:
     """One field's ``value`` for :func:`message_to_dict` (``slot``: its rosidl type, None for
     the items of a sequence)."""
+    options = {"truncate": truncate, "no_arr": no_arr, "no_str": no_str}
     if _is_message(value):
         return message_to_dict(value, truncate, no_arr=no_arr, no_str=no_str)
     if isinstance(value, bytes):  # `byte` fields (length 1) and byte sequences
@@ -74,13 +76,15 @@ def _field_to_plain(value: Any, slot: Any, truncate, no_arr: bool, no_str: bool)
     if isinstance(value, list | tuple):
         if no_arr and slot is not None:
             return _abbreviated(value, slot)
-        cut = truncate is not None and len(value) > truncate
-        items = [
-            _field_to_plain(item, None, truncate, no_arr, no_str)
-            for item in (value[:truncate] if cut else value)
-        ]
-        return [*items, "..."] if cut else items
+        return _items(value, truncate, functools.partial(_field_to_plain, slot=None, **options))
     return value
+
+
+def _items(value: list | tuple, truncate: int | None, convert: Callable[[Any], Any]) -> list:
+    """The items of a sequence converted, cut after ``truncate`` with a last ``"..."``."""
+    cut = truncate is not None and len(value) > truncate
+    items = [convert(item) for item in (value[:truncate] if cut else value)]
+    return [*items, "..."] if cut else items
 
 
 def _plain_sequence(value: Any) -> Any:
@@ -171,12 +175,9 @@ def _csv_value(value: Any, slot: Any, truncate, no_arr: bool, no_str: bool) -> s
     if isinstance(value, list | tuple):
         if no_arr and slot is not None:
             return _abbreviated(value, slot)
-        cut = truncate is not None and len(value) > truncate
-        items = [
-            _csv_value(item, None, truncate, no_arr, no_str)
-            for item in (value[:truncate] if cut else value)
-        ]
-        return ",".join([*items, "..."] if cut else items)
+        options = {"truncate": truncate, "no_arr": no_arr, "no_str": no_str}
+        convert = functools.partial(_csv_value, slot=None, **options)
+        return ",".join(_items(value, truncate, convert))
     if isinstance(value, str):
         if no_str:
             return f"<string length: <{len(value)}>>"

@@ -311,3 +311,25 @@ def chain_urdf(links: int) -> str:
             )
     parts.append("</robot>")
     return "\n".join(parts)
+
+
+def run_with_file_size_limit(script: str, limit: int, timeout: float):
+    """``script`` run by this Python in a child process whose files may not grow past ``limit``
+    bytes (``ulimit -f``: writes beyond fail with EFBIG, Python ignores SIGXFSZ); the
+    CompletedProcess, output as text. The child joins no ROS graph beyond localhost."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    def limited() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return subprocess.run(
+        [sys.executable, "-c", script],
+        preexec_fn=limited,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
+    )

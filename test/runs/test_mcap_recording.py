@@ -6,10 +6,6 @@ fails (file-size limit) leaves no file."""
 
 from __future__ import annotations
 
-import os
-import resource
-import subprocess
-import sys
 import textwrap
 
 import pytest
@@ -17,6 +13,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
+from rns_testing import run_with_file_size_limit
 from sensor_msgs.msg import JointState
 
 from rns_ros.bag.definitions import SEPARATOR, message_definition, msg_dependencies, msg_file
@@ -270,17 +267,7 @@ def test_the_file_size_limit_ends_the_recording_and_removes_the_file(tmp_path):
     )
     limit = 64 * 1024
 
-    def limited() -> None:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
-
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        preexec_fn=limited,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
-    )
+    done = run_with_file_size_limit(script, limit, timeout=120)
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr
     assert done.stdout.startswith(f"None cannot write {path}: File too large; the file is removed")

@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from rerun.chunk import RrdReader
-from rns_testing import SATELLITE_OBSERVATION_DEG
+from rns_testing import SATELLITE_OBSERVATION_DEG, run_with_file_size_limit
 
 from rns_ros.core import ConfigError, FreeFloatingState, InputError, load_model_config
 from rns_ros.resources import default_model_config
@@ -506,10 +506,6 @@ def test_a_file_cut_short_is_not_a_complete_recording(open_recorder, tmp_path):
 def test_a_recording_over_the_file_size_limit_is_said_and_removed(tmp_path):
     """Under ``ulimit -f`` rerun's file writer stops: close() says so, naming the limit, and
     removes the file it could not finish (no exception, no file claimed)."""
-    import os
-    import resource
-    import subprocess
-    import sys
     import textwrap
 
     path = tmp_path / "limited.rrd"
@@ -532,17 +528,7 @@ def test_a_recording_over_the_file_size_limit_is_said_and_removed(tmp_path):
     )
     limit = 256 * 1024
 
-    def limited() -> None:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
-
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        preexec_fn=limited,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
-    )
+    done = run_with_file_size_limit(script, limit, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     assert "Traceback" not in done.stderr
     assert done.stdout.strip() == (

@@ -175,7 +175,7 @@ class TopicLog:
             start = len(self._messages)
             received = self.received[:start]
             for data, at in zip(self._raw, self.received[start:], strict=True):
-                msg = self._deserialize(data)
+                msg = self.decode(data)
                 if msg is None:
                     self.rejected += 1
                 else:
@@ -184,7 +184,7 @@ class TopicLog:
             self.received, self._raw = received, []
         return self._messages
 
-    def _deserialize(self, data: bytes):
+    def decode(self, data: bytes):
         """``data`` as a message, or None when the bytes are not one."""
         try:
             return deserialize_message(data, self.msg_type)
@@ -198,10 +198,17 @@ class TopicLog:
     def __len__(self) -> int:
         return len(self._messages) + len(self._raw)
 
+    def serialized(self, start: int = 0) -> list[bytes]:
+        """The serialized messages from the ``start``-th on, in receipt order (a raw log's
+        bytes as received; a plain log's messages serialized)."""
+        done = len(self._messages)
+        kept = [serialize_message(msg) for msg in self._messages[start:]]
+        return kept + self._raw[max(start - done, 0) :]
+
     def latest(self):
         """The newest message, or None."""
         for data in reversed(self._raw):  # bad bytes are counted once :attr:`messages` reads them
-            msg = self._deserialize(data)
+            msg = self.decode(data)
             if msg is not None:
                 return msg
         return self._messages[-1] if self._messages else None

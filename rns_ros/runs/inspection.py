@@ -511,24 +511,38 @@ def _run_task(
 
 
 class JointLimitWatch:
-    """The stamp [s] of an rns_controller status in JOINT_LIMIT (:attr:`at`; inf until one is
-    seen). Only the newest status of the log ``status`` is read at each look (a joint-limit stop
-    lasts while the operator pushes on, many periods), so the watch costs one message per look."""
+    """The stamp [s] of the first rns_controller status in JOINT_LIMIT (:attr:`at`; inf until
+    one is seen). Each look reads the statuses received since the last one, as bytes: only one
+    naming JOINT_LIMIT is decoded, so the watch costs a byte search per status, and the stamp
+    does not depend on how often this process looked (on simulated time the figures end at the
+    same instant on a busy machine as on a quiet one)."""
 
     def __init__(self, status: TopicLog) -> None:
         self._status = status
+        self._looked = 0
         self._at = math.inf
 
     @property
     def at(self) -> float:
         if math.isfinite(self._at):
             return self._at
-        msg = self._status.latest()
-        if msg is not None:
+        new = self._status.serialized(self._looked)
+        self._looked += len(new)
+        for data in new:
+            if JOINT_LIMIT_STATE not in data:
+                continue
+            msg = self._status.decode(data)
+            if msg is None:
+                continue
             states = {kv.value for entry in msg.status for kv in entry.values if kv.key == "state"}
             if "JOINT_LIMIT" in states:
                 self._at = header_seconds(msg)
+                break
         return self._at
+
+
+#: The controller state's text as it appears in a serialized status.
+JOINT_LIMIT_STATE = b"JOINT_LIMIT"
 
 
 #: rns_simulator's default RK4 step [s] and the range --sim-step accepts (its step_size's).

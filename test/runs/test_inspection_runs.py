@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import TwistStamped
 from rns_testing import SHORT_ROLL_SCENARIO
 
@@ -89,3 +92,30 @@ def test_a_twist_stream_recorded_from_mid_profile_is_a_partial_recording():
         _check_recorded_from_the_start(
             moving, argparse.Namespace(**{**vars(lockstep), **other}), "dls"
         )
+
+
+def _status(state: str, seconds: float) -> DiagnosticArray:
+    values = [KeyValue(key="state", value=state)]
+    msg = DiagnosticArray(status=[DiagnosticStatus(name="rns_controller", values=values)])
+    msg.header.stamp.sec, msg.header.stamp.nanosec = int(seconds), round(seconds % 1 * 1e9)
+    return msg
+
+
+def test_the_joint_limit_watch_takes_the_first_stop_whenever_it_looks():
+    """However many statuses arrived between two looks (a busy machine looks seldom), the stop
+    is the first JOINT_LIMIT status: the figures end at the same instant."""
+    from rclpy.serialization import serialize_message
+
+    from rns_ros.runs.inspection import JointLimitWatch
+
+    log = TopicLog("rns_controller/status", DiagnosticArray)
+    watch = JointLimitWatch(log)
+    for k in range(5):
+        log._append_raw(serialize_message(_status("OK", 0.5 + 0.01 * k)))
+    assert watch.at == math.inf
+    log._append_raw(b"\x00\x01\x00\x00JOINT_LIMIT but not a message")  # anyone may send bytes
+    for k in range(5):
+        log._append_raw(serialize_message(_status("JOINT_LIMIT", 1.0 + 0.01 * k)))
+    assert watch.at == pytest.approx(1.0)
+    log._append_raw(serialize_message(_status("JOINT_LIMIT", 2.0)))
+    assert watch.at == pytest.approx(1.0)

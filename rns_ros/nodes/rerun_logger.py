@@ -5,8 +5,9 @@ messages into arrays. Entity paths and units: :mod:`rns_ros.viz.paths`. One time
 ``ros_time``, from the header stamps (sim time when the simulator publishes /clock; a zero stamp
 is replaced by this node's clock).
 
-Subscribes (best effort, depth 100: matches reliable and best-effort publishers, and holds 1 s
-of 100 Hz state while a busy logger catches up instead of dropping samples):
+Subscribes (best effort, depth QUEUE_DEPTH = 2000: matches reliable and best-effort publishers,
+and holds 20 s of 100 Hz state, longer than a file's flush tick and the block sent then, while
+a busy logger catches up instead of dropping samples):
     joint_states              sensor_msgs/JointState (by joint name, other joints ignored): joint
                               transforms, camera arrow and trail, joint velocities, achieved
                               camera angular velocity
@@ -118,9 +119,9 @@ class RerunLoggerNode(Node):
         else:
             self.recorder = TelemetryRecorder(self.robot, urdf_path, sink, settings)
         try:
-            # deep queue: a recorder should not drop samples while rerun work or a busy CPU
-            # holds it up (1 s of a 100 Hz stream)
-            qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
+            # deep queue: a recorder should not drop samples while rerun work (a block of a
+            # flush tick) or a busy CPU holds it up
+            qos = QoSProfile(depth=QUEUE_DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT)
             self._extra_joints = ExtraJointsReport()  # joint_states names beyond the model's
             self.create_subscription(JointState, "joint_states", self._on_joint_state, qos)
             if self.fixed_base:
@@ -328,6 +329,10 @@ class RerunLoggerNode(Node):
                         f"recording closed ({counts} messages): {recorder.sink.description}"
                     )
         super().destroy_node()
+
+
+#: Messages each subscription holds while the node is busy: 20 s of a 100 Hz stream.
+QUEUE_DEPTH = 2000
 
 
 def main(args=None) -> int:

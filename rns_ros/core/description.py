@@ -13,12 +13,12 @@ A file, or an expanded xacro, over :data:`~rns_ros.core.urdf_tree.MAX_URDF_BYTES
 from __future__ import annotations
 
 import contextlib
-import os
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from rns_ros.core.errors import ModelError
 from rns_ros.core.urdf_tree import MAX_URDF_BYTES, check_urdf_size
+from rns_ros.core.yaml_input import read_head
 
 #: File name endings read as xacro.
 XACRO_SUFFIXES = (".xacro", ".urdf.xacro")
@@ -50,9 +50,7 @@ def read_description(
     try:
         if not path.is_file():
             raise ModelError(f"URDF file not found: {path}")
-        with path.open("rb") as stream:
-            data = stream.read(MAX_URDF_BYTES + 1)
-            size = max(len(data), os.fstat(stream.fileno()).st_size)
+        data, size = read_head(path, MAX_URDF_BYTES)
         check_urdf_size(size, str(path))
         if not is_xacro(path):
             return data.decode().replace("\r\n", "\n").replace("\r", "\n")  # as read_text

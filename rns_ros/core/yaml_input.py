@@ -140,6 +140,19 @@ def load_yaml(text: str, where: str):
         loader.dispose()
 
 
+def read_head(path: Path, limit: int) -> tuple[bytes, int]:
+    """The first ``limit + 1`` bytes of the file ``path`` and its size [bytes] (what was read,
+    or more where the file system says so): a file over ``limit`` is told without reading it
+    all.
+
+    Raises:
+        OSError: the file cannot be read.
+    """
+    with Path(path).open("rb") as stream:
+        data = stream.read(limit + 1)
+        return data, max(len(data), os.fstat(stream.fileno()).st_size)
+
+
 def read_yaml_file(path: str | Path, what: str):
     """The Python value of the YAML file ``path`` (see :func:`load_yaml`); ``what`` names the
     kind of file in errors ("model config").
@@ -152,9 +165,7 @@ def read_yaml_file(path: str | Path, what: str):
     try:
         if not path.is_file():
             raise ConfigError(f"{what} not found: {path}")
-        with path.open("rb") as stream:
-            data = stream.read(MAX_YAML_BYTES + 1)
-            size = max(len(data), os.fstat(stream.fileno()).st_size)
+        data, size = read_head(path, MAX_YAML_BYTES)
         if size > MAX_YAML_BYTES:
             raise ConfigError(
                 f"{path}: {size} bytes, over the limit of {MAX_YAML_BYTES} bytes for a {what}"

@@ -1,7 +1,7 @@
 """The package's rooms: imports point down only, no import circles, no ROS below nodes/.
 
 Rooms (docs/architecture.md): core < control, sim < analysis < viz and the libraries (cli,
-resources, harness, keyboard, tool_session, ros_messages, bag) < nodes < runs < apps (the
+resources, harness, keyboard, tool_session, tool_qos, ros_messages, bag) < nodes < runs < apps (the
 programs).
 A module may import its own room and the rooms listed for it; control and sim are side by side
 and do not import each other.
@@ -29,6 +29,7 @@ ALLOWED = {
     "keyboard": {"core", "control"},
     "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard", "bag"},
     "tool_session": {"core", "cli", "resources"},
+    "tool_qos": {"tool_session"},
     "ros_messages": {"core", "cli", "resources", "tool_session"},
     "bag": {"core", "cli", "resources"},
     "runs": {

@@ -13,7 +13,6 @@ Domain, exit codes and Ctrl-C: :mod:`rns_ros.tool_session`.
 from __future__ import annotations
 
 import argparse
-import copy
 import math
 import sys
 import time
@@ -29,6 +28,14 @@ from rns_ros.ros_messages import (  # noqa: F401  (message_to_dict: part of this
     message_to_dict,
     message_to_yaml,
     parse_fields,
+)
+from rns_ros.tool_qos import (
+    ECHO_QOS_PROFILE,
+    PUB_QOS_PROFILE,
+    add_qos_arguments,
+    configured_qos,
+    echo_qos,
+    subscription_qos,
 )
 from rns_ros.tool_session import (
     DEFAULT_TIMEOUT,
@@ -56,26 +63,6 @@ DEFAULT_PUB_RATE = 1.0
 DEFAULT_KEEP_ALIVE = 0.1
 #: Seconds between ``pub``'s "Waiting for at least N matching subscription(s)..." lines (ros2's).
 WAIT_NOTE_PERIOD = 1.0
-#: rclpy's QoS presets and policies by short key (``QoSPresetProfiles.short_keys()`` and the
-#: policies'), the choices of ros2's ``--qos-*`` options; spelled out because the parser is built
-#: before rclpy is imported.
-QOS_PROFILES = (
-    "unknown",
-    "default",
-    "system_default",
-    "sensor_data",
-    "services_default",
-    "parameters",
-    "parameter_events",
-    "action_status_default",
-    "best_available",
-)
-QOS_HISTORY = ("system_default", "keep_last", "keep_all", "unknown")
-QOS_RELIABILITY = ("system_default", "reliable", "best_effort", "unknown", "best_available")
-QOS_DURABILITY = ("system_default", "transient_local", "volatile", "unknown", "best_available")
-QOS_LIVELINESS = ("system_default", "automatic", "manual_by_topic", "unknown", "best_available")
-#: The QoS preset of ``echo`` and of ``pub`` without ``--qos-profile`` (ros2's).
-ECHO_QOS_PROFILE, PUB_QOS_PROFILE = "sensor_data", "default"
 
 
 def _expanded(session: ToolSession, topic: str) -> str:
@@ -105,152 +92,6 @@ def _topic_type(session: ToolSession, topic: str, timeout: float) -> tuple[str, 
     if len(types) > 1:
         raise ToolError(f"topic {topic} has more than one type: {', '.join(types)}")
     return topic, import_interface(types[0])
-
-
-def _subscription_qos(session: ToolSession, topic: str):
-    """QoS that matches every publisher of ``topic`` and gets what they offer (``hz``).
-
-    Reliable only if every publisher is (a reliable reader matches no best-effort writer);
-    transient local only if every publisher is, so latched messages (robot_description) arrive.
-    """
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
-    publishers = session.node.get_publishers_info_by_topic(topic)
-    qos = QoSProfile(
-        depth=10,
-        reliability=ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.VOLATILE,
-    )
-    if publishers and all(
-        p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in publishers
-    ):
-        qos.reliability = ReliabilityPolicy.RELIABLE
-    if publishers and all(
-        p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in publishers
-    ):
-        qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
-    return qos
-
-
-def _add_qos_arguments(parser: argparse.ArgumentParser, verb: str, profile: str) -> None:
-    """ros2's ``--qos-*`` options (``verb``: subscribe or publish; ``profile``: the preset)."""
-    adapted = "; default: what every publisher offers" if verb == "subscribe" else ""
-    parser.add_argument(
-        "--qos-profile",
-        choices=QOS_PROFILES,
-        default=profile,
-        help=f"QoS preset profile to {verb} with (default: {profile})",
-    )
-    parser.add_argument(
-        "--qos-depth", metavar="N", type=int, help=f"queue size to {verb} with (overrides the "
-        "profile's)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--qos-history", choices=QOS_HISTORY, help="history (overrides the profile's)"
-    )
-    parser.add_argument(
-        "--qos-reliability",
-        choices=QOS_RELIABILITY,
-        help=f"reliability (overrides the profile's{adapted})",
-    )
-    parser.add_argument(
-        "--qos-durability",
-        choices=QOS_DURABILITY,
-        help=f"durability (overrides the profile's{adapted})",
-    )
-    parser.add_argument(
-        "--qos-liveliness", choices=QOS_LIVELINESS, help="liveliness (overrides the profile's)"
-    )
-    parser.add_argument(
-        "--qos-liveliness-lease-duration-seconds",
-        type=float,
-        metavar="SEC",
-        help="liveliness lease duration (overrides the profile's)",
-    )
-
-
-def _qos_overridden(args) -> bool:
-    """Whether a ``--qos-*`` policy option was given (``--qos-profile`` alone is not)."""
-    return any(
-        value is not None
-        for value in (
-            args.qos_reliability,
-            args.qos_durability,
-            args.qos_depth,
-            args.qos_history,
-            args.qos_liveliness,
-            args.qos_liveliness_lease_duration_seconds,
-        )
-    )
-
-
-def configured_qos(args):
-    """The ``--qos-profile`` preset with the ``--qos-*`` overrides, as ros2 builds it (a depth
-    <= 0 keeps the preset's; transient local with depth 0 gets depth 1)."""
-    from rclpy.duration import Duration
-    from rclpy.qos import (
-        DurabilityPolicy,
-        HistoryPolicy,
-        LivelinessPolicy,
-        QoSPresetProfiles,
-        ReliabilityPolicy,
-    )
-
-    # rclpy hands out the preset object itself: a copy keeps the preset intact
-    qos = copy.copy(QoSPresetProfiles.get_from_short_key(args.qos_profile))
-    if args.qos_history:
-        qos.history = HistoryPolicy.get_from_short_key(args.qos_history)
-    if args.qos_durability:
-        qos.durability = DurabilityPolicy.get_from_short_key(args.qos_durability)
-    if args.qos_reliability:
-        qos.reliability = ReliabilityPolicy.get_from_short_key(args.qos_reliability)
-    if args.qos_liveliness:
-        qos.liveliness = LivelinessPolicy.get_from_short_key(args.qos_liveliness)
-    lease = args.qos_liveliness_lease_duration_seconds
-    if lease and lease >= 0:
-        qos.liveliness_lease_duration = Duration(seconds=lease)
-    if args.qos_depth and args.qos_depth >= 0:
-        qos.depth = args.qos_depth
-    elif qos.durability == DurabilityPolicy.TRANSIENT_LOCAL and qos.depth == 0:
-        qos.depth = 1
-    policies = {
-        "history": HistoryPolicy,
-        "reliability": ReliabilityPolicy,
-        "durability": DurabilityPolicy,
-        "liveliness": LivelinessPolicy,
-    }
-    unknown = [name for name, kind in policies.items() if getattr(qos, name) == kind.UNKNOWN]
-    if unknown:  # rcl refuses them, with a page of C error state
-        raise UsageError(f"QoS {', '.join(unknown)} 'unknown': no endpoint can be created with it")
-    return qos
-
-
-def _echo_qos(args, session: ToolSession, topic: str):
-    """ros2 topic echo's QoS: the options' if a policy is given, else the preset made reliable
-    (transient local) if every publisher of ``topic`` is, so it matches them all."""
-    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
-
-    qos = configured_qos(args)
-    publishers = session.node.get_publishers_info_by_topic(topic)
-    if _qos_overridden(args) or not publishers:
-        return qos
-    for policy, strong, weak in (
-        ("reliability", ReliabilityPolicy.RELIABLE, ReliabilityPolicy.BEST_EFFORT),
-        ("durability", DurabilityPolicy.TRANSIENT_LOCAL, DurabilityPolicy.VOLATILE),
-    ):
-        offering = sum(getattr(p.qos_profile, policy) == strong for p in publishers)
-        if offering == len(publishers):
-            setattr(qos, policy, strong)
-            continue
-        if offering:
-            kind = type(strong).__name__.removesuffix("Policy")
-            print(
-                f"Some, but not all, publishers are offering QoS{kind}Policy.{strong.name}. "
-                f"Falling back to QoS{kind}Policy.{weak.name} as it will connect to all "
-                "publishers"
-            )
-        setattr(qos, policy, weak)
-    return qos
 
 
 def _topic_parser() -> argparse.ArgumentParser:
@@ -305,7 +146,7 @@ def _add_echo_parser(commands) -> None:
     echo.add_argument(
         "message_type", metavar="TYPE", nargs="?", help="message type, e.g. std_msgs/msg/String"
     )
-    _add_qos_arguments(echo, "subscribe", ECHO_QOS_PROFILE)
+    add_qos_arguments(echo, "subscribe", ECHO_QOS_PROFILE)
     echo.add_argument(
         "--csv", action="store_true", help="one line of comma-separated values per message"
     )
@@ -427,7 +268,7 @@ def _add_pub_parser(commands) -> None:
         help=f"stay this long after the last message (default {DEFAULT_KEEP_ALIVE:g})",
     )
     pub.add_argument("-n", "--node-name", metavar="NAME", help="name of the publishing node")
-    _add_qos_arguments(pub, "publish", PUB_QOS_PROFILE)
+    add_qos_arguments(pub, "publish", PUB_QOS_PROFILE)
 
 
 def _topic_list(args, session: ToolSession) -> int:
@@ -566,7 +407,7 @@ def _topic_echo(args, session: ToolSession) -> int:
     callback = (
         (lambda msg, info: on_message(msg, info)) if args.include_message_info else on_message
     )
-    _subscribe(session, msg_type, topic, callback, _echo_qos(args, session, topic), args)
+    _subscribe(session, msg_type, topic, callback, echo_qos(args, session, topic), args)
 
     def done() -> bool:
         if limit is not None and printed >= limit:
@@ -641,7 +482,7 @@ def _topic_hz(args, session: ToolSession) -> int:
         msg_type,
         topic,
         lambda _data: stats.add(time.monotonic()),
-        _subscription_qos(session, topic),
+        subscription_qos(session, topic),
         raw=True,
     )
     end = None if args.duration is None else time.monotonic() + args.duration

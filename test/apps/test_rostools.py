@@ -563,14 +563,14 @@ def test_qos_choices_are_rclpys_short_keys():
     """Spelled out for the parser (built before rclpy loads): kept equal to rclpy's."""
     from rclpy import qos
 
-    from rns_ros.apps import topic
+    from rns_ros import tool_qos
 
     ours = [
-        topic.QOS_PROFILES,
-        topic.QOS_HISTORY,
-        topic.QOS_RELIABILITY,
-        topic.QOS_DURABILITY,
-        topic.QOS_LIVELINESS,
+        tool_qos.QOS_PROFILES,
+        tool_qos.QOS_HISTORY,
+        tool_qos.QOS_RELIABILITY,
+        tool_qos.QOS_DURABILITY,
+        tool_qos.QOS_LIVELINESS,
     ]
     kinds = [
         qos.QoSPresetProfiles,
@@ -585,7 +585,8 @@ def test_qos_choices_are_rclpys_short_keys():
 def test_configured_qos_overrides_a_copy_of_the_preset():
     from rclpy.qos import DurabilityPolicy, QoSPresetProfiles, ReliabilityPolicy
 
-    from rns_ros.apps.topic import _topic_parser, configured_qos
+    from rns_ros.apps.topic import _topic_parser
+    from rns_ros.tool_qos import configured_qos
 
     args = _topic_parser().parse_args(
         ["pub", "/x", "std_msgs/msg/Bool", "--qos-profile", "sensor_data", "--qos-depth", "3",

@@ -112,12 +112,8 @@ def _use_dask_scheduler(address: str, ids: list[str]) -> None:
 
 def _body(argv: Sequence[str]) -> int:
     args = _parser().parse_args(list(argv))
-    from rns_ros.analysis.reproduce.registry import (
-        load_all,
-        output_dir,
-        report_markdown,
-        resolve,
-    )
+    from rns_ros.analysis.reproduce.registry import load_all, output_dir, resolve
+    from rns_ros.analysis.reproduce.report import report_markdown
 
     if args.command == "list":
         for reproduction in load_all().values():

@@ -16,7 +16,7 @@ from rns_ros.analysis.planar_field import PlanarArm, critical_distance, fixed_po
 from rns_ros.analysis.reproduce import chapter3, chapter3_bifurcation
 from rns_ros.analysis.reproduce.registry import CLOSE_FRACTION, Verdict, run_one
 
-IDS = ("fig3.1", "fig3.2", "fig3.3", "bifurcation")
+IDS = ("fig3.1", "fig3.2", "fig3.3", "sec3.2.2")
 
 
 def _rows(document) -> dict[str, dict]:
@@ -48,11 +48,16 @@ def test_quick_run_writes_json_and_png(identifier, tmp_path):
     assert document["settings"]["base_mass_kg"] == 1000.0
     assert document["choices"]
     # the planar model is fully specified: every number the thesis prints is met exactly
-    assert verdicts <= {Verdict.EXACT, Verdict.QUALITATIVE, Verdict.NOT_REPRODUCED}
+    assert verdicts <= {
+        Verdict.EXACT,
+        Verdict.QUALITATIVE,
+        Verdict.NOT_REPRODUCED,
+        Verdict.BY_CONSTRUCTION,
+    }
 
 
 def test_bifurcation_json(tmp_path):
-    document = _run("bifurcation", tmp_path)
+    document = _run("sec3.2.2", tmp_path)
     assert 0.9448 <= document["r_star_m"] <= 0.9450
     assert document["thesis"]["r_star_m"] == 0.945
     assert document["ours"]["r_star_m"] == pytest.approx(0.944885, abs=1e-6)
@@ -66,7 +71,7 @@ def test_bifurcation_json(tmp_path):
 
 
 def test_bifurcation_verdicts_follow_the_numbers(tmp_path):
-    rows = _rows(_run("bifurcation", tmp_path))
+    rows = _rows(_run("sec3.2.2", tmp_path))
     # 0.944885 is 1.2e-4 m from the printed 0.945, within half its last digit (5e-4 m)
     assert abs(rows["r_star_m"]["ours"] - 0.945) <= chapter3.R_STAR_TOLERANCE
     assert rows["r_star_m"]["verdict"] == Verdict.EXACT
@@ -88,9 +93,12 @@ def test_another_arm_makes_the_printed_numbers_different(monkeypatch, tmp_path):
     at_half = len(fixed_points(short.at(0.5)))
     assert at_half > 0
     monkeypatch.setattr(chapter3, "ARM", short)
-    rows = _rows(_run("fig3.2", tmp_path))
+    monkeypatch.setattr(chapter3_bifurcation, "ARM", short)
+    rows = _rows(_run("sec3.2.2", tmp_path))
     assert rows["r_star_m"]["ours"] == pytest.approx(r_star)
     assert rows["r_star_m"]["verdict"] == Verdict.DIFFERENT
+    rows = _rows(_run("fig3.2", tmp_path))
+    assert "r_star_m" not in rows  # one claim, judged once (sec3.2.2)
     assert rows["fixed_points_r0_5"]["ours"] == at_half
     assert rows["fixed_points_r0_5"]["verdict"] == Verdict.DIFFERENT
 
@@ -111,11 +119,19 @@ def test_the_limit_trend_fails_when_the_branches_stop_short():
     assert chapter3_bifurcation._limit_row(stalled).verdict is Verdict.NOT_REPRODUCED
 
 
+#: a det map with no zero and no fixed point: "the dark area is singular" cannot hold
+_FLAT_MAP = (np.linspace(-np.pi, np.pi, 5), np.linspace(-np.pi, np.pi, 5), np.ones((5, 5)))
+
+
 @pytest.mark.parametrize(
     ("row", "verdict"),
     [
-        (lambda: chapter3._symmetry_row(1e-15, 11), Verdict.QUALITATIVE),
+        # an identity is listed, never agreement; should it fail, it is a defect
+        (lambda: chapter3._symmetry_row(1e-15, 11), Verdict.BY_CONSTRUCTION),
         (lambda: chapter3._symmetry_row(1e-3, 11), Verdict.NOT_REPRODUCED),
+        (lambda: chapter3._com_distance_row([0.0, 0.0], 2.5, 0.01), Verdict.BY_CONSTRUCTION),
+        (lambda: chapter3._com_distance_row([0.0, 0.5], 2.4, 0.01), Verdict.NOT_REPRODUCED),
+        (lambda: chapter3._dark_area_row(chapter3.ARM, _FLAT_MAP, []), Verdict.NOT_REPRODUCED),
         (lambda: chapter3._joint_2_row(0.95, 0.31, 11), Verdict.QUALITATIVE),
         (lambda: chapter3._joint_2_row(0.4, 0.9, 11), Verdict.NOT_REPRODUCED),
         (lambda: chapter3._separation_row([], 0.05, 1.2), Verdict.QUALITATIVE),
@@ -140,15 +156,16 @@ def test_figure_numbers(tmp_path):
     assert fig3_2["fixed_point_counts"] == {"0.5": 0, "0.945": 4, "1.5": 4}
     rows = _rows(fig3_2)
     assert rows["fixed_points_r0_5"]["verdict"] == Verdict.EXACT
-    assert rows["fixed_points_created_at_r_star"]["verdict"] == Verdict.EXACT
-    assert "4 fixed points at r = 0.945 m" in rows["fixed_points_created_at_r_star"]["note"]
+    assert "fixed_points_created_at_r_star" not in rows  # counted in sec3.2.2
+    assert "4 fixed points at r = 0.945 m" in fig3_2["near_r_star"]
     assert rows["separation_r1_5"]["verdict"] == Verdict.QUALITATIVE
     fig3_3 = _run("fig3.3", tmp_path, quick=False)
     assert fig3_3["det_argmax_theta_rad"] == [0.0, 0.0]
     assert fig3_3["det_max_kg2_m4"] == pytest.approx(2.5251e5, rel=1e-3)
     rows = _rows(fig3_3)
     assert rows["det_argmax_theta_rad"]["verdict"] == Verdict.EXACT
-    assert rows["dark_area_is_singular"]["verdict"] == Verdict.QUALITATIVE
+    assert rows["dark_area_is_singular"]["verdict"] == Verdict.BY_CONSTRUCTION
+    assert rows["com_distance_argmax_theta_rad"]["verdict"] == Verdict.BY_CONSTRUCTION
     assert rows["fixed_points_in_small_distance_area"]["verdict"] == Verdict.QUALITATIVE
     # 'det large whenever the distance is large' fails at the edge of the large-distance half
     assert fig3_3["det_min_where_distance_above_median_kg2_m4"] < fig3_3["det_median_kg2_m4"]

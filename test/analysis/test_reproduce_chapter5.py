@@ -14,6 +14,7 @@ from rns_testing import comparison_rows, expected_verdict, quick_result_verdicts
 from rns_ros.analysis.reproduce import chapter5, registry
 from rns_ros.analysis.reproduce.registry import run_one
 from rns_ros.apps import reproduce
+from rns_ros.core.errors import ConfigError
 
 IDS = ("fig5.1", "fig5.2", "fig5.3")
 KEYS = {
@@ -54,23 +55,54 @@ def test_quick_run_writes_finite_json_with_the_documented_keys(documents, identi
     assert document["choices"]
     for c in document["comparisons"]:
         if c["verdict"] in {"different", "not reproduced"}:  # a cause, or "the cause is open"
-            assert any(word in c["note"] for word in ("open", "needs", "singularities")), c
+            causes = ("open", "needs", "singularities", "do not resolve")
+            assert any(word in c["note"] for word in causes), c
+
+
+PLANAR = (1.002, chapter5.PLANAR_MEAN_PRECISION, chapter5.PLANAR_EXCESS_TOLERANCE)
+SPATIAL = (1.14, chapter5.SPATIAL_MEAN_PRECISION, chapter5.SPATIAL_EXCESS_TOLERANCE)
+
+
+def excess_verdict(thesis: float, mean: float, tolerance: float) -> str:
+    """The verdict rule on the excess over 1 (C_ratio >= 1), written out independently."""
+    return expected_verdict(thesis - 1.0, mean - 1.0, tolerance)
 
 
 @pytest.mark.parametrize(
-    ("thesis", "mean", "tolerance", "verdict"),
+    ("printed", "mean", "verdict", "where"),
     [
-        (1.002, 1.0018, 5e-4, "exact"),
-        (1.002, 1.0014977, 5e-4, "close"),  # the full 100² mesh: rounds to 1.001
-        (1.14, 1.0472, 5e-3, "close"),  # the full 50⁴ grid: excess 0.047 against 0.14
-        (1.14, 1.3, 5e-3, "different"),
+        (PLANAR, 1.00205, "exact", "inside"),  # excess 0.00205: within 1e-4 of 0.002
+        (PLANAR, 1.00185, "close", "inside"),  # 7.5 % below the excess 0.002
+        (PLANAR, 1.0016816, "different", "inside"),  # the quick 40² mesh: rounds to 1.002
+        (PLANAR, 1.0014977, "different", "below"),  # the full 100² mesh: rounds to 1.001
+        (SPATIAL, 1.142, "exact", "inside"),
+        (SPATIAL, 1.13, "close", "below"),  # excess 0.13 against 0.14
+        (SPATIAL, 1.0472, "different", "below"),  # the full 50⁴ grid: 0.047 against 0.14
+        (SPATIAL, 1.3, "different", "above"),
     ],
 )
-def test_mean_row_follows_the_rule_and_states_both_excesses(thesis, mean, tolerance, verdict):
-    row = chapter5.mean_row(thesis, mean, tolerance, "test")
-    assert row.verdict.value == verdict == expected_verdict(thesis, mean, tolerance)
-    assert f"ours {mean - 1:.3g}, the thesis' {thesis - 1:.3g}" in row.note
-    assert ("open" in row.note) == (verdict == "different")
+def test_mean_row_is_judged_on_the_excess_over_1(printed, mean, verdict, where):
+    thesis, precision, tolerance = printed
+    row = chapter5.mean_row(thesis, mean, precision, tolerance, "test")
+    assert row.key == "c_ratio_mean"
+    assert (row.thesis, row.ours) == (thesis, mean)  # shown as printed
+    assert row.verdict.value == verdict == excess_verdict(thesis, mean, tolerance)
+    low, high = thesis - precision - 1.0, thesis + precision - 1.0
+    assert (
+        f"excess over 1 in [{low:.4g}, {high:.4g}): ours, {mean - 1:.4g}, lies {where}" in row.note
+    )
+    cause = "do not resolve" if where == "inside" else "the cause is open"
+    assert (cause in row.note) == (verdict == "different")
+
+
+def test_the_excess_bands_are_no_wider_than_their_close_bands():
+    """1.002 printed to +-5e-4 cannot set the exact band of its excess 0.002 (close band 2e-4):
+    the rule refuses it, and the stated band is inside the close band."""
+    precision = chapter5.PLANAR_MEAN_PRECISION  # its half unit as the exact band
+    with pytest.raises(ConfigError, match="wider than the close band"):
+        chapter5.mean_row(1.002, 1.002, precision, precision, "test")
+    for thesis, _, tolerance in (PLANAR, SPATIAL):
+        assert tolerance <= 0.1 * (thesis - 1.0)
 
 
 def test_fig5_1_ratio_is_one_almost_everywhere(documents):
@@ -82,7 +114,7 @@ def test_fig5_1_ratio_is_one_almost_everywhere(documents):
     assert document["share_above_1_01"] < 0.05
     table = comparison_rows(document)
     mean = table["c_ratio_mean"]
-    assert mean["verdict"] == expected_verdict(1.002, mean["ours"], 5e-4)
+    assert mean["verdict"] == excess_verdict(1.002, mean["ours"], PLANAR[2])
     assert table["share_near_1"]["verdict"] == (
         "qualitative" if ours["share_near_1"] >= 0.95 else "not reproduced"
     )
@@ -129,7 +161,9 @@ def test_fig5_3_statistics_and_slices(documents):
     assert [s["theta1_rad"] for s in document["slices"]] == [-3.05, -math.pi]
     assert all(s["c_ratio_mean"] >= 1.0 - 1e-9 for s in document["slices"])
     table = comparison_rows(document)
-    assert table["c_ratio_mean"]["verdict"] == expected_verdict(1.14, ours["c_ratio_mean"], 5e-3)
+    assert table["c_ratio_mean"]["verdict"] == excess_verdict(
+        1.14, ours["c_ratio_mean"], SPATIAL[2]
+    )
     peak_a, peak_b = ours["slice_a_c_ratio_max"], ours["slice_b_c_ratio_max"]
     assert peak_a == document["slices"][0]["c_ratio_max"]
     assert table["slice_a_c_ratio_max"]["verdict"] == (

@@ -12,7 +12,7 @@ from rns_ros.analysis.reproduce import chapter7 as ch7
 # whole chapter-7 reproductions (quick runs): make test, not test-quick
 pytestmark = pytest.mark.slow
 
-IDS = ("fig7.1", "fig7.2")
+IDS = ("fig7.1", "fig7.3", "fig7.4")
 RUN_KEYS = {
     "peak_joint_speed_rad_s",
     "peak_joint_speed_per_joint_rad_s",
@@ -46,8 +46,9 @@ def test_the_module_comes_after_the_other_chapters_and_registers_both_results():
 def test_each_result_writes_finite_json_and_a_png(documents, identifier):
     document, png = documents[identifier]
     verdicts = quick_result_verdicts(document, png, identifier)
-    # the thesis prints no numbers here: trends, and the damper gain as an input
-    assert verdicts <= {"qualitative", "not reproduced", "input"}
+    # the thesis prints no numbers here: trends, the damper gain as an input and its RK4 limit
+    # by construction
+    assert verdicts <= {"qualitative", "not reproduced", "input", "by construction"}
     settings = document["settings"]
     assert settings["step_s"] == ch7.QUICK_STEP
     assert settings["half_period_s"] == ch7.QUICK_HALF_PERIOD
@@ -56,38 +57,44 @@ def test_each_result_writes_finite_json_and_a_png(documents, identifier):
     assert len(document["choices"]) >= 7
 
 
-def test_fig7_1_keys(documents):
-    document = documents["fig7.1"][0]
+def test_fig7_1_and_fig7_3_keys(documents):
+    """One set of runs, each figure with its own rows (Fig. 7.1: velocities; Fig. 7.3: RMS)."""
+    fig7_1, fig7_3 = documents["fig7.1"][0], documents["fig7.3"][0]
     masses = [f"{m:g}" for m in ch7.QUICK_SWEEP_MASSES]
-    assert set(document["runs"]) == set(masses) | {f"{m:g}" for m in ch7.QUICK_FIGURE_MASSES}
-    for values in document["runs"].values():
+    assert set(fig7_1["runs"]) == set(masses) | {f"{m:g}" for m in ch7.QUICK_FIGURE_MASSES}
+    for values in fig7_1["runs"].values():
         assert set(values) >= RUN_KEYS
         assert values["rms_vs_resolved_rad"] > 0.0
         assert values["max_radial_error_m"] < 1e-6
-    assert set(document["resolved"]) >= RUN_KEYS
-    rms = document["rms_vs_mass"]
+    for document in (fig7_1, fig7_3):
+        assert set(document["resolved"]) >= RUN_KEYS
+    assert set(fig7_1["spec_v_table"]) == {"10", "100", "1000", "10000", "100000"}
+    rms = fig7_3["rms_vs_mass"]
+    assert "rms_vs_mass" not in fig7_1
     assert rms["masses_kg"] == list(ch7.QUICK_SWEEP_MASSES)
     assert len(rms["rms_rad"]) == len(masses)
     assert rms["log_slope"] == pytest.approx(-1.0, abs=0.1)
-    assert set(document["spec_v_table"]) == {"10", "100", "1000", "10000", "100000"}
-    keys = {c["key"]: c for c in document["comparisons"]}
+    velocity = {c["key"]: c for c in fig7_1["comparisons"]}
+    keys = {c["key"]: c for c in fig7_3["comparisons"]}
+    assert set(velocity) == {"max_null_space_velocity_rad_s"}
     assert set(keys) == {
-        "max_null_space_velocity_rad_s",
         "rms_delta_theta_rad",
         "rms_log_slope",
         "rms_delta_theta_free_floating_rad",
     }
     # both fall with the mass in the quick run, and the verdicts say so
-    for key in ("max_null_space_velocity_rad_s", "rms_delta_theta_rad"):
-        assert np.all(np.diff(keys[key]["ours"]) < 0.0)
-        assert keys[key]["verdict"] == "qualitative"
+    for row in (velocity["max_null_space_velocity_rad_s"], keys["rms_delta_theta_rad"]):
+        assert np.all(np.diff(row["ours"]) < 0.0)
+        assert row["verdict"] == "qualitative"
     assert keys["rms_delta_theta_rad"]["ours"] == rms["rms_rad"]
     assert keys["rms_log_slope"]["ours"] == rms["log_slope"]
     assert keys["rms_log_slope"]["verdict"] == "qualitative"
+    # the literal reading (b) is the same claim again: reported apart, counted once
+    assert keys["rms_delta_theta_free_floating_rad"]["extension"] is True
 
 
-def test_fig7_2_keys(documents):
-    document = documents["fig7.2"][0]
+def test_fig7_4_keys(documents):
+    document = documents["fig7.4"][0]
     labels = {ch7.VELOCITY, ch7.DAMPER, ch7.MOMENTUM}
     assert set(document["runs"]) == labels
     for values in document["runs"].values():
@@ -101,7 +108,8 @@ def test_fig7_2_keys(documents):
     rows = {c["key"]: c for c in document["comparisons"]}
     assert rows["peak_null_space_velocity_damper_over_velocity_level"]["ours"] == ratio["peak"]
     assert rows["peak_null_space_velocity_damper_over_velocity_level"]["verdict"] == "qualitative"
-    assert rows["damper_rk4_limit"]["verdict"] == "qualitative"
+    # the integrator was inferred from the thesis' 2770: its limit agrees by construction
+    assert rows["damper_rk4_limit"]["verdict"] == "by construction"
     peaks = document["peak_null_space_rns_rad_s"]
     momentum = rows["peak_null_space_velocity_damper_over_momentum_form"]
     assert momentum["ours"] == pytest.approx(peaks[ch7.DAMPER] / peaks[ch7.MOMENTUM])
@@ -114,10 +122,10 @@ def test_fig7_2_keys(documents):
     assert gain["ours"] == pytest.approx(2.77 / ch7.QUICK_STEP)
 
 
-def test_fig7_1_free_floating_variant_tends_to_the_closed_form(documents):
+def test_fig7_3_free_floating_variant_tends_to_the_closed_form(documents):
     """A-4.15 variant (b), (7.4) without F_B: it leaves the arc (the closed form does not), by
     less as m_hat grows, and its verdict follows from its own series."""
-    document = documents["fig7.1"][0]
+    document = documents["fig7.3"][0]
     free = document["rms_vs_mass_free_floating"]
     closed = document["rms_vs_mass"]
     assert free["masses_kg"] == closed["masses_kg"]
@@ -145,3 +153,10 @@ def test_free_floating_row_fails_on_a_series_that_does_not_fall():
     }
     row = ch7._free_floating_row([1e1, 1e3, 1e5], [1.0, 1e-2, 1e-4], free)
     assert row.verdict.value == "not reproduced"
+
+
+def test_the_rk4_limit_fails_loudly_when_the_unstable_run_stays_finite():
+    divergence = {"k_d_step": ch7.UNSTABLE_DAMPER_STEP, "diverged": False, "message": ""}
+    assert ch7._rk4_limit_row(divergence).verdict.value == "not reproduced"
+    divergence = {"k_d_step": ch7.UNSTABLE_DAMPER_STEP, "diverged": True, "message": "nan"}
+    assert ch7._rk4_limit_row(divergence).verdict.value == "by construction"

@@ -87,9 +87,11 @@ def test_all_regenerates_the_report_with_every_result(fakes, tmp_path, capsys):
     assert "| `slope_m` [m] | 2 | 1.5 | different | a line; exact within 1e-09 m |" in report
     assert "| `slope_m` [m] | 2 | 2 | exact |" in report
     assert (
-        "Totals: 4 compared: 1 exact, 0 close, 1 different, 2 qualitative, 0 not reproduced; "
-        "2 input (not counted)"
+        "**Thesis claims judged: 4**: 1 exact, 0 close, 1 different, 2 qualitative, "
+        "0 not reproduced (3 agree)."
     ) in report
+    assert "0 by construction (identities" in report
+    assert "2 input (values we set" in report
     assert "One verdict rule for every comparison: *exact*" in report
     progress = capsys.readouterr().err
     assert "[" + "#" * reproduce.BAR_WIDTH + "] 2/2" in progress
@@ -190,6 +192,8 @@ def test_a_trend_is_qualitative_when_it_holds_and_not_reproduced_when_it_fails()
     [
         (0.944885, 0.944885, 5e-7, Verdict.EXACT),
         (0.944885, 0.9449, 5e-7, Verdict.CLOSE),
+        (1000.0, 1085.0, 100.0, Verdict.EXACT),
+        (1000.0, 1100.0 + 1e-9, 100.0, Verdict.DIFFERENT),
         (28.5, 23.6, 0.05, Verdict.DIFFERENT),  # a deliberately wrong value is different
         (4.22, 1.365, 0.005, Verdict.DIFFERENT),
         (1000.0, 11.0, 0.5, Verdict.DIFFERENT),
@@ -200,8 +204,12 @@ def test_a_trend_is_qualitative_when_it_holds_and_not_reproduced_when_it_fails()
         ([1.0, 2.0, 3.0], [1.0, 2.0, 3.0 + 1e-12], 1e-9, Verdict.EXACT),
         ([1.0, 2.0, 3.0], [1.0, 2.0, 3.2], 1e-9, Verdict.CLOSE),
         ([1.0, 2.0, 3.0], [1.0, 2.0, 4.0], 1e-9, Verdict.DIFFERENT),
-        (1.0, float("nan"), 1.0, Verdict.DIFFERENT),
-        (1.0, "n/a", 1.0, Verdict.DIFFERENT),
+        # element by element: one element 15 % off is different, however close the norm
+        ([1000.0, 1000.0], [1085.0, 850.0], 1e-9, Verdict.DIFFERENT),
+        ([1.0, 100.0], [1.15, 100.0], 1e-9, Verdict.DIFFERENT),
+        ([0.0, 0.0], [0.004, 0.0], 0.00873, Verdict.EXACT),  # a zero has only the exact band
+        (1.0, float("nan"), 0.1, Verdict.DIFFERENT),
+        (1.0, "n/a", 0.1, Verdict.DIFFERENT),
     ],
 )
 def test_one_rule_judges_every_number(thesis, ours, tolerance, verdict):
@@ -216,11 +224,40 @@ def test_one_rule_judges_every_number(thesis, ours, tolerance, verdict):
         (1.0, 1.0, float("nan"), "tolerance must be finite and >= 0"),
         (float("inf"), 1.0, 0.0, "the thesis' number must be finite"),
         ([1.0, 2.0], [1.0], 0.0, "differ in shape"),
+        (1000.0, 1000.0, 500.0, "wider than the close band"),
+        ([1000.0, 1.0], [1000.0, 1.0], 0.2, "wider than the close band"),
     ],
 )
 def test_a_comparison_that_cannot_be_judged_is_an_error(thesis, ours, tolerance, message):
     with pytest.raises(ConfigError, match=message):
         number_verdict(thesis, ours, tolerance)
+
+
+def test_an_excess_is_judged_over_its_bound():
+    """C_ratio >= 1: 1.047 against 1.14 is 4.6 % off as printed, but its excess 0.047 is a
+    third of the thesis' 0.14."""
+    row = Comparison.excess("c", 1.14, 1.047, "", bound=1.0, tolerance=0.005)
+    assert row.verdict is Verdict.DIFFERENT
+    assert (row.thesis, row.ours) == (1.14, 1.047)
+    assert "excess over 1" in row.note
+    assert Comparison.excess("c", 1.14, 1.135, "", bound=1.0, tolerance=0.005).verdict is (
+        Verdict.EXACT
+    )
+    assert Comparison.excess("c", 1.14, 1.13, "", bound=1.0, tolerance=0.005).verdict is (
+        Verdict.CLOSE
+    )
+    with pytest.raises(ConfigError, match="not above the bound"):
+        Comparison.excess("c", 0.9, 1.0, "", bound=1.0, tolerance=0.0)
+
+
+def test_a_result_by_construction_is_listed_and_fails_loudly():
+    holds = Comparison.by_construction("d", "no drift", 0.0, "deg", holds=True, note="exact model")
+    assert holds.verdict is Verdict.BY_CONSTRUCTION
+    fails = Comparison.by_construction("d", "no drift", 1.0, "deg", holds=False, note="exact")
+    assert fails.verdict is Verdict.NOT_REPRODUCED
+    assert "defect" in fails.note
+    assert Verdict.BY_CONSTRUCTION not in registry.COUNTED
+    assert Verdict.INPUT not in registry.COUNTED
 
 
 def test_an_input_is_shown_and_never_a_result():

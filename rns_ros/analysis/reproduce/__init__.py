@@ -13,11 +13,11 @@ from rns_ros.analysis.reproduce.registry import (
     load_all,
     number_verdict,
     register,
-    report_markdown,
     resolve,
     run_one,
     trend_verdict,
 )
+from rns_ros.analysis.reproduce.report import report_markdown
 
 __all__ = [
     "Comparison",

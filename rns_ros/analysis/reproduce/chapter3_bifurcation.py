@@ -1,6 +1,7 @@
 """Chapter 3, §3.2.2: the fixed points of the planar reactionless field versus the attachment
 distance r (two are created at r* ≈ 0.945 m and separate towards θ2 → 0 and ±π), from
-:mod:`rns_ros.analysis.planar_field` (closed form). Registers ``bifurcation``.
+:mod:`rns_ros.analysis.planar_field` (closed form). Registers ``sec3.2.2``, the bifurcation claim
+of §3.2.2.
 """
 
 from __future__ import annotations
@@ -152,7 +153,7 @@ def plot_bifurcation(outcome: Outcome, figure) -> None:
 
 REPRODUCTIONS = register_all(
     Reproduction(
-        "bifurcation",
+        "sec3.2.2",
         "§3.2.2",
         "fixed points of the reactionless field versus the attachment distance r",
         compute_bifurcation,

@@ -200,10 +200,11 @@ def force_spread_row(force_errors: dict[str, float], position_errors: dict[str, 
         spread,
         "",
         holds=spread <= FORCE_IDENTICAL_FACTOR,
-        note=f"labelled run: the plant carries a {PAYLOAD:g} kg payload at the EE that no "
-        "controller models, so the same-instant force loop is no longer exact; largest over "
-        "smallest max |f_des - f| over the three controllers (criterion <= "
-        f"{FORCE_IDENTICAL_FACTOR:g}): "
+        extension=True,
+        note="an extension (the thesis never ran it): the plant carries a "
+        f"{PAYLOAD:g} kg payload at the EE that no controller models, so the same-instant "
+        "force loop is no longer exact; largest over smallest max |f_des - f| over the three "
+        f"controllers (criterion <= {FORCE_IDENTICAL_FACTOR:g}): "
         + ", ".join(f"{k} {v:.3g} N" for k, v in force_errors.items())
         + "; max in-plane position errors "
         + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in position_errors.items()),

@@ -10,6 +10,10 @@ chapter adds itself by adding its module there. Each result has
 
 :func:`run_one` turns one result into ``<id>.json`` and ``<id>.png``; the JSON holds the thesis'
 numbers under the thesis' names next to ours, the settings and the documented choices.
+:mod:`~rns_ros.analysis.reproduce.report` writes docs/reproduction.md from the results.
+
+Ids follow the thesis' numbering: ``fig<chapter>.<n>`` and ``table<chapter>.<n>`` for one thesis
+figure or table, ``sec<section>`` for a claim made in the text, ``ext-...`` for our extensions.
 """
 
 from __future__ import annotations
@@ -49,14 +53,27 @@ CHAPTER_MODULES = (
 
 class Verdict(StrEnum):
     """How a thesis number or claim is reproduced: one rule for every comparison (see
-    :data:`VERDICT_RULE`). *input* marks a value we set or fitted: shown, never counted."""
+    :data:`VERDICT_RULE`). *by construction* marks an identity or a result our set-up forces:
+    listed, never counted as agreement. *input* marks a value we set or fitted: shown, never
+    counted."""
 
     EXACT = "exact"
     CLOSE = "close"
     DIFFERENT = "different"
     QUALITATIVE = "qualitative"
     NOT_REPRODUCED = "not reproduced"
+    BY_CONSTRUCTION = "by construction"
     INPUT = "input"
+
+
+#: verdicts that are results (counted); the others are listed only
+COUNTED = (
+    Verdict.EXACT,
+    Verdict.CLOSE,
+    Verdict.DIFFERENT,
+    Verdict.QUALITATIVE,
+    Verdict.NOT_REPRODUCED,
+)
 
 
 #: relative distance to the thesis' number within which ours is *close* [-]
@@ -64,27 +81,44 @@ CLOSE_FRACTION = 0.10
 #: the rule, as the report states it
 VERDICT_RULE = (
     "*exact*: within the stated numerical tolerance of the thesis' number; "
-    f"*close*: within {CLOSE_FRACTION:.0%} of it; *different*: further than that; "
+    f"*close*: every element within {CLOSE_FRACTION:.0%} of the thesis' element; "
+    "*different*: further than that; "
     "*qualitative*: the thesis states only a trend, and the trend holds in our run; "
-    "*not reproduced*: the trend fails; *input*: a value we set or fitted, shown for reference "
-    "and never counted as a result."
+    "*not reproduced*: the trend fails; *by construction*: an identity, or a result our set-up "
+    "forces (exact model, a plan built from the null vector), listed and never counted as "
+    "agreement (should one fail, it is *not reproduced*: a defect); *input*: a value we set or "
+    "fitted, or a statement of the set-up, shown for reference and never counted. "
+    'Where the thesis prints a number (a ratio, "about two times" = 2, "almost 10³" = '
+    "10³), ours is compared as a number, element by element for a list; each exact band is "
+    "written in the code before the run and is never wider than the close band; a quantity "
+    "bounded below (C_ratio ≥ 1) is compared on its excess over the bound. "
+    "*Extension* rows and results (conditions the thesis never ran) are reported apart."
 )
 
 
 def number_verdict(thesis, ours, tolerance: float) -> Verdict:
-    """*exact* when ``ours`` is within ``tolerance`` of ``thesis`` (largest element-wise
-    distance, same unit), *close* within :data:`CLOSE_FRACTION` of the thesis' magnitude (norms
-    for arrays), else *different*. A non-finite or non-numeric ``ours`` is *different*.
+    """*exact* when every element of ``ours`` is within ``tolerance`` of the thesis' (same
+    unit), *close* when every element is within :data:`CLOSE_FRACTION` of the thesis' element's
+    magnitude, else *different*. A non-finite or non-numeric ``ours`` is *different*.
+
+    ``tolerance`` is the exact band; it may not be wider than the close band of any non-zero
+    thesis element (a zero element has no close band: only the exact band applies).
 
     Raises:
-        ConfigError: a negative or non-finite ``tolerance``, a non-finite thesis number, or
-            shapes that differ.
+        ConfigError: a negative or non-finite ``tolerance``, one wider than the close band, a
+            non-finite thesis number, or shapes that differ.
     """
     if not (math.isfinite(tolerance) and tolerance >= 0.0):
         raise ConfigError(f"tolerance must be finite and >= 0, got {tolerance!r}")
     expected = np.asarray(thesis, dtype=float)
     if not np.all(np.isfinite(expected)):
         raise ConfigError(f"the thesis' number must be finite, got {thesis!r}")
+    band = CLOSE_FRACTION * np.abs(expected)
+    if np.any((expected != 0.0) & (tolerance > band)):
+        raise ConfigError(
+            f"the exact band {tolerance!r} is wider than the close band "
+            f"({CLOSE_FRACTION:.0%} of {thesis!r}): state a narrower tolerance"
+        )
     try:
         value = np.asarray(ours, dtype=float)
     except (TypeError, ValueError):
@@ -93,9 +127,10 @@ def number_verdict(thesis, ours, tolerance: float) -> Verdict:
         raise ConfigError(f"ours {value.shape} and the thesis' {expected.shape} differ in shape")
     if not np.all(np.isfinite(value)):
         return Verdict.DIFFERENT
-    if float(np.max(np.abs(value - expected), initial=0.0)) <= tolerance:
+    distance = np.abs(value - expected)
+    if float(np.max(distance, initial=0.0)) <= tolerance:
         return Verdict.EXACT
-    if float(np.linalg.norm(value - expected)) <= CLOSE_FRACTION * float(np.linalg.norm(expected)):
+    if np.all(distance <= band):
         return Verdict.CLOSE
     return Verdict.DIFFERENT
 
@@ -108,7 +143,8 @@ def trend_verdict(holds: bool) -> Verdict:
 @dataclass(frozen=True)
 class Comparison:
     """One quantity the thesis reports, next to ours, with its verdict. Build it with
-    :meth:`number`, :meth:`trend` or :meth:`input`: the verdict follows from the values.
+    :meth:`number`, :meth:`excess`, :meth:`trend`, :meth:`by_construction` or :meth:`input`:
+    the verdict follows from the values.
 
     Attributes:
         key: name in the JSON (the thesis' quantity, with its unit as suffix, e.g. ``r_star_m``).
@@ -117,6 +153,8 @@ class Comparison:
         unit: unit of both, e.g. "m", "deg"; "" for counts and text.
         verdict: :class:`Verdict`.
         note: why, the tolerance, or the cause of a *different* / *not reproduced*.
+        extension: a condition the thesis never ran (ours only): reported apart from the
+            thesis' claims.
     """
 
     key: str
@@ -125,10 +163,19 @@ class Comparison:
     unit: str
     verdict: Verdict
     note: str = ""
+    extension: bool = False
 
     @classmethod
     def number(
-        cls, key: str, thesis, ours, unit: str, *, tolerance: float, note: str = ""
+        cls,
+        key: str,
+        thesis,
+        ours,
+        unit: str,
+        *,
+        tolerance: float,
+        note: str = "",
+        extension: bool = False,
     ) -> Comparison:
         """A number the thesis prints, judged by :func:`number_verdict` (the tolerance is
         stated in the note)."""
@@ -140,18 +187,92 @@ class Comparison:
             unit,
             number_verdict(thesis, ours, tolerance),
             f"{note}; {stated}" if note else stated,
+            extension,
         )
 
     @classmethod
-    def trend(cls, key: str, thesis, ours, unit: str, *, holds: bool, note: str = "") -> Comparison:
+    def excess(
+        cls,
+        key: str,
+        thesis,
+        ours,
+        unit: str,
+        *,
+        bound: float,
+        tolerance: float,
+        note: str = "",
+    ) -> Comparison:
+        """A printed number of a quantity bounded below by ``bound`` (C_ratio >= 1), judged by
+        :func:`number_verdict` on the excess over the bound (``ours - bound`` against
+        ``thesis - bound``), which is what carries the information; the row shows both values
+        as printed.
+
+        Raises:
+            ConfigError: the thesis' number is not above the bound.
+        """
+        expected = np.asarray(thesis, dtype=float)
+        if not np.all(expected > bound):
+            raise ConfigError(f"the thesis' {thesis!r} is not above the bound {bound!r}")
+        try:
+            value = np.asarray(ours, dtype=float) - bound
+        except (TypeError, ValueError):
+            value = ours
+        stated = (
+            f"compared on the excess over {bound:g}: ours {cell_text(_plain(value))} against "
+            f"{cell_text(_plain(expected - bound))}; exact within {tolerance:.3g}"
+            f"{f' {unit}' if unit else ''}"
+        )
+        return cls(
+            key,
+            thesis,
+            ours,
+            unit,
+            number_verdict(expected - bound, value, tolerance),
+            f"{note}; {stated}" if note else stated,
+        )
+
+    @classmethod
+    def trend(
+        cls,
+        key: str,
+        thesis,
+        ours,
+        unit: str,
+        *,
+        holds: bool,
+        note: str = "",
+        extension: bool = False,
+    ) -> Comparison:
         """A trend the thesis states in words (``thesis`` quotes it), judged by
         :func:`trend_verdict` on ``holds``, computed from our run."""
-        return cls(key, thesis, ours, unit, trend_verdict(bool(holds)), note)
+        return cls(key, thesis, ours, unit, trend_verdict(bool(holds)), note, extension)
+
+    @classmethod
+    def by_construction(
+        cls, key: str, thesis, ours, unit: str, *, holds: bool, note: str
+    ) -> Comparison:
+        """A claim our set-up makes true whatever the physics (an identity, an exact model, a
+        plan built to have it): *by construction*, never counted as agreement. ``holds`` is
+        still checked: an identity that fails is a defect, shown as *not reproduced*. ``note``
+        says why it holds by construction."""
+        verdict = Verdict.BY_CONSTRUCTION if holds else Verdict.NOT_REPRODUCED
+        if not holds:
+            note = f"{note}; the identity FAILS in our run: a defect in the model or the code"
+        return cls(key, thesis, ours, unit, verdict, note)
 
     @classmethod
     def input(cls, key: str, thesis, ours, unit: str, note: str) -> Comparison:
-        """A value we set or fitted (``note`` says how): shown, never counted as a result."""
+        """A value we set or fitted, or a statement of the set-up (``note`` says how): shown,
+        never counted as a result."""
         return cls(key, thesis, ours, unit, Verdict.INPUT, note)
+
+
+def _plain(value):
+    """A numpy value as a float or a list of floats (for notes)."""
+    array = np.asarray(value, dtype=float) if not isinstance(value, str) else value
+    if isinstance(array, np.ndarray):
+        return float(array) if array.ndim == 0 else [float(v) for v in array.ravel()]
+    return array
 
 
 @dataclass(frozen=True)
@@ -179,12 +300,14 @@ class Reproduction:
     """One thesis figure or table.
 
     Attributes:
-        id: short id for the command line, e.g. ``fig3.1``, ``bifurcation``.
+        id: short id for the command line, e.g. ``fig3.1``, ``sec3.2.2``.
         figure: the thesis' label, e.g. "Fig. 3.1", "§3.2.2".
         title: one line saying what it shows.
         compute: ``quick -> Outcome``.
         plot: ``(outcome, figure) -> None`` draws on a matplotlib Figure.
         size: figure size [in] (width, height).
+        extension: ours only (a condition or method the thesis never ran): every row is
+            reported apart from the thesis' claims.
     """
 
     id: str
@@ -193,6 +316,7 @@ class Reproduction:
     compute: Callable[[bool], Outcome]
     plot: Callable[[Outcome, Any], None]
     size: tuple[float, float] = field(default=(8.0, 6.0))
+    extension: bool = False
 
 
 _REGISTRY: dict[str, Reproduction] = {}
@@ -282,6 +406,7 @@ def run_one(reproduction: Reproduction, out: Path, *, quick: bool = False) -> Ru
         "id": reproduction.id,
         "figure": reproduction.figure,
         "title": reproduction.title,
+        "extension": reproduction.extension,
         "quick": quick,
         "thesis": {c.key: c.thesis for c in outcome.comparisons},
         "ours": {c.key: c.ours for c in outcome.comparisons},
@@ -293,6 +418,7 @@ def run_one(reproduction: Reproduction, out: Path, *, quick: bool = False) -> Ru
                 "unit": c.unit,
                 "verdict": c.verdict.value,
                 "note": c.note,
+                "extension": c.extension or reproduction.extension,
             }
             for c in outcome.comparisons
         ],
@@ -323,75 +449,24 @@ def _jsonable(value):
     return value
 
 
-def report_markdown(records: list[RunRecord], figure_dir: str) -> str:
-    """docs/reproduction.md: the verdict rule and counts, then per result a table thesis | ours |
-    verdict and its figure.
-
-    Args:
-        figure_dir: path of the PNGs relative to the report (e.g. "reproduction").
-    """
-    counts = {verdict: 0 for verdict in Verdict}
-    for record in records:
-        for comparison in record.outcome.comparisons:
-            counts[comparison.verdict] += 1
-    compared = [verdict for verdict in Verdict if verdict is not Verdict.INPUT]
-    lines = [
-        "# Reproduction of the thesis",
-        "",
-        "Generated by `rns_reproduce all` (do not edit by hand). Each section is one registered",
-        "result: the numbers the thesis reports next to ours, the settings and our choices.",
-        "The JSON of each result, with every value, is written next to its figure.",
-        "",
-        f"One verdict rule for every comparison: {VERDICT_RULE}",
-        "",
-        f"Totals: {sum(counts[v] for v in compared)} compared: "
-        + ", ".join(f"{counts[v]} {v.value}" for v in compared)
-        + f"; {counts[Verdict.INPUT]} input (not counted); {len(records)} results, "
-        f"{sum(r.seconds for r in records):.0f} s of computing.",
-        "",
-        "| id | thesis | title |",
-        "|---|---|---|",
-    ]
-    lines += [
-        f"| [`{r.reproduction.id}`](#{_anchor(r.reproduction.id)}) | {r.reproduction.figure} | "
-        f"{r.reproduction.title} |"
-        for r in records
-    ]
-    for record in records:
-        rep, outcome = record.reproduction, record.outcome
-        lines += [
-            "",
-            f"## {rep.id}",
-            "",
-            f"{rep.figure}: {rep.title}. Computed in {record.seconds:.1f} s.",
-            "",
-            "| quantity | thesis | ours | verdict | note |",
-            "|---|---|---|---|---|",
-        ]
-        for c in outcome.comparisons:
-            unit = f" [{c.unit}]" if c.unit else ""
-            lines.append(
-                f"| `{c.key}`{unit} | {_cell(c.thesis)} | {_cell(c.ours)} | {c.verdict.value} | "
-                f"{_cell(c.note)} |"
-            )
-        if outcome.settings:
-            settings = "; ".join(f"{k} = {_cell(v)}" for k, v in outcome.settings.items())
-            lines += ["", f"Settings: {settings}."]
-        if outcome.choices:
-            lines += ["", "Choices:", ""] + [f"* {choice}" for choice in outcome.choices]
-        lines += ["", f"![{rep.figure}]({figure_dir}/{rep.id}.png)"]
-    return "\n".join(lines) + "\n"
-
-
-def _anchor(identifier: str) -> str:
-    return identifier.replace(".", "").lower()
-
-
-def _cell(value) -> str:
+def cell_text(value) -> str:
+    """``value`` as one markdown table cell (floats to 6 digits, long lists counted)."""
     if value is None:
         return "—"
     if isinstance(value, float):
         return f"{value:.6g}"
     if isinstance(value, list | tuple):
-        return ", ".join(_cell(v) for v in value) if len(value) <= 6 else f"{len(value)} values"
+        if len(value) <= 6 and not any(isinstance(v, list | tuple) for v in value):
+            return ", ".join(cell_text(v) for v in value)
+        try:
+            flat = np.asarray(value, dtype=float).ravel()
+        except (TypeError, ValueError):
+            return f"{len(value)} values"
+        if not flat.size:
+            return "—"
+        if flat.min() == flat.max():
+            return f"{flat.size} values, all {flat.min():.4g}"
+        return f"{flat.size} values, {flat.min():.4g} to {flat.max():.4g}"
+    if isinstance(value, Mapping) and len(value) <= 6:
+        return ", ".join(f"{k}: {cell_text(v)}" for k, v in value.items())
     return str(value).replace("|", "\\|")

@@ -1,12 +1,13 @@
 """Windows of a recorded closed-loop trace (:class:`~rns_ros.analysis.reproduce.scenario_runs.
-Trace`) for the singularity figures (§4.3): the passes through sigma_min < epsilon, peaks and
-accelerations inside them, and the notes that describe a burst."""
+Trace`) for the singularity figures (§4.3): stated time windows, the passes through
+sigma_min < epsilon, peaks and accelerations inside them, and the notes that describe a burst."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from rns_ros.analysis.reproduce.scenario_runs import Trace
+from rns_ros.core.errors import ConfigError
 
 
 def intervals(t: np.ndarray, inside: np.ndarray) -> list[list[float]]:
@@ -22,9 +23,29 @@ def runs_of(inside: np.ndarray) -> list[tuple[int, int]]:
 
 def first_pass(trace: Trace, epsilon: float) -> slice:
     """The periods of the run's first pass through the singular region sigma_min < epsilon
-    (§4.3.2), the pass the thesis' Figs. 4.6-4.8 show; the whole run if it never enters."""
+    (eq. 4.12); the whole run if it never enters."""
     runs = runs_of(trace.sigma_min < epsilon)
     return slice(*runs[0]) if runs else slice(0, len(trace.t_mid))
+
+
+#: Rounding allowance on a window's ends [s]: mid-period times are sums of float periods, so a
+#: period whose mid-time is printed as the window's end may sit a few ulp beyond it.
+TIME_ROUNDING_S = 1e-9
+
+
+def time_window(trace: Trace, window_s: tuple[float, float]) -> slice:
+    """The periods whose mid-time lies in ``window_s`` = (start, end) [s], both ends included:
+    an analysis window stated before the run (the thesis' region, a figure's time axis).
+
+    Raises:
+        ConfigError: no period of the trace lies in the window.
+    """
+    low, high = window_s
+    start = int(np.searchsorted(trace.t_mid, low - TIME_ROUNDING_S, side="left"))
+    stop = int(np.searchsorted(trace.t_mid, high + TIME_ROUNDING_S, side="right"))
+    if stop <= start:
+        raise ConfigError(f"no control period lies in the analysis window {low:g}-{high:g} s")
+    return slice(start, stop)
 
 
 def acceleration(trace: Trace) -> np.ndarray:

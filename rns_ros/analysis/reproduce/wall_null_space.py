@@ -1,6 +1,6 @@
 """RNS-C on the chapter-6 wall task with a chapter-7 null-space term or another virtual mass.
 
-The runs behind ``fig6.8-ch7`` (:mod:`rns_ros.analysis.reproduce.chapter7_wall`) and the cause
+The runs behind ``ext-fig6.8-ch7`` (:mod:`rns_ros.analysis.reproduce.chapter7_wall`) and the cause
 in ``fig6.8``'s note (:func:`velocity_level_cause`). Registers nothing, so that chapter 6 can
 quote these runs without importing a later chapter module.
 """
@@ -89,7 +89,7 @@ def velocity_level_cause(runs: dict, threshold: float) -> str:
     before, after = min_ratio(osc, baseline), min_ratio(osc, run)
     sentence = (
         f"RNS-C with chapter 7's velocity-level term (7.13) on the same task (result "
-        f"fig6.8-ch7) keeps ||P_hat_RNS theta_dot|| below "
+        f"ext-fig6.8-ch7) keeps ||P_hat_RNS theta_dot|| below "
         f"{float(run.null_space_velocity.max()):.3g} rad/s and peaks at "
         f"{rounded(per_stroke(run)[0])} rad/s per stroke (without: "
         f"{rounded(per_stroke(baseline)[0])}), smallest OS-C / RNS-C {before:.3g} -> "

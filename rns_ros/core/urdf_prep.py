@@ -36,6 +36,12 @@ from rns_ros.core.urdf_tree import UrdfTree
 #: Relative tolerance of the triangle inequality on principal moments (I1 + I2 >= I3): URDFs
 #: exported from CAD round their moments, and a thin disk (I, I, 2I) sits exactly on the bound.
 TRIANGLE_RTOL = 1e-4
+#: An ``<inertial>`` with mass [kg] and every moment [kg m^2] at most these is a placeholder that
+#: a description puts on a frame link (Sawyer writes 1e-8 in all ten numbers, a matrix of rank
+#: 1): it is not read, as if the link had no ``<inertial>``. The lightest arm bodies weigh tens
+#: of grams, so the mass dropped is below their rounding.
+PLACEHOLDER_MASS_KG = 1e-6
+PLACEHOLDER_MOMENT_KG_M2 = 1e-6
 #: The six moments of a URDF <inertia> [kg m^2].
 INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 #: Name of the satellite link added as the URDF root (a suffix is added if the arm has one).
@@ -114,10 +120,11 @@ class PreparedUrdf(NamedTuple):
 def check_urdf_inertials(xml: str, name: str = "robot") -> None:
     """Check every ``<link>``'s ``<inertial>`` as the URDF text writes it.
 
-    Links without ``<inertial>`` (frames such as ``camera``) are accepted, and so is an explicit
-    empty one (mass 0 and all six moments 0), which published descriptions put on frame links:
-    whether the body such a link belongs to is physical is checked after Pinocchio merges the
-    fixed links (:func:`rns_ros.core.model.check_moving_bodies`). For the others: mass [kg]
+    Links without ``<inertial>`` (frames such as ``camera``) are accepted, and so are an explicit
+    empty one (mass 0 and all six moments 0) and a placeholder (:func:`placeholder_inertials`),
+    which published descriptions put on frame links: whether the body such a link belongs to is
+    physical is checked after Pinocchio merges the fixed links
+    (:func:`rns_ros.core.model.check_moving_bodies`). For the others: mass [kg]
     finite and > 0; the six moments ``ixx ixy ixz iyy iyz izz`` [kg m^2] present and finite; the
     inertia matrix positive definite; its principal moments obey the triangle inequality
     I1 + I2 >= I3 (relative tolerance :data:`TRIANGLE_RTOL`).
@@ -135,9 +142,35 @@ def check_urdf_inertials(xml: str, name: str = "robot") -> None:
         values = {key: _number(element, key, f"{where} <inertia>") for key in INERTIA_KEYS}
         if mass == 0.0 and not any(values.values()):
             continue  # an empty inertial: a frame link
+        if _is_placeholder(mass, values):
+            continue  # not read (prepare_urdf)
         if not mass > 0.0:
             raise ModelError(f"{where}: mass must be finite and > 0 kg, got {mass}")
         check_inertia_matrix(inertia_matrix(values), where)
+
+
+def placeholder_inertials(tree: UrdfTree) -> tuple[str, ...]:
+    """Names of the links whose ``<inertial>`` is a placeholder: a mass in
+    (0, :data:`PLACEHOLDER_MASS_KG`] kg and every moment within +-:data:`PLACEHOLDER_MOMENT_KG_M2`
+    kg m^2. Such a link is read as a frame link (its inertial removed by :func:`prepare_urdf`)."""
+    names = []
+    for link in tree.links:
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        try:
+            mass = _number(inertial.find("mass"), "value", "")
+            values = {key: _number(inertial.find("inertia"), key, "") for key in INERTIA_KEYS}
+        except ModelError:
+            continue  # check_urdf_inertials names it
+        if _is_placeholder(mass, values):
+            names.append(link.get("name"))
+    return tuple(names)
+
+
+def _is_placeholder(mass: float, moments: Mapping[str, float]) -> bool:
+    small = all(abs(value) <= PLACEHOLDER_MOMENT_KG_M2 for value in moments.values())
+    return 0.0 < mass <= PLACEHOLDER_MASS_KG and small
 
 
 def inertia_matrix(moments: Mapping[str, float]) -> np.ndarray:
@@ -219,6 +252,16 @@ def prepare_urdf(xml: str, base: BaseBody | None = None, name: str = "robot") ->
     if skipped:
         notes.append(f"{', '.join(skipped)} not read: not part of the kinematic tree")
     mimic = _mimic_rules(joints, name)
+    placeholders = placeholder_inertials(tree)
+    for link in tree.links:
+        if link.get("name") in placeholders:
+            link.remove(link.find("inertial"))
+    if placeholders:
+        notes.append(
+            f"links {list(placeholders)}: placeholder inertials (mass <= "
+            f"{PLACEHOLDER_MASS_KG:g} kg, moments <= {PLACEHOLDER_MOMENT_KG_M2:g} kg m^2) "
+            "not read: frame links"
+        )
     roots = tree.root_links()
     if len(roots) != 1:
         raise ModelError(f"{name}: the URDF must have exactly one root link, found {roots}")

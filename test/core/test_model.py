@@ -11,6 +11,7 @@ import pytest
 from rns_ros.analysis.arm_geometry import IDENTIFIED_GEOMETRY
 from rns_ros.core import ConfigError, FreeFloatingModel, InputError, ModelError, ModelSpec
 from rns_ros.core.config import load_model, load_model_config
+from rns_ros.core.urdf_prep import INERTIA_KEYS
 from rns_ros.resources import default_model_config
 
 # Thesis Table 4.1: mass [kg] and principal moments [kg m^2] of links 1-7.
@@ -286,6 +287,38 @@ def test_moving_link_without_inertial_is_a_massless_body():
     link.remove(link.find("inertial"))
     with pytest.raises(ModelError, match=r"body of joint 'joint_7' \(links \['link_7'.*mass 0"):
         FreeFloatingModel.from_urdf_string(ET.tostring(root, encoding="unicode"))
+
+
+def _with_camera_inertial(mass: str, moment: str) -> str:
+    """The default URDF with an <inertial> of ``mass`` and all six moments ``moment`` on the
+    camera frame link (fixed to link_7), as Sawyer's description writes its frame links."""
+    root = ET.fromstring(_default_urdf())
+    inertial = ET.SubElement(root.find("link[@name='camera']"), "inertial")
+    ET.SubElement(inertial, "origin", xyz=f"{mass} {mass} {mass}", rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=mass)
+    ET.SubElement(inertial, "inertia", {key: moment for key in INERTIA_KEYS})
+    return ET.tostring(root, encoding="unicode")
+
+
+def test_placeholder_inertial_is_read_as_a_frame_link(robot):
+    # 1e-8 everywhere: a rank-1 inertia, not a rigid body, but below any arm body's rounding
+    loaded = FreeFloatingModel.from_urdf_string(_with_camera_inertial("1.0E-08", "1.0E-08"))
+    body = robot.model.frames[robot.model.getFrameId("camera")].parentJoint
+    ours, theirs = loaded.model.inertias[body], robot.model.inertias[body]
+    assert ours.mass == theirs.mass
+    assert np.array_equal(ours.lever, theirs.lever)
+    assert np.array_equal(ours.inertia, theirs.inertia)
+    assert any("['camera']: placeholder inertials" in note for note in loaded.loading_notes)
+    assert not any("placeholder" in note for note in robot.loading_notes)
+
+
+@pytest.mark.parametrize(
+    ("mass", "moment"),
+    [("1.0E-08", "1.0E-03"), ("1.0E-03", "1.0E-08")],  # one of the two is not negligible
+)
+def test_a_light_but_not_negligible_bad_inertial_is_still_refused(mass, moment):
+    with pytest.raises(ModelError, match=r"link 'camera': inertia must be positive definite"):
+        FreeFloatingModel.from_urdf_string(_with_camera_inertial(mass, moment))
 
 
 def test_pinocchio_bodies_are_checked_too(robot):

@@ -1,6 +1,6 @@
 """The package's rooms: imports point down only, no import circles, no ROS below nodes/.
 
-Rooms (docs/architecture.md): core < control, sim < analysis < viz and the libraries (cli,
+Rooms (docs/architecture.md): core < control, sim < analysis, ground < viz and the libraries (cli,
 resources, harness, keyboard, tool_session, tool_qos, ros_messages, bag) < nodes < runs < apps (the
 programs).
 A module may import its own room and the rooms listed for it; control and sim are side by side
@@ -24,10 +24,11 @@ ALLOWED = {
     "cli": {"core"},
     "resources": {"core"},
     "analysis": {"core", "control", "sim", "resources"},
+    "ground": {"core", "control", "sim", "resources"},
     "viz": {"core", "control", "sim", "resources"},
     "harness": {"core", "cli", "resources"},
     "keyboard": {"core", "control"},
-    "nodes": {"core", "control", "sim", "viz", "cli", "resources", "keyboard", "bag"},
+    "nodes": {"core", "control", "sim", "ground", "viz", "cli", "resources", "keyboard", "bag"},
     "tool_session": {"core", "cli", "resources"},
     "tool_qos": {"tool_session"},
     "ros_messages": {"core", "cli", "resources", "tool_session"},
@@ -37,6 +38,7 @@ ALLOWED = {
         "control",
         "sim",
         "analysis",
+        "ground",
         "viz",
         "cli",
         "resources",
@@ -48,7 +50,7 @@ ALLOWED = {
 #: the programs may import every room; test/apps/test_apps_apart.py keeps them apart
 ALLOWED["apps"] = set(ALLOWED) | {"tool_session", "runs"}
 #: rooms whose modules never import ROS 2 or the viewer
-ROS_FREE = ("core", "control", "sim", "analysis", "resources")
+ROS_FREE = ("core", "control", "sim", "analysis", "ground", "resources")
 ROS_OR_VIEWER = ("rclpy", "rerun", "rcl_interfaces", "std_msgs", "sensor_msgs", "geometry_msgs")
 
 

@@ -42,6 +42,7 @@ EXECUTABLES = frozenset(
         "rns_force_controller",
         "rns_ptp",
         "rns_attitude_control",
+        "rns_link",
         "rns_rerun_logger",
         "rns_operator",
         "rns_teleop_keyboard",

@@ -38,6 +38,7 @@ CHECKED = (
     "rns_controller",
     "rns_demo",
     "rns_force_controller",
+    "rns_link",
     "rns_observer",
     "rns_operator",
     "rns_rerun_logger",

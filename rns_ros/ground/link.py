@@ -166,3 +166,41 @@ class LinkChannel:
     def next_arrival(self) -> float:
         """When the next message is received [s] (inf: nothing in flight)."""
         return self._queue[0].arrival if self._queue else math.inf
+
+
+def parse_outages(text: str) -> tuple[tuple[float, float], ...]:
+    """Scheduled outages written ``'start:end,start:end'`` [s] (empty: none), checked as
+    :class:`LinkSettings` checks them.
+
+    Raises:
+        ConfigError: naming the bad pair.
+    """
+    outages = []
+    for item in (part.strip() for part in text.split(",")):
+        if not item:
+            continue
+        try:
+            start, end = (float(value) for value in item.split(":"))
+        except ValueError:
+            raise ConfigError(
+                f"outage {item!r} is not 'start:end' in seconds (e.g. '10:12.5')"
+            ) from None
+        outages.append((start, end))
+    LinkSettings(outages=tuple(outages))  # the range checks
+    return tuple(outages)
+
+
+def parse_topic(spec: str) -> tuple[str, str]:
+    """``'topic:package/msg/Type'`` as (topic, type name).
+
+    Raises:
+        ConfigError: not of that form.
+    """
+    topic, _, type_name = spec.partition(":")
+    parts = type_name.split("/")
+    if not topic.strip() or len(parts) != 3 or parts[1] != "msg" or not all(parts):
+        raise ConfigError(
+            f"link topic {spec!r} must be 'topic:package/msg/Type' "
+            "(e.g. 'cmd_twist:geometry_msgs/msg/TwistStamped')"
+        )
+    return topic.strip(), type_name

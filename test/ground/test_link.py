@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rns_ros.core.errors import ConfigError
-from rns_ros.ground.link import LinkChannel, LinkSettings
+from rns_ros.ground.link import LinkChannel, LinkSettings, parse_outages, parse_topic
 
 
 def _stream(channel: LinkChannel, times, size: int = 0) -> None:
@@ -117,3 +117,19 @@ def test_an_outage_loses_what_is_sent_inside_it_and_nothing_else():
 def test_bad_settings_name_the_value_and_the_range(values, message):
     with pytest.raises(ConfigError, match=message):
         LinkSettings(**values)
+
+
+def test_outages_and_topics_are_read_from_their_text():
+    assert parse_outages("10:12, 30:31.5") == ((10.0, 12.0), (30.0, 31.5))
+    assert parse_outages("") == ()
+    with pytest.raises(ConfigError, match=r"outage '10-12' is not 'start:end'"):
+        parse_outages("10-12")
+    with pytest.raises(ConfigError, match=r"link outage must be \(start, end\)"):
+        parse_outages("12:10")
+    assert parse_topic("cmd_twist:geometry_msgs/msg/TwistStamped") == (
+        "cmd_twist",
+        "geometry_msgs/msg/TwistStamped",
+    )
+    for bad in ("cmd_twist", ":geometry_msgs/msg/Twist", "x:geometry_msgs/Twist", "x:a/srv/B"):
+        with pytest.raises(ConfigError, match="must be 'topic:package/msg/Type'"):
+            parse_topic(bad)

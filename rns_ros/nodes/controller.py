@@ -14,7 +14,10 @@ Parameters: :mod:`rns_ros.nodes.controller_parameters`; status:
 
 Subscribes:
     cmd_twist     geometry_msgs/TwistStamped (``twist_stamped: true``) or geometry_msgs/Twist;
-                  best effort, depth 1 (50 with ``await_commands``). ``header.frame_id`` is
+                  best effort, depth 1 (50 with ``await_commands`` or ``execution_delay``).
+                  With ``execution_delay`` D > 0 (a delayed link) a twist stamped t acts from
+                  t + D, and one received after t + D + ``late_tolerance`` or stamped more
+                  than ``future_tolerance`` ahead is refused. ``header.frame_id`` is
                   ``world_frame``, the base link or the camera frame (empty or unstamped:
                   ``default_twist_frame``). Only the angular part is achievable; the linear
                   part is reported as unachieved.
@@ -157,7 +160,10 @@ class ControllerNode(Node):
             self.get_logger().warn("output_lead is for use_sim_time (lockstep) only: not used")
         # latency is a wall-clock matter: under simulated time a command served between ticks
         # would land while a lockstep simulator runs on, so ticks stay on the period grid
-        self._immediate = params["immediate_reaction"] and not self._sim_time
+        # time-tagged twists act on the tick grid at their execution time
+        self._immediate = (
+            params["immediate_reaction"] and not self._sim_time and not params["execution_delay"]
+        )
         self._instants = TickInstants(self._period, self._lead)
         self._lateness = TickLateness(self._period)  # wall clock: the timer's mean lateness
         self._reporter = StatusReporter(self, self.robot.name)  # the intakes report into it
@@ -360,6 +366,7 @@ class ControllerNode(Node):
     def _serve_tick(self, tick: int) -> None:
         """The control period of ``tick`` [ns] once its inputs are there: state, law, output."""
         _, held = self._instants.serve(tick)
+        self._twists.release_due(tick)  # time-tagged twists acting by this tick
         clock_fault = self._input_clock.clock_fault()
         if clock_fault is not None:
             self.controller.abandon_hold()  # held for a time no clock difference can tell

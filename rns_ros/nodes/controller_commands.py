@@ -28,10 +28,11 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rns_ros.control.command_tracking import CommandedAttitude, TrackingSettings
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.teleop import ControllerState, TwistCommand, validate_twist
-from rns_ros.control.ticks import AwaitedTicks, ServedTick
+from rns_ros.control.ticks import AwaitedTicks, CommandSchedule, ServedTick
 from rns_ros.core.conventions import rotation_from_quaternion
-from rns_ros.core.errors import InputError
+from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.nodes.cdr import MalformedMessageError, TwistFields, read_twist_stamped
+from rns_ros.nodes.controller_parameters import time_tags
 from rns_ros.nodes.controller_status import TWISTS_RECEIVED, StatusReporter
 from rns_ros.nodes.input_clock import InputClock, awaited_commands
 
@@ -42,6 +43,9 @@ INPUT_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: profile: none may be overwritten before it is read).
 SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
 NS_PER_S = 1_000_000_000  # nanoseconds per second (message stamps)
+#: Time-tagged twists waiting for their execution time at most: 100 s of a 100 Hz stream (the
+#: oldest is dropped beyond, so a flood cannot grow the queue).
+MAX_PENDING = 10_000
 #: Gate states in which the camera follows the integral of the commanded rate (a fresh
 #: command); in the others nothing is tracked and the tracking restarts at the camera.
 TRACKED_STATES = (ControllerState.OK, ControllerState.RAMPING, ControllerState.SPEED_LIMITED)
@@ -88,12 +92,20 @@ class OperatorTwists:
         self._reject, self._serve_ready = reject, serve_ready
         self.max_angular_speed = params["max_angular_speed"]  # [rad/s]; parameter changes
         self.command_timeout = params["command_timeout"]  # [s]; parameter changes
+        #: with execution_delay > 0: when a twist acts, which stamps are refused; else None
+        self.time_tags = time_tags(params)
+        if self.time_tags is not None and not params["twist_stamped"]:
+            raise ConfigError("execution_delay > 0 needs twist_stamped: true (the issue time)")
         #: with await_commands: ticks wait for the twist in force; None when not used
         self.awaited = self._awaited_ticks(params, lead)
+        #: time-tagged twists waiting for their execution time (without await_commands)
+        self.pending: CommandSchedule[TwistFields] = CommandSchedule(MAX_PENDING)
         self.message_type = TwistStamped if params["twist_stamped"] else Twist
         if params["twist_stamped"]:
-            # awaited twists are each one sample: none may be overwritten before it is read
-            qos = INPUT_QOS if self.awaited is None else SCHEDULED_COMMAND_QOS
+            # awaited and time-tagged twists are each one sample: none may be overwritten
+            # before it is read (a link hands on several at once)
+            scheduled = self.awaited is not None or self.time_tags is not None
+            qos = SCHEDULED_COMMAND_QOS if scheduled else INPUT_QOS
             node.create_subscription(TwistStamped, "cmd_twist", self._on_stamped, qos, raw=True)
         else:
             node.create_subscription(Twist, "cmd_twist", self._on_twist, INPUT_QOS)
@@ -118,6 +130,14 @@ class OperatorTwists:
             self._reporter.reject(self.topic, exc)
             return
         self._reporter.count(TWISTS_RECEIVED)
+        if self.time_tags is not None:
+            fields = self._time_tagged(fields)
+            if fields is None:
+                return
+            if self.awaited is None:
+                sec, nanosec = fields.stamp
+                self.pending.push(sec * NS_PER_S + nanosec, fields, True)
+                return
         if self.awaited is None:
             self.take(fields.angular, fields.linear, fields.frame_id, fields.stamp)
             return
@@ -132,6 +152,33 @@ class OperatorTwists:
                 throttle_duration_sec=1.0,
             )
         self._serve_ready(ready)
+
+    def _time_tagged(self, fields: TwistFields) -> TwistFields | None:
+        """A time-tagged twist with its stamp moved to its execution time (stamp +
+        execution_delay), or None after refusing it (late, from the future, unstamped)."""
+        sec, nanosec = fields.stamp
+        stamp = sec * NS_PER_S + nanosec
+        now = self._node.get_clock().now().nanoseconds
+        refusal = (
+            "a time-tagged cmd_twist needs its issue time in header.stamp"
+            if stamp == 0
+            else self.time_tags.refusal(stamp * 1e-9, now * 1e-9)
+        )
+        if refusal is not None:
+            self._reject(f"cmd_twist refused: {refusal}")
+            self._node.get_logger().error(
+                f"cmd_twist stamped {stamp * 1e-9:.3f} s refused at {now * 1e-9:.3f} s: {refusal}",
+                throttle_duration_sec=1.0,
+            )
+            return None
+        acts = stamp + round(self.time_tags.execution_delay * NS_PER_S)
+        return fields._replace(stamp=divmod(acts, NS_PER_S))
+
+    def release_due(self, tick: int) -> None:
+        """Time-tagged twists (without await_commands) whose execution time is at or before
+        ``tick`` [ns]: taken in stamp order, the last one in force from this tick on."""
+        for fields in self.pending.due(tick):
+            self.take(fields.angular, fields.linear, fields.frame_id, fields.stamp)
 
     def _on_await_timeout(self) -> None:
         """await_commands: no twist came for command_timeout (wall clock) while ticks waited:

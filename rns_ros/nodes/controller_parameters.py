@@ -7,6 +7,7 @@ from rns_ros.control.camera_law import ControlGains, Method
 from rns_ros.control.command_tracking import TrackingSettings
 from rns_ros.control.controller import ControllerSettings, HoldCorrection, TwistFrame
 from rns_ros.control.teleop import CommandGate, resolve_twist_frame
+from rns_ros.control.time_tags import MAX_EXECUTION_DELAY_S, TimeTags
 from rns_ros.core.validation import Choice
 from rns_ros.nodes.parameters import (
     CLOCK_TIMEOUT,
@@ -210,6 +211,30 @@ PARAMETERS = (
     ),
     ParameterSpec("twist_stamped", True, "cmd_twist is TwistStamped (false: plain Twist)"),
     ParameterSpec(
+        "execution_delay",
+        0.0,
+        "Time-tagged twists (a delayed link): a twist stamped t acts at t + this; 0: on arrival",
+        "[s]",
+        0.0,
+        MAX_EXECUTION_DELAY_S,
+    ),
+    ParameterSpec(
+        "late_tolerance",
+        0.5,
+        "execution_delay > 0: a twist received more than this after t + execution_delay is refused",
+        "[s]",
+        1e-3,
+        60.0,
+    ),
+    ParameterSpec(
+        "future_tolerance",
+        0.05,
+        "execution_delay > 0: a twist stamped more than this ahead of the node clock is refused",
+        "[s]",
+        1e-3,
+        60.0,
+    ),
+    ParameterSpec(
         "default_twist_frame",
         TwistFrame.CAMERA.value,
         "Axes of unstamped or frame-less commands: world, base, camera, or the world_frame, "
@@ -302,6 +327,13 @@ def controller_settings(params: dict) -> ControllerSettings:
     )
 
 
+def time_tags(params: dict) -> TimeTags | None:
+    """The time tags of ``execution_delay`` > 0 (None: twists act on arrival)."""
+    if params["execution_delay"] == 0.0:
+        return None
+    return TimeTags(params["execution_delay"], params["late_tolerance"], params["future_tolerance"])
+
+
 def command_gate(params: dict, frames: dict[str, TwistFrame]) -> CommandGate:
     """The command gate from the parameter values ``params``; ``frames``: frame id -> axes.
 
@@ -338,5 +370,6 @@ __all__ = [
     "SUMMARY",
     "command_gate",
     "controller_settings",
+    "time_tags",
     "tracking_settings",
 ]

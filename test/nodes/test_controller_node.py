@@ -766,6 +766,56 @@ def test_with_output_lead_a_reset_clock_is_not_caught_up_to_the_old_state(ros):
     assert plant.output_stamps() == [0.51, 0.01, 0.02]
 
 
+def test_a_time_tagged_twist_acts_its_execution_delay_after_its_stamp(ros):
+    """execution_delay (an operator behind a delayed link): a twist stamped 1.0 acts from the
+    tick at 2.0, the outputs before it stay at rest, and a stop stamped 1.5 acts from the tick
+    at 2.5."""
+    # tracking and wrist terms off: this plant's joints never move, and the lag would be made up
+    plant = _LockstepPlant(
+        ros, execution_delay=1.0, command_timeout=5.0, tracking_gain=0.0, wrist_gain=0.0
+    )
+    plant.state(1.0)
+    plant.clock(1.0)
+    plant.twist(1.0, 0.5)
+    t = 1.0
+    while t < 2.6 - 1e-9:
+        t = round(t + 0.01, 9)
+        plant.state(t)
+        plant.clock(t)
+        if t == 1.5:
+            plant.twist(1.5, 0.0)  # issued now
+    stamps, speeds = plant.output_stamps(), plant.output_speeds()
+    moving = [stamp for stamp, speed in zip(stamps, speeds, strict=True) if speed > 0.0]
+    # each output is stamped a period after its tick (output_lead): ticks 2.00 to 2.49 move
+    assert moving[0] == pytest.approx(2.01)
+    assert moving[-1] == pytest.approx(2.50)
+    assert stamps[-1] == pytest.approx(2.61)
+
+
+def test_time_tags_need_stamped_twists(ros):
+    with pytest.raises(ConfigError, match=r"execution_delay > 0 needs twist_stamped: true"):
+        _node(ros, ControllerNode, execution_delay=1.0, twist_stamped=False)
+
+
+def test_late_and_future_time_tagged_twists_are_refused_with_the_reason(ros):
+    plant = _LockstepPlant(ros, execution_delay=1.0, late_tolerance=0.2, command_timeout=5.0)
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_controller/status", qos=100)
+    plant.state(5.0)
+    plant.clock(5.0)
+    plant.twist(3.5, 0.5)  # due at 4.5, received at 5.0: 0.5 s late, over 0.2
+    plant.state(5.01)
+    plant.clock(5.01)
+    ros.spin_until(lambda: any("delay budget" in m.status[0].message for m in status.messages))
+    plant.twist(6.0, 0.5)  # stamped 0.99 s ahead of the clock (5.01)
+    plant.state(5.02)
+    plant.clock(5.02)
+    ros.spin_until(lambda: any("in the future" in m.status[0].message for m in status.messages))
+    messages = [m.status[0].message for m in status.messages]
+    assert any("received 0.500 s after its execution time" in text for text in messages)
+    assert any("stamped 0.990 s in the future" in text for text in messages)
+    assert max(plant.output_speeds()) == 0.0  # neither moved the arm
+
+
 def test_with_await_commands_a_tick_waits_for_the_twist_in_force_and_twists_wait_for_stamps(ros):
     """await_commands (lockstep: the operator publishes its samples ahead, stamped with their
     instants): a tick is served once a twist stamped at or after it came, so the twist in force

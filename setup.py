@@ -16,6 +16,7 @@ CONSOLE_SCRIPTS = [
     "rns_ptp = rns_ros.nodes.ptp:main",
     "rns_attitude_control = rns_ros.nodes.attitude_control:main",
     "rns_link = rns_ros.nodes.link:main",
+    "rns_predictor = rns_ros.nodes.predictor:main",
     "rns_rerun_logger = rns_ros.nodes.rerun_logger:main",
     "rns_operator = rns_ros.nodes.operator:main",
     "rns_teleop_keyboard = rns_ros.nodes.teleop_keyboard:main",

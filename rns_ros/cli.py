@@ -43,6 +43,7 @@ EXECUTABLES = frozenset(
         "rns_ptp",
         "rns_attitude_control",
         "rns_link",
+        "rns_predictor",
         "rns_rerun_logger",
         "rns_operator",
         "rns_teleop_keyboard",

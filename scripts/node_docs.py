@@ -31,6 +31,7 @@ PARAMETER_MODULES = (
     "rns_ros.nodes.force_controller_parameters",
     "rns_ros.nodes.attitude_control_parameters",
     "rns_ros.nodes.link_parameters",
+    "rns_ros.nodes.predictor_parameters",
     "rns_ros.nodes.operator_parameters",
     "rns_ros.nodes.rerun_logger_parameters",
     "rns_ros.nodes.teleop_keyboard_parameters",

@@ -39,6 +39,7 @@ CHECKED = (
     "rns_demo",
     "rns_force_controller",
     "rns_link",
+    "rns_predictor",
     "rns_observer",
     "rns_operator",
     "rns_rerun_logger",

@@ -54,6 +54,8 @@ from rns_ros.sim.free_floating import FreeFloatingSimulator, SimulationMode
 
 #: A telemetry stamp this close to a tick of the grid [s] is compared with that tick.
 GRID_TOLERANCE_S = 1e-6
+#: Prediction errors kept (the newest): 1000 s of 100 Hz telemetry.
+MAX_ERRORS = 100_000
 
 
 @dataclass(frozen=True)
@@ -173,7 +175,11 @@ class PredictedArm:
         self._acts: list[float] = []
         self._commands: list[TwistCommand] = []
         self._ticks: deque[_Tick] = deque()
-        self.errors: list[PredictionError] = []
+        #: the newest prediction errors (at most MAX_ERRORS kept); their worst so far
+        self.errors: deque[PredictionError] = deque(maxlen=MAX_ERRORS)
+        self.worst = PredictionError(math.nan, 0.0, 0.0, 0.0, False)
+        self.compared = 0  # telemetry samples compared
+        self.resyncs = 0  # re-anchorings
         self._anchor(float(t0), as_vector(q0, robot.model.nq, "q0"), settings.gate.gate(), True)
 
     # --- inputs --------------------------------------------------------------------------------
@@ -218,7 +224,8 @@ class PredictedArm:
 
     def telemetry(self, stamp: float, q) -> PredictionError | None:
         """The measured configuration ``q`` (7 + n,) stamped ``stamp`` [s] (on-board time):
-        the prediction error at that stamp (also appended to :attr:`errors`), or None when the
+        the prediction error at that stamp (also appended to :attr:`errors` and counted in
+        :attr:`worst`, :attr:`compared`, :attr:`resyncs`), or None when the
         stamp is off the grid or outside the kept history. Re-anchors past ``resync_deg``."""
         q = as_vector(q, self.robot.model.nq, "telemetry q")
         tick = self._tick_at(stamp)
@@ -237,6 +244,16 @@ class PredictedArm:
             self._restart(tick.time, q)
         error = PredictionError(stamp, camera, base, joints, resync)
         self.errors.append(error)
+        worst = self.worst
+        self.worst = PredictionError(
+            stamp,
+            max(worst.camera_deg, camera),
+            max(worst.base_deg, base),
+            max(worst.joints_rad, joints),
+            worst.resynced or resync,
+        )
+        self.compared += 1
+        self.resyncs += resync
         return error
 
     # --- the loop ------------------------------------------------------------------------------

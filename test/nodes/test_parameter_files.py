@@ -19,6 +19,7 @@ DEFAULTS = (
     ("rns_ros.nodes.force_controller_parameters", "force_controller.yaml"),
     ("rns_ros.nodes.attitude_control_parameters", "attitude_control.yaml"),
     ("rns_ros.nodes.link_parameters", "link.yaml"),
+    ("rns_ros.nodes.predictor_parameters", "predictor.yaml"),
     ("rns_ros.nodes.operator_parameters", "operator.yaml"),
     ("rns_ros.nodes.rerun_logger_parameters", "rerun_logger.yaml"),
     ("rns_ros.nodes.teleop_keyboard_parameters", "teleop_keyboard.yaml"),

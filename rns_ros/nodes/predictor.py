@@ -1,0 +1,234 @@
+"""rns_predictor: the predictive display's arm, on the ground side of a delayed link.
+
+The operator's twists act on board at their stamp + ``execution_delay`` (D, rns_controller's
+time tags); the telemetry comes back another downlink delay later. This node runs the on-board
+loop ahead on the ground (:class:`rns_ros.ground.predictor.PredictedArm`, the law and gate of
+rns_controller with the same parameters), so the arm it publishes is where the spacecraft's arm
+will be once the commands given so far have acted: on-board time now + D. Each telemetry
+sample, when it arrives, is compared with what was predicted for its stamp (the prediction
+error) and, past ``resync_deg`` / ``resync_rad``, the prediction restarts from it.
+
+Run it in the ground's namespace (``-r __ns:=/ground``), beside ``rns_link``:
+
+Subscribes:
+    cmd_twist              geometry_msgs/TwistStamped, the operator's (stamped with the issue
+                           time; frames as rns_controller takes them)
+    joint_states           sensor_msgs/JointState, the telemetry (by joint name)
+    base_odom              nav_msgs/Odometry, the telemetry; paired with joint_states by stamp
+Publishes:
+    predicted/joint_states sensor_msgs/JointState every control period, stamped with the
+                           on-board time it predicts (now + D)
+    predicted/base_odom    nav_msgs/Odometry, the same instant
+    ~/status               diagnostic_msgs/DiagnosticArray every ``status_period``: the last and
+                           largest prediction errors (camera, base [deg], joints [rad]), the
+                           re-anchorings, the telemetry's age (the round trip as seen here)
+
+Before the first telemetry nothing is predicted (WAITING_FOR_TELEMETRY); twists given meanwhile
+are kept and act once it comes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+
+from rns_ros.control.teleop import twist_frame_ids, validate_twist
+from rns_ros.control.time_tags import TimeTags
+from rns_ros.core.commands import match_joint_state
+from rns_ros.core.errors import InputError
+from rns_ros.ground.predictor import GateSettings, PredictedArm, PredictorSettings
+from rns_ros.nodes import predictor_parameters
+from rns_ros.nodes.controller_parameters import controller_settings
+from rns_ros.nodes.parameters import declare_parameters, load_node_model
+from rns_ros.nodes.robot_io import base_pose
+from rns_ros.nodes.runner import run_node
+from rns_ros.nodes.sim_clock import stamp_from_seconds
+
+#: Every sample counts (a twist is one instant of the operator's stream; telemetry pairs by stamp).
+INPUT_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: Telemetry halves (joint_states or base_odom) kept while waiting for their other half.
+MAX_UNPAIRED = 200
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
+class PredictorNode(Node):
+    """ROS 2 wrapper of :class:`PredictedArm` (module docstring)."""
+
+    def __init__(self, **node_kwargs) -> None:
+        super().__init__(predictor_parameters.NODE_NAME, **node_kwargs)
+        params = declare_parameters(self, predictor_parameters.PARAMETERS)
+        self.robot = load_node_model(self, params["model_config"])
+        self._settings = PredictorSettings(
+            controller=controller_settings(params),
+            gate=GateSettings(
+                params["command_timeout"], params["stop_deceleration"], params["start_acceleration"]
+            ),
+            time_tags=TimeTags(params["execution_delay"]),
+            resync_deg=params["resync_deg"],
+            resync_rad=params["resync_rad"],
+            history=params["history"],
+            simulation_step=1.0 / params["rate"],
+        )
+        self._frames = twist_frame_ids(
+            self.robot, params["world_frame"], params["default_twist_frame"]
+        )
+        self._max_speed = params["max_angular_speed"]
+        self._world_frame = params["world_frame"]
+        self.arm: PredictedArm | None = None
+        self._early: list[tuple[float, np.ndarray, object]] = []  # twists before telemetry
+        self._joints: dict[int, np.ndarray] = {}  # stamp [ns] -> theta, unpaired
+        self._poses: dict[int, np.ndarray] = {}  # stamp [ns] -> (position, quaternion xyzw)
+        self.newest_telemetry = -math.inf  # [s]
+        self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, INPUT_QOS)
+        self.create_subscription(JointState, "joint_states", self._on_joints, INPUT_QOS)
+        self.create_subscription(Odometry, "base_odom", self._on_odom, INPUT_QOS)
+        self._joints_pub = self.create_publisher(JointState, "predicted/joint_states", 10)
+        self._odom_pub = self.create_publisher(Odometry, "predicted/base_odom", 10)
+        self._status_pub = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
+        self.create_timer(self._settings.controller.period, self._on_tick)
+        self.create_timer(params["status_period"], self._on_status)
+        self.get_logger().info(
+            f"predicting {self.robot.name} {params['execution_delay']:g} s ahead "
+            f"({params['method']} at {params['rate']:g} Hz); waiting for "
+            f"{self.resolve_topic_name('joint_states')}"
+        )
+
+    def now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    # --- inputs --------------------------------------------------------------------------------
+    def _on_twist(self, msg: TwistStamped) -> None:
+        stamp = _seconds(msg.header.stamp)
+        a, v = msg.twist.angular, msg.twist.linear
+        try:
+            command = validate_twist(
+                [a.x, a.y, a.z],
+                [v.x, v.y, v.z],
+                msg.header.frame_id,
+                self._frames,
+                self._max_speed,
+                stamp,
+            )
+        except InputError as exc:
+            self.get_logger().error(f"cmd_twist ignored: {exc}", throttle_duration_sec=1.0)
+            return
+        if self.arm is None:
+            self._early.append((stamp, command.angular, command.frame))
+            del self._early[:-1000]
+        else:
+            self.arm.command(stamp, command.angular, command.frame)
+
+    def _on_joints(self, msg: JointState) -> None:
+        try:
+            named, _ = match_joint_state(msg.name, self.robot.joint_names, positions=msg.position)
+        except InputError as exc:
+            self.get_logger().error(f"joint_states ignored: {exc}", throttle_duration_sec=1.0)
+            return
+        if named.positions is None or not np.all(np.isfinite(named.positions)):
+            self.get_logger().error(
+                "joint_states ignored: no finite positions", throttle_duration_sec=1.0
+            )
+            return
+        self._pair(self._joints, msg.header.stamp, np.asarray(named.positions, dtype=float))
+
+    def _on_odom(self, msg: Odometry) -> None:
+        p, o = msg.pose.pose.position, msg.pose.pose.orientation
+        pose = base_pose(np.array([p.x, p.y, p.z, o.x, o.y, o.z, o.w]))
+        if pose is None:
+            self.get_logger().error(
+                "base_odom ignored: not a finite pose", throttle_duration_sec=1.0
+            )
+            return
+        self._pair(self._poses, msg.header.stamp, np.concatenate(pose))
+
+    def _pair(self, halves: dict[int, np.ndarray], stamp, value: np.ndarray) -> None:
+        key = stamp.sec * 1_000_000_000 + stamp.nanosec
+        halves[key] = value
+        if key in self._joints and key in self._poses:
+            theta, pose = self._joints.pop(key), self._poses.pop(key)
+            self._telemetry(key * 1e-9, self.robot.configuration(theta, pose[:3], pose[3:]))
+        for table in (self._joints, self._poses):
+            while len(table) > MAX_UNPAIRED:
+                del table[min(table)]
+
+    def _telemetry(self, stamp: float, q: np.ndarray) -> None:
+        self.newest_telemetry = max(self.newest_telemetry, stamp)
+        if self.arm is None:
+            self.arm = PredictedArm(self.robot, self._settings, q, stamp)
+            for item in self._early:
+                self.arm.command(*item)
+            self._early.clear()
+            self.get_logger().info(f"first telemetry at {stamp:.3f} s: predicting")
+            return
+        error = self.arm.telemetry(stamp, q)
+        if error is not None and error.resynced:
+            self.get_logger().info(
+                f"re-anchored at {stamp:.3f} s: predicted camera {error.camera_deg:.4f} deg, "
+                f"base {error.base_deg:.4f} deg, joints {error.joints_rad:.2e} rad off",
+                throttle_duration_sec=1.0,
+            )
+
+    # --- outputs -------------------------------------------------------------------------------
+    def _on_tick(self) -> None:
+        if self.arm is None:
+            return
+        state = self.arm.advance(self.now_s() + self._settings.time_tags.execution_delay)
+        stamp = stamp_from_seconds(self.arm.time)
+        joints = JointState(name=list(self.robot.joint_names), position=state.theta.tolist())
+        joints.header.stamp = stamp
+        self._joints_pub.publish(joints)
+        odom = Odometry()
+        odom.header.stamp, odom.header.frame_id = stamp, self._world_frame
+        odom.child_frame_id = self.robot.base_link
+        q = state.q
+        p, o = odom.pose.pose.position, odom.pose.pose.orientation
+        p.x, p.y, p.z = (float(x) for x in q[:3])
+        o.x, o.y, o.z, o.w = (float(x) for x in q[3:7])
+        self._odom_pub.publish(odom)
+
+    def _on_status(self) -> None:
+        arm = self.arm
+        values = {"predicted_time": "-" if arm is None else f"{arm.time:.3f}"}
+        if arm is not None and arm.errors:
+            last, worst = arm.errors[-1], arm.worst
+            values.update(
+                {
+                    "prediction_error_camera_deg": f"{last.camera_deg:.6g}",
+                    "prediction_error_base_deg": f"{last.base_deg:.6g}",
+                    "prediction_error_joints_rad": f"{last.joints_rad:.6g}",
+                    "max_prediction_error_camera_deg": f"{worst.camera_deg:.6g}",
+                    "max_prediction_error_base_deg": f"{worst.base_deg:.6g}",
+                    "max_prediction_error_joints_rad": f"{worst.joints_rad:.6g}",
+                    "compared": str(arm.compared),
+                    "resynced": str(arm.resyncs),
+                }
+            )
+        if math.isfinite(self.newest_telemetry):
+            values["telemetry_age_s"] = f"{self.now_s() - self.newest_telemetry:.3f}"
+        status = DiagnosticStatus(
+            name=self.get_fully_qualified_name(),
+            level=DiagnosticStatus.WARN if self.arm is None else DiagnosticStatus.OK,
+            message="WAITING_FOR_TELEMETRY" if self.arm is None else "PREDICTING",
+            values=[KeyValue(key=key, value=value) for key, value in values.items()],
+        )
+        message = DiagnosticArray(status=[status])
+        message.header.stamp = self.get_clock().now().to_msg()
+        self._status_pub.publish(message)
+
+
+def main(args=None) -> int:
+    return run_node(PredictorNode, predictor_parameters, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -305,8 +305,33 @@ def _task_arrays(
             f"{method}: the robot state was recorded from {data['times'][0]:.3f} s, after "
             f"the operator's profile started at {task:.3f} s"
         )
+    _check_at_rest_before(data, task, method)
     _check_complete(data, method, sim_time)
     return data
+
+
+#: Largest joint speed [rad/s] of an arm at rest: before the first command acts nothing moves
+#: (the controller's output is exactly zero), so anything above is a command already acting.
+AT_REST = 1e-3
+
+
+def _check_at_rest_before(data: dict[str, np.ndarray], task: float, method: str) -> None:
+    """The arm stands still up to the task's start: the start is the first moving twist this
+    process recorded, so an arm already moving then means the twists before it were lost to
+    this process (on the wall clock a starved recorder drops best-effort samples, and the
+    figures would start mid-task: the camera's target counted from where it had turned to).
+
+    Raises:
+        PartialRecordingError: it moved.
+    """
+    before = data["times"] <= task
+    speed = float(np.abs(data["joint_velocities"][before]).max(initial=0.0))
+    if speed > AT_REST:
+        raise PartialRecordingError(
+            f"{method}: the arm moved at {speed:.3g} rad/s before the first moving cmd_twist "
+            f"this process recorded ({task:.3f} s): it missed the start of the operator's "
+            "profile; no figures from a partial recording"
+        )
 
 
 def _task_so_far(streams: dict[str, TopicLog], scenario: Scenario) -> float | None:

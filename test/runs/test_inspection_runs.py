@@ -94,6 +94,27 @@ def test_a_twist_stream_recorded_from_mid_profile_is_a_partial_recording():
         )
 
 
+def test_an_arm_already_moving_at_the_first_recorded_twist_is_a_partial_recording():
+    """On the wall clock a starved recorder may lose the operator's first moving twists: the
+    task would then start mid-roll, and the camera's target count from where it had turned to
+    (a loaded run showed 29 deg 'off' a 30 deg roll). An arm that moves before the first moving
+    twist recorded gives it away."""
+    import numpy as np
+
+    from rns_ros.runs.inspection import AT_REST, _check_at_rest_before
+    from rns_ros.runs.recorded import PartialRecordingError
+
+    times = 0.01 * np.arange(100)
+    speeds = np.zeros((100, 7))
+    speeds[30:, 2] = 0.17  # the arm moves from 0.30 s on, when the first command acts
+    data = {"times": times, "joint_velocities": speeds}
+    _check_at_rest_before(data, 0.295, "dls")  # recorded from the profile's start
+    with pytest.raises(PartialRecordingError, match=r"dls: the arm moved at 0\.17 rad/s before"):
+        _check_at_rest_before(data, 0.60, "dls")  # the first 0.3 s of twists were lost
+    speeds[:30, 2] = 0.5 * AT_REST  # rounding at rest
+    _check_at_rest_before(data, 0.295, "dls")
+
+
 def _status(state: str, seconds: float) -> DiagnosticArray:
     values = [KeyValue(key="state", value=state)]
     msg = DiagnosticArray(status=[DiagnosticStatus(name="rns_controller", values=values)])

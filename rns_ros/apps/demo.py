@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import sys
@@ -42,6 +43,7 @@ from rns_ros.cli import (
     split_ros_args,
 )
 from rns_ros.core import RnsError, load_model
+from rns_ros.ground.link import MAX_DELAY_S
 from rns_ros.harness import CLAIM_PREFIX, DomainInUseError, claim_domain
 from rns_ros.resources import default_model_config, scenario_path
 from rns_ros.runs.clock import clock_text
@@ -63,6 +65,7 @@ from rns_ros.runs.inspection import (
     singular_threshold,
     start_configuration,
 )
+from rns_ros.runs.link import MAX_LINK_LOSS
 from rns_ros.runs.ptp import PTP_METHODS, PTP_SCENARIOS, PtpScenario, run_ptp_method
 from rns_ros.runs.recorded import PartialRecordingError
 from rns_ros.runs.report import (
@@ -175,6 +178,29 @@ def _parser() -> argparse.ArgumentParser:
         help="inspection scenarios: run every method this many times and add the min / median "
         "/ max of the base deviation (in --summary too); [1, 100]",
     )
+    parser.add_argument(
+        "--link-delay",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="inspection: the operator on the ground behind a space link of this one-way delay "
+        "(rns_link, time-tagged twists, rns_predictor); the table adds the delay and the "
+        "largest prediction error",
+    )
+    parser.add_argument(
+        "--link-jitter",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="with --link-delay: extra delay, uniform in [0, jitter) per message",
+    )
+    parser.add_argument(
+        "--link-loss",
+        type=float,
+        default=0.0,
+        metavar="P",
+        help="with --link-delay: probability that a message is lost, each way",
+    )
     add_domain_id_argument(parser, 42, "of the runs")
     return parser
 
@@ -206,6 +232,7 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
         parser.error("--wall-clock is for the inspection and point-to-point scenarios")
     if not 1 <= args.runs <= 100:
         parser.error(f"--runs must be in [1, 100], got {args.runs}")
+    _check_link(parser, args)
     if args.sim_step is not None:
         substeps = 1.0 / (args.rate * args.sim_step)
         if (
@@ -231,6 +258,24 @@ def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
         parser.error(f"--summary {str(args.summary)!r} {problem}")
     if not args.no_record and (problem := make_output_folder(args.output)):
         parser.error(f"--output {str(args.output)!r} {problem}")
+
+
+def _check_link(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """--link-delay, --link-jitter, --link-loss within their ranges, for inspection runs."""
+    if args.link_delay is None:
+        if args.link_jitter or args.link_loss:
+            parser.error("--link-jitter and --link-loss need --link-delay")
+        return
+    if args.scenario in PTP_SCENARIOS or is_contact_scenario(args.scenario):
+        parser.error("--link-delay is for the inspection scenarios")
+    for name, value, high in (
+        ("--link-delay", args.link_delay, MAX_DELAY_S),
+        ("--link-jitter", args.link_jitter, MAX_DELAY_S),
+    ):
+        if not (math.isfinite(value) and 0.0 <= value <= high):
+            parser.error(f"{name} must be in [0, {high:g}] s, got {value:g}")
+    if not (math.isfinite(args.link_loss) and 0.0 <= args.link_loss <= MAX_LINK_LOSS):
+        parser.error(f"--link-loss must be in [0, {MAX_LINK_LOSS:g}], got {args.link_loss:g}")
 
 
 def main(argv: list[str] | None = None) -> int:

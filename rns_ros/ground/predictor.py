@@ -213,6 +213,11 @@ class PredictedArm:
         return self._ticks[-1].time
 
     @property
+    def q(self) -> np.ndarray:
+        """The newest predicted configuration (7 + n,)."""
+        return self._ticks[-1].q.copy()
+
+    @property
     def state(self) -> FreeFloatingState:
         """The newest predicted state."""
         return FreeFloatingState.compute(self.robot, self._ticks[-1].q)

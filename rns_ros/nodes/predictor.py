@@ -16,8 +16,11 @@ Subscribes:
     joint_states           sensor_msgs/JointState, the telemetry (by joint name)
     base_odom              nav_msgs/Odometry, the telemetry; paired with joint_states by stamp
 Publishes:
-    predicted/joint_states sensor_msgs/JointState every control period, stamped with the
-                           on-board time it predicts (now + D)
+    predicted/joint_states sensor_msgs/JointState, one per predicted control period, stamped
+                           with the on-board time it stands for: up to the newest twist's
+                           stamp + D (twists come in stamp order; the later ones are not known
+                           yet), or now + D once the operator has been silent for
+                           ``command_timeout``
     predicted/base_odom    nav_msgs/Odometry, the same instant
     ~/status               diagnostic_msgs/DiagnosticArray every ``status_period``: the last and
                            largest prediction errors (camera, base [deg], joints [rad]), the
@@ -30,6 +33,7 @@ are kept and act once it comes.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -43,7 +47,12 @@ from rns_ros.control.teleop import twist_frame_ids, validate_twist
 from rns_ros.control.time_tags import TimeTags
 from rns_ros.core.commands import match_joint_state
 from rns_ros.core.errors import InputError
-from rns_ros.ground.predictor import GateSettings, PredictedArm, PredictorSettings
+from rns_ros.ground.predictor import (
+    GRID_TOLERANCE_S,
+    GateSettings,
+    PredictedArm,
+    PredictorSettings,
+)
 from rns_ros.nodes import predictor_parameters
 from rns_ros.nodes.controller_parameters import controller_settings
 from rns_ros.nodes.parameters import declare_parameters, load_node_model
@@ -51,10 +60,15 @@ from rns_ros.nodes.robot_io import base_pose
 from rns_ros.nodes.runner import run_node
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 
-#: Every sample counts (a twist is one instant of the operator's stream; telemetry pairs by stamp).
-INPUT_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: Every sample counts (a twist is one instant of the operator's stream; telemetry pairs by
+#: stamp): best effort (matches any sender), deep enough for 10 s of a 100 Hz stream while
+#: the prediction catches up.
+INPUT_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: Telemetry halves (joint_states or base_odom) kept while waiting for their other half.
 MAX_UNPAIRED = 200
+#: Predicted ticks per timer call at most: a prediction that fell behind catches up over
+#: several calls, and the twists and telemetry are taken in between.
+MAX_TICKS_PER_CALL = 50
 
 
 def _seconds(stamp) -> float:
@@ -89,6 +103,9 @@ class PredictorNode(Node):
         self._joints: dict[int, np.ndarray] = {}  # stamp [ns] -> theta, unpaired
         self._poses: dict[int, np.ndarray] = {}  # stamp [ns] -> (position, quaternion xyzw)
         self.newest_telemetry = -math.inf  # [s]
+        self.newest_twist = -math.inf  # [s], the newest twist's stamp
+        self.twists = 0  # valid twists taken
+        self._twist_received = -math.inf  # [s, monotonic] of the newest
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, INPUT_QOS)
         self.create_subscription(JointState, "joint_states", self._on_joints, INPUT_QOS)
         self.create_subscription(Odometry, "base_odom", self._on_odom, INPUT_QOS)
@@ -122,6 +139,9 @@ class PredictorNode(Node):
         except InputError as exc:
             self.get_logger().error(f"cmd_twist ignored: {exc}", throttle_duration_sec=1.0)
             return
+        self.newest_twist = max(self.newest_twist, stamp)
+        self._twist_received = time.monotonic()
+        self.twists += 1
         if self.arm is None:
             self._early.append((stamp, command.angular, command.frame))
             del self._early[:-1000]
@@ -179,18 +199,42 @@ class PredictorNode(Node):
             )
 
     # --- outputs -------------------------------------------------------------------------------
+    def _horizon(self) -> float:
+        """How far the prediction may go now [s, on-board time]: the newest twist's stamp + D,
+        since twists come in stamp order and the ones after it are not known yet (a prediction
+        past it would be redone when they come); once the operator has been silent for
+        ``command_timeout``, now + D (the gate then stops the arm as the spacecraft's does).
+        Silent on the node clock and on the wall clock alike: on a busy machine /clock may be
+        taken while twists still wait in the queue."""
+        delay = self._settings.time_tags.execution_delay
+        now, timeout = self.now_s(), self._settings.gate.command_timeout
+        silent = now - self.newest_twist > timeout
+        if silent and time.monotonic() - self._twist_received > timeout:
+            return now + delay
+        return min(now, self.newest_twist) + delay
+
     def _on_tick(self) -> None:
-        if self.arm is None:
+        """Predict up to the horizon, publishing every predicted tick (at most
+        :data:`MAX_TICKS_PER_CALL` per call: the subscriptions are served in between)."""
+        arm = self.arm
+        if arm is None:
             return
-        state = self.arm.advance(self.now_s() + self._settings.time_tags.execution_delay)
-        stamp = stamp_from_seconds(self.arm.time)
-        joints = JointState(name=list(self.robot.joint_names), position=state.theta.tolist())
+        horizon = self._horizon()
+        for _ in range(MAX_TICKS_PER_CALL):
+            if arm.time + arm.period > horizon + GRID_TOLERANCE_S:
+                break
+            arm.advance(arm.time + arm.period)
+            self._publish(arm.q, arm.time)
+
+    def _publish(self, q: np.ndarray, t: float) -> None:
+        """The predicted configuration ``q`` (7 + n,) of on-board time ``t`` [s]."""
+        stamp = stamp_from_seconds(t)
+        joints = JointState(name=list(self.robot.joint_names), position=q[7:].tolist())
         joints.header.stamp = stamp
         self._joints_pub.publish(joints)
         odom = Odometry()
         odom.header.stamp, odom.header.frame_id = stamp, self._world_frame
         odom.child_frame_id = self.robot.base_link
-        q = state.q
         p, o = odom.pose.pose.position, odom.pose.pose.orientation
         p.x, p.y, p.z = (float(x) for x in q[:3])
         o.x, o.y, o.z, o.w = (float(x) for x in q[3:7])
@@ -198,7 +242,10 @@ class PredictorNode(Node):
 
     def _on_status(self) -> None:
         arm = self.arm
-        values = {"predicted_time": "-" if arm is None else f"{arm.time:.3f}"}
+        values = {
+            "predicted_time": "-" if arm is None else f"{arm.time:.3f}",
+            "twists": str(self.twists),
+        }
         if arm is not None and arm.errors:
             last, worst = arm.errors[-1], arm.worst
             values.update(

@@ -34,6 +34,15 @@ from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
+from rns_ros.runs.link import (
+    GROUND_TWISTS,
+    LinkOptions,
+    acting,
+    controller_parameters,
+    link_options,
+    prediction_error_deg,
+    start_link_nodes,
+)
 from rns_ros.runs.logger import rrd_lost, start_logger
 from rns_ros.runs.mcap_recording import open_mcap, record_robot_model
 from rns_ros.runs.recorded import (
@@ -79,6 +88,10 @@ class DemoRow:
     ended: str | None = None
     #: a recording of the run that could not be written (the file removed): why, one line each
     unwritten: tuple[str, ...] = ()
+    #: behind a space link (--link-delay): its one-way delay [s], and the largest angle between
+    #: the predicted and the spacecraft's camera at the same stamp over the task [deg]
+    link_delay_s: float | None = None
+    prediction_error_deg: float | None = None
 
     @property
     def real_time_factor(self) -> float | None:
@@ -185,6 +198,7 @@ def run_method(
     scenario = replace(scenario, initial_theta=theta)
     sim_time = lockstep(args)
     wheels = method.endswith(WHEELS_SUFFIX)
+    link = link_options(args)
     ros_args = list(args.ros_args[1:]) if args.ros_args else []
     start = time.perf_counter()
     interrupted: KeyboardInterrupt | None = None
@@ -203,6 +217,12 @@ def run_method(
             "energy": stack.record(Float64MultiArray, "energy", raw=True),
             "attitude": stack.record(DiagnosticArray, "rns_attitude_control/status", raw=True),
         }
+        predicted = {}
+        if link is not None:  # the ground's predicted arm, compared after the run
+            predicted = {
+                "joints": stack.record(JointState, "/ground/predicted/joint_states", raw=True),
+                "odom": stack.record(Odometry, "/ground/predicted/base_odom", raw=True),
+            }
         recording, logger = start_logger(
             processes, method, args, model_config, sim_time=sim_time, ros_args=ros_args
         )
@@ -225,7 +245,7 @@ def run_method(
                 awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
             _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
             task, end, task_wall, limited = _run_task(
-                stack, processes, streams, scenario, args, method
+                stack, processes, streams, scenario, args, method, link
             )
         except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the figures so far, then stop
             interrupted = exc
@@ -234,6 +254,8 @@ def run_method(
             # stopped before the recorded messages are read: in lockstep the stack would go
             # on stepping as fast as it can meanwhile, competing with this process for cores
             processes.stop()  # the logger writes its summary line as it closes the recording
+            if link is not None and "commands" in streams:
+                streams["commands"] = acting(streams["commands"], link.execution_delay)
             if interrupted is None:
                 data = _task_arrays(streams, task, end, method, sim_time)
             else:
@@ -270,6 +292,10 @@ def run_method(
         ended = f"interrupted {end - task:.1f} s into the task (its figures so far)"
     elif limited:
         ended = limit_cause(robot, data["joint_positions"][-1], data["times"][-1] - task)
+    prediction = None
+    if link is not None and task is not None and end is not None:
+        measured = {"joints": streams["joints"], "odom": streams["odom"]}
+        prediction = prediction_error_deg(robot, predicted, measured, task, end)
     row = DemoRow(
         method,
         figures,
@@ -281,6 +307,8 @@ def run_method(
         mcap=mcap,
         ended=ended,
         unwritten=tuple(unwritten),
+        link_delay_s=None if link is None else link.delay,
+        prediction_error_deg=prediction,
     )
     if interrupted is not None:
         raise InterruptedRun(interrupted, row, unwritten)
@@ -411,6 +439,9 @@ def _controller_parameters(
         # and serves each tick with the operator's sample in force then, published ahead
         # (OPERATOR_LEAD): a run's figures do not depend on when the operator got a core
         parameters["await_commands"] = True
+    link = link_options(args)
+    if link is not None:
+        parameters.update(controller_parameters(link, OPERATOR_LEAD))
     parameters.update({key: value for key, value in scenario.controller.items() if key != "method"})
     return parameters
 
@@ -433,11 +464,11 @@ def _start_nodes(
     timing = {"use_sim_time": True} if sim_time else {}
     model = {"model_config": model_config}
     wheels = method.endswith(WHEELS_SUFFIX)
-    processes.start(
-        "rns_controller",
-        {**_controller_parameters(method, args, scenario), **model},
-        ros_args=ros_args,
-    )
+    link = link_options(args)
+    controller = {**_controller_parameters(method, args, scenario), **model}
+    processes.start("rns_controller", controller, ros_args=ros_args)
+    if link is not None:
+        start_link_nodes(processes, link, controller, timing, ros_args)
     # the operator imports while the others do (started after the robot ran, its start-up
     # competed for the cores with a lockstep run stepping the idle robot as fast as it can:
     # ~2 s of each run's wall time); its profile still waits for this process's cmd_twist
@@ -445,6 +476,10 @@ def _start_nodes(
     listeners = [NODE_NAMES["controller"]]
     if logger:
         listeners.append(NODE_NAMES["logger"])
+    # the operator's twists go to the ground's topic: the link and the predictor take them
+    operator_subscribers = 2 if link is not None else len(listeners)
+    if link is not None:
+        listeners.append("rns_link")
     operator_timing = dict(timing)
     if sim_time and args.output_lead:
         # the profile on the controller's period grid: the same samples in each tick, however
@@ -466,10 +501,11 @@ def _start_nodes(
             "zero_duration": OPERATOR_ZERO_DURATION,
             # the controller, this process and the logger: the first to be matched no
             # longer starts the profile while the controller still misses it
-            "min_subscribers": len(listeners) + 1,
+            "min_subscribers": operator_subscribers + 1,
             **operator_timing,
             **model,  # the operator's base and camera frame ids
         },
+        remappings={"cmd_twist": GROUND_TWISTS} if link is not None else None,
         ros_args=ros_args,
     )
     if wheels:
@@ -502,24 +538,29 @@ def _run_task(
     scenario: Scenario,
     args: argparse.Namespace,
     method: str,
+    link: LinkOptions | None = None,
 ) -> tuple[float, float, float, bool]:
     """Record ``cmd_twist`` (into ``streams``) until every state stream reached the task's end,
     or until rns_controller reports JOINT_LIMIT (a joint at its limit: the task cannot be done;
     the run ends there, its figures so far kept); return the task's start and end [s] (stamps'
-    clock), its wall time [s] and whether a joint limit ended it."""
+    clock), its wall time [s] and whether a joint limit ended it. Behind a ``link`` the
+    operator's twists are recorded on the ground and the task starts when they act on board,
+    the execution delay after their stamps."""
     # the operator's profile waits for this subscription (one of its min_subscribers): made
     # only now, once the robot runs and is recorded, it holds the profile until then
-    commands = streams["commands"] = stack.record(TwistStamped, "cmd_twist", raw=True)
+    topic = "cmd_twist" if link is None else GROUND_TWISTS
+    commands = streams["commands"] = stack.record(TwistStamped, topic, raw=True)
     # serialized: only the newest is read (JointLimitWatch); deserializing each status in the
     # executor would cost it the time it needs to record every cmd_twist
     status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status", raw=True)
-    budget = 60.0 + (scenario.duration + 2.0) / max(args.real_time_factor, 1.0)
+    shift = 0.0 if link is None else link.execution_delay  # when a twist acts on board
+    budget = 60.0 + (scenario.duration + 2.0 + 2 * shift) / max(args.real_time_factor, 1.0)
     if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
         raise RnsError(f"{method}: no moving cmd_twist from rns_operator within {budget:.0f} s")
     # the end on the stamps' clock: a lockstep run goes on at its own pace,
     # so a wall-time settle would let figures depend on this machine's speed
     _check_recorded_from_the_start(commands.messages[0], args, method)
-    task = profile_start(commands, scenario, OPERATOR_RATE)
+    task = profile_start(commands, scenario, OPERATOR_RATE) + shift
     task_started = time.perf_counter()
     end = task + scenario.duration + OPERATOR_ZERO_DURATION + SETTLE
     states = [streams[name] for name in ("joints", "odom", "momentum")]

@@ -67,6 +67,9 @@ def format_table(rows: list[DemoRow]) -> str:
         ("task [s]", 10),
         ("× real time", 13),
     )
+    linked = any(row.link_delay_s is not None for row in rows)
+    if linked:
+        columns += (("link [s]", 10), ("pred. err [deg]", 17))
     header = "".join(
         f"{title:<{width}}" if i == 0 else f"{title:>{width}}"
         for i, (title, width) in enumerate(columns)
@@ -80,11 +83,18 @@ def format_table(rows: list[DemoRow]) -> str:
             f"{f.rms_tracking_error:>19.3e}{f.max_wrist_drift_m:>17.3f}{f.max_joint_speed:>17.3f}"
             f"{f.angular_momentum_drift:>14.2e}{f.min_sigma:>11.3g}{f.singular_time_s:>11.2f}"
             f"{_energy_columns(row.energy)}"
-            f"{row.wall_time_s:>10.1f}{_task_columns(row)}"
+            f"{row.wall_time_s:>10.1f}{_task_columns(row)}" + (_link_columns(row) if linked else "")
         )
     if any(row.ended for row in rows):
         lines.append(f"{ENDED_MARK.strip()} ended before the task's end: the figures up to then")
     return "\n".join(lines)
+
+
+def _link_columns(row: DemoRow) -> str:
+    """The link's one-way delay [s] and the largest prediction error [deg], or dashes."""
+    delay = "-" if row.link_delay_s is None else f"{row.link_delay_s:g}"
+    error = row.prediction_error_deg
+    return f"{delay:>10}" + (f"{'-':>17}" if error is None else f"{error:>17.3g}")
 
 
 def _task_columns(row: DemoRow) -> str:
@@ -247,6 +257,11 @@ def inspection_summary(runs: list[list[DemoRow]]) -> list[dict]:
         {"method": row.method, **asdict(row.figures), "wall_time_s": row.wall_time_s}
         | {"task_wall_s": row.task_wall_s, "task_sim_s": row.task_sim_s}
         | {"recording": row.recording, "mcap": row.mcap, "ended": row.ended}
+        | (
+            {"link_delay_s": row.link_delay_s, "prediction_error_deg": row.prediction_error_deg}
+            if row.link_delay_s is not None
+            else {}
+        )
         | {"energy": None if row.energy is None else asdict(row.energy)}
         | (
             {

@@ -70,10 +70,13 @@ class _Ground:
         msg.twist.angular.z = rate
         self.twists.publish(msg)
 
-    def step_to(self, t: float) -> None:
-        """Advance the clock to ``t`` [s] in 10 ms steps; wait for each step's prediction."""
+    def step_to(self, t: float, rate: float) -> None:
+        """Advance the clock to ``t`` [s] in 10 ms steps, the operator streaming ``rate``
+        [rad/s] stamped at each; wait for each step's prediction (as far as the twists go)."""
         while self.clock.seconds < t - 1e-9:
-            want = _seconds(self.clock.advance(0.01)) + DELAY
+            self.twist(self.clock.seconds, rate)
+            want = self.clock.seconds + DELAY
+            self.clock.advance(0.01)
             self.ros.spin_until(lambda w=want: self.newest() >= w - 1e-6, 10.0)
 
     def newest(self) -> float:
@@ -91,10 +94,8 @@ def test_the_predicted_arm_moves_at_the_execution_time_at_the_commanded_rate(ros
     ground.clock.advance(0.0)
     ground.telemetry(START, ground.theta)  # the first telemetry starts the prediction
     ground.ros.spin_until(lambda: ground.node.arm is not None, 10.0)
-    ground.twist(START, RATE)
-    ground.step_to(START + 0.5)
-    ground.twist(START + 0.5, 0.0)  # a half-second pulse, issued now
-    ground.step_to(START + 2.0)
+    ground.step_to(START + 0.5, RATE)
+    ground.step_to(START + 2.01, 0.0)  # a half-second pulse
     by_stamp = {round(_seconds(m.header.stamp), 6): m for m in ground.predicted.messages}
     rest = ground.camera(by_stamp[round(START + DELAY, 6)])
     before = ground.camera(JointState(position=ground.theta.tolist()))  # the telemetry
@@ -111,12 +112,11 @@ def test_telemetry_that_disagrees_is_reported_and_re_anchors(ros):
     ground.clock.advance(0.0)
     ground.telemetry(START, ground.theta)
     ground.ros.spin_until(lambda: ground.node.arm is not None, 10.0)
-    ground.twist(START, RATE)
-    ground.step_to(START + DELAY + 0.5)
+    ground.step_to(START + DELAY + 0.5, RATE)
     # the spacecraft "did not move": telemetry at rest for a stamp the prediction moved through
     ground.telemetry(START + DELAY + 0.5, ground.theta)
     ground.ros.spin_until(lambda: ground.node.arm.resyncs > 0, 10.0)
-    ground.step_to(START + DELAY + 0.6)
+    ground.step_to(START + DELAY + 0.6, RATE)
     ground.ros.spin_until(
         lambda: ground.status.messages and "resynced" in status_values(ground.status.messages[-1])
     )

@@ -48,6 +48,9 @@ class RunFigures:
     samples: int
     min_sigma: float
     singular_time_s: float
+    #: smallest prod(sigma_i) of J-bar [-]: the SC method scales the commanded rate by b times
+    #: it (eq. 4.13), so below 1 / b the camera turns slower than commanded (None: not computed)
+    min_singular_product: float | None = None
 
 
 def run_figures(
@@ -98,7 +101,8 @@ def run_figures(
         else 0.0
     )
     momentum = np.asarray(angular_momentum, dtype=float).reshape(-1, 3)
-    sigma = np.array([np.linalg.svd(s.restricted_jacobian, compute_uv=False)[-1] for s in states])
+    singular = np.array([np.linalg.svd(s.restricted_jacobian, compute_uv=False) for s in states])
+    sigma = singular[:, -1]
     held = np.diff(times, append=times[-1])  # each sample until the next
     return RunFigures(
         max_base_deviation_deg=float(np.rad2deg(base)),
@@ -120,6 +124,7 @@ def run_figures(
         samples=k,
         min_sigma=float(sigma.min()),
         singular_time_s=float(held[sigma < singular_threshold].sum()),
+        min_singular_product=float(np.prod(singular, axis=1).min()),
     )
 
 

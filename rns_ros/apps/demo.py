@@ -42,6 +42,7 @@ from rns_ros.cli import (
     run_main,
     split_ros_args,
 )
+from rns_ros.control.camera_law import THESIS_SC_GAIN
 from rns_ros.core import RnsError, load_model
 from rns_ros.ground.link import MAX_DELAY_S
 from rns_ros.harness import CLAIM_PREFIX, DomainInUseError, claim_domain
@@ -383,7 +384,10 @@ def _inspection_runs(args: argparse.Namespace, scenario, scenario_file, robot, n
     table = format_table(runs[-1])
     if complete:
         table += "\n\n" + format_spread(runs)
-    notes = camera_notes(runs[-1], singular_threshold(scenario), float(min(robot.velocity_limits)))
+    sc_gain = float(scenario.controller.get("sc_gain", THESIS_SC_GAIN))
+    notes = camera_notes(
+        runs[-1], singular_threshold(scenario), float(min(robot.velocity_limits)), sc_gain
+    )
     return _report(
         args,
         runs[-1],

@@ -11,6 +11,7 @@ from typing import NamedTuple, Protocol
 import numpy as np
 
 from rns_ros.analysis.reproduce.chapter4_ptp import THESIS_TABLE
+from rns_ros.control.camera_law import THESIS_SC_GAIN
 from rns_ros.runs.contact import ContactDemoRow
 from rns_ros.runs.inspection import DemoRow
 from rns_ros.runs.ptp import PtpDemoRow
@@ -121,10 +122,16 @@ CAMERA_OFF_DEG = 1.0
 SPEED_LIMIT_REACHED = 0.99
 
 
-def camera_notes(rows: list[DemoRow], threshold: float, speed_limit: float = math.inf) -> list[str]:
+def camera_notes(
+    rows: list[DemoRow],
+    threshold: float,
+    speed_limit: float = math.inf,
+    sc_gain: float = THESIS_SC_GAIN,
+) -> list[str]:
     """One line per completed run whose camera ends more than :data:`CAMERA_OFF_DEG` off its
-    target, saying whether the singular region (sigma_min of J-bar below ``threshold``) or the
-    joint speed limit (the lowest URDF velocity limit, ``speed_limit`` [rad/s], reached) is why."""
+    target, saying whether the singular region (sigma_min of J-bar below ``threshold``), the
+    joint speed limit (the lowest URDF velocity limit, ``speed_limit`` [rad/s], reached) or, for
+    SC, its speed scale b prod(sigma) below 1 (eq. 4.13, b = ``sc_gain``) is why."""
     notes = []
     for row in rows:
         f = row.figures
@@ -136,6 +143,12 @@ def camera_notes(rows: list[DemoRow], threshold: float, speed_limit: float = mat
                 f"{head}: {f.singular_time_s:.2f} s in the singular region (sigma_min of J-bar "
                 f"down to {f.min_sigma:.2g} < {threshold:g}), where the method gives up rate "
                 "accuracy to keep the joint rates bounded (section 4.3)"
+            )
+        elif row.method == "sc" and _sc_scale(f, sc_gain) < 1.0:
+            notes.append(
+                f"{head}: SC scales the commanded rate by b prod(sigma of J-bar) (eq. 4.13), "
+                f"down to {_sc_scale(f, sc_gain):.2g} here, so the camera turns slower than "
+                f"commanded; not a singular region (sigma_min of J-bar >= {f.min_sigma:.2g})"
             )
         elif f.max_joint_speed >= SPEED_LIMIT_REACHED * speed_limit:
             notes.append(
@@ -149,6 +162,12 @@ def camera_notes(rows: list[DemoRow], threshold: float, speed_limit: float = mat
                 " not a singular region; see the RMS ω error and the controller's warnings"
             )
     return notes
+
+
+def _sc_scale(figures, sc_gain: float) -> float:
+    """SC's smallest speed scale b prod(sigma) over a run (inf when not computed)."""
+    product = figures.min_singular_product
+    return math.inf if product is None else sc_gain * product
 
 
 class Spread(NamedTuple):

@@ -50,3 +50,18 @@ def test_sigma_min_and_the_time_below_the_threshold(robot):
     below = np.flatnonzero(sigmas < threshold)
     expected = 0.1 * np.sum(below < len(path) - 1)  # the last sample is held for no time
     assert figures.singular_time_s == pytest.approx(expected, abs=1e-9)
+
+
+def test_the_smallest_singular_value_product_is_the_determinant_root(robot):
+    """prod(sigma_i) of J-bar is sqrt(det(J-bar J-bar^T)): SC's speed scale over b (eq. 4.13)."""
+    scenario = load_scenario(scenario_path("algorithmic_singularity"))
+    samples = []
+    run_scenario(robot, scenario, method="dls", rate=20.0, on_period=samples.append)
+    path = [sample.state.theta for sample in samples[::10]]
+    roots = []
+    for theta in path:
+        state = FreeFloatingState.compute(robot, robot.configuration(theta))
+        matrix = restricted_jacobian(state).matrix
+        roots.append(np.sqrt(np.linalg.det(matrix @ matrix.T)))
+    figures = run_figures(robot, scenario, **_record(robot, path))
+    assert figures.min_singular_product == pytest.approx(min(roots), rel=1e-6, abs=1e-12)

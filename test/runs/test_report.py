@@ -8,7 +8,7 @@ from rns_ros.runs.inspection import DemoRow
 from rns_ros.runs.report import CAMERA_OFF_DEG, camera_notes, format_table
 
 
-def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None):
+def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None, product=None):
     figures = RunFigures(
         max_base_deviation_deg=1e-6,
         final_camera_error_deg=camera_deg,
@@ -19,6 +19,7 @@ def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None):
         samples=100,
         min_sigma=min_sigma,
         singular_time_s=singular_s,
+        min_singular_product=product,
     )
     return DemoRow(method, figures, 1.0, None, ended=ended)
 
@@ -39,6 +40,17 @@ def test_a_camera_off_its_target_is_explained_once():
     # the same run with the joints at their 0.3 rad/s speed limit
     (speed,) = camera_notes([rows[1]], 0.2, speed_limit=0.3)
     assert speed.startswith("sc: the camera ends 3 deg off its target: the joint rates reached")
+
+
+def test_an_sc_camera_behind_because_of_its_speed_scale_says_so():
+    # xArm7's roll: sigma_min 0.63 throughout, but prod(sigma) 0.3: SC turns at b 0.3 = 0.51 of
+    # the commanded rate and ends 61 deg short
+    (note,) = camera_notes([_row("sc", 61.2, min_sigma=0.63, product=0.3)], 0.2, sc_gain=1.7)
+    assert note.startswith("sc: the camera ends 61.2 deg off its target: SC scales the")
+    assert "down to 0.51 here" in note
+    # a scale above 1 explains nothing: the generic line
+    (other,) = camera_notes([_row("sc", 61.2, min_sigma=0.63, product=0.7)], 0.2, sc_gain=1.7)
+    assert "not a singular region; see the RMS" in other
 
 
 def test_the_table_marks_a_run_that_ended_early_and_shows_the_singular_figures():

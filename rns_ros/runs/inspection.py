@@ -106,8 +106,12 @@ class DemoRow:
         return self.method
 
     def checked_figures(self) -> dict[str, float]:
-        """Every figure that must be finite, by name: the run's, its wall time, its energy."""
-        values = {**asdict(self.figures), "wall_time_s": self.wall_time_s}
+        """Every figure that must be finite, by name: the run's (those computed), its wall time,
+        its energy and, behind a link, its prediction error."""
+        values = {k: v for k, v in asdict(self.figures).items() if v is not None}
+        values["wall_time_s"] = self.wall_time_s
+        if self.prediction_error_deg is not None:
+            values["prediction_error_deg"] = self.prediction_error_deg
         if self.energy is not None:
             values |= {k: v for k, v in asdict(self.energy).items() if v is not None}
         return values

@@ -48,9 +48,11 @@ class RunFigures:
     samples: int
     min_sigma: float
     singular_time_s: float
-    #: smallest prod(sigma_i) of J-bar [-]: the SC method scales the commanded rate by b times
-    #: it (eq. 4.13), so below 1 / b the camera turns slower than commanded (None: not computed)
+    #: smallest and largest prod(sigma_i) of J-bar [-]: the SC method scales the commanded rate
+    #: by b times it (eq. 4.13), so the camera turns slower than commanded below 1 / b and
+    #: faster above (None: not computed)
     min_singular_product: float | None = None
+    max_singular_product: float | None = None
 
 
 def run_figures(
@@ -125,6 +127,7 @@ def run_figures(
         min_sigma=float(sigma.min()),
         singular_time_s=float(held[sigma < singular_threshold].sum()),
         min_singular_product=float(np.prod(singular, axis=1).min()),
+        max_singular_product=float(np.prod(singular, axis=1).max()),
     )
 
 

@@ -144,11 +144,13 @@ def camera_notes(
                 f"down to {f.min_sigma:.2g} < {threshold:g}), where the method gives up rate "
                 "accuracy to keep the joint rates bounded (section 4.3)"
             )
-        elif row.method == "sc" and _sc_scale(f, sc_gain) < 1.0:
+        elif row.method == "sc" and (scale := _sc_scales(f, sc_gain)) is not None:
+            low, high = scale
             notes.append(
                 f"{head}: SC scales the commanded rate by b prod(sigma of J-bar) (eq. 4.13), "
-                f"down to {_sc_scale(f, sc_gain):.2g} here, so the camera turns slower than "
-                f"commanded; not a singular region (sigma_min of J-bar >= {f.min_sigma:.2g})"
+                f"{low:.2g} to {high:.2g} here (1: as commanded), so the camera turns "
+                f"{'faster' if low >= 1.0 else 'slower' if high <= 1.0 else 'at another speed'}"
+                f" than commanded; not a singular region (sigma_min of J-bar >= {f.min_sigma:.2g})"
             )
         elif f.max_joint_speed >= SPEED_LIMIT_REACHED * speed_limit:
             notes.append(
@@ -164,10 +166,18 @@ def camera_notes(
     return notes
 
 
-def _sc_scale(figures, sc_gain: float) -> float:
-    """SC's smallest speed scale b prod(sigma) over a run (inf when not computed)."""
-    product = figures.min_singular_product
-    return math.inf if product is None else sc_gain * product
+#: An SC speed scale this far from 1 [-] explains a camera off its target.
+SC_SCALE_OFF = 0.1
+
+
+def _sc_scales(figures, sc_gain: float) -> tuple[float, float] | None:
+    """SC's smallest and largest speed scale b prod(sigma) over a run, when either is more than
+    :data:`SC_SCALE_OFF` from 1 (None otherwise, or when not computed)."""
+    low, high = figures.min_singular_product, figures.max_singular_product
+    if low is None or high is None:
+        return None
+    low, high = sc_gain * low, sc_gain * high
+    return (low, high) if low < 1.0 - SC_SCALE_OFF or high > 1.0 + SC_SCALE_OFF else None
 
 
 class Spread(NamedTuple):

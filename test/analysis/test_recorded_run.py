@@ -52,7 +52,7 @@ def test_sigma_min_and_the_time_below_the_threshold(robot):
     assert figures.singular_time_s == pytest.approx(expected, abs=1e-9)
 
 
-def test_the_smallest_singular_value_product_is_the_determinant_root(robot):
+def test_the_singular_value_products_are_determinant_roots(robot):
     """prod(sigma_i) of J-bar is sqrt(det(J-bar J-bar^T)): SC's speed scale over b (eq. 4.13)."""
     scenario = load_scenario(scenario_path("algorithmic_singularity"))
     samples = []
@@ -65,3 +65,4 @@ def test_the_smallest_singular_value_product_is_the_determinant_root(robot):
         roots.append(np.sqrt(np.linalg.det(matrix @ matrix.T)))
     figures = run_figures(robot, scenario, **_record(robot, path))
     assert figures.min_singular_product == pytest.approx(min(roots), rel=1e-6, abs=1e-12)
+    assert figures.max_singular_product == pytest.approx(max(roots), rel=1e-6)

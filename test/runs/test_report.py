@@ -8,7 +8,7 @@ from rns_ros.runs.inspection import DemoRow
 from rns_ros.runs.report import CAMERA_OFF_DEG, camera_notes, format_table
 
 
-def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None, product=None):
+def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None, products=(None, None)):
     figures = RunFigures(
         max_base_deviation_deg=1e-6,
         final_camera_error_deg=camera_deg,
@@ -19,7 +19,8 @@ def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None, product=
         samples=100,
         min_sigma=min_sigma,
         singular_time_s=singular_s,
-        min_singular_product=product,
+        min_singular_product=products[0],
+        max_singular_product=products[1],
     )
     return DemoRow(method, figures, 1.0, None, ended=ended)
 
@@ -42,14 +43,17 @@ def test_a_camera_off_its_target_is_explained_once():
     assert speed.startswith("sc: the camera ends 3 deg off its target: the joint rates reached")
 
 
-def test_an_sc_camera_behind_because_of_its_speed_scale_says_so():
-    # xArm7's roll: sigma_min 0.63 throughout, but prod(sigma) 0.3: SC turns at b 0.3 = 0.51 of
-    # the commanded rate and ends 61 deg short
-    (note,) = camera_notes([_row("sc", 61.2, min_sigma=0.63, product=0.3)], 0.2, sc_gain=1.7)
+def test_an_sc_camera_off_because_of_its_speed_scale_says_so():
+    # xArm7's roll: sigma_min >= 0.63, prod(sigma) 0.69 to 1.02, b = 1.7: SC turns the camera
+    # 1.17 to 1.74 times as fast as commanded and ends 61 deg off the 180 deg roll
+    row = _row("sc", 61.2, min_sigma=0.63, products=(0.6866, 1.0231))
+    (note,) = camera_notes([row], 0.2, sc_gain=1.7)
     assert note.startswith("sc: the camera ends 61.2 deg off its target: SC scales the")
-    assert "down to 0.51 here" in note
-    # a scale above 1 explains nothing: the generic line
-    (other,) = camera_notes([_row("sc", 61.2, min_sigma=0.63, product=0.7)], 0.2, sc_gain=1.7)
+    assert "1.2 to 1.7 here (1: as commanded), so the camera turns faster than commanded" in note
+    (slow,) = camera_notes([_row("sc", 9.0, products=(0.2, 0.5))], 0.2, sc_gain=1.7)
+    assert "so the camera turns slower than commanded" in slow
+    # a scale within 10 % of 1 explains nothing: the generic line
+    (other,) = camera_notes([_row("sc", 9.0, products=(0.56, 0.62))], 0.2, sc_gain=1.7)
     assert "not a singular region; see the RMS" in other
 
 

@@ -29,6 +29,12 @@ a busy logger catches up instead of dropping samples):
     ptp_goal                  sensor_msgs/JointState goal of rns_ptp (by joint name; joints it
                               does not name at their newest measured angle): a translucent ghost
                               arm at the goal; the ``["deploy"]`` goal clears it
+    <ground_namespace>/predicted/joint_states, .../predicted/base_odom
+                              (with ``ground_namespace``, teleoperation from the ground) the arm
+                              rns_predictor predicts, an orange ghost at each predicted instant;
+    <ground_namespace>/joint_states, <ground_namespace>/base_odom
+                              the telemetry as the ground receives it, a grey ghost at its
+                              receipt on this node's clock (each pair matched by stamp)
 
 Part II contact mode (docs/part2_ros.md): when ``model_config`` is a fixed-base arm (its YAML has
 ``ee_frame``, e.g. config/lwr_7dof.yaml), the arm is drawn from ``joint_states`` with its base link
@@ -93,6 +99,36 @@ from rns_ros.viz.sinks import SinkSettings
 DUE_CHECK_PERIOD = 0.1
 
 
+class _StampPairs:
+    """joint_states and base_odom halves of one ground arm, matched by stamp [ns] (at most
+    :data:`MAX_UNPAIRED` of each kept)."""
+
+    def __init__(self) -> None:
+        self._joints: dict[int, object] = {}
+        self._poses: dict[int, object] = {}
+
+    def joints(self, stamp: int, theta):
+        return self._add(self._joints, self._poses, stamp, theta, joints_first=True)
+
+    def pose(self, stamp: int, pose):
+        return self._add(self._poses, self._joints, stamp, pose, joints_first=False)
+
+    @staticmethod
+    def _add(mine: dict, theirs: dict, stamp: int, value, joints_first: bool):
+        """(stamp, theta, pose) once both halves of ``stamp`` are in, else None."""
+        other = theirs.pop(stamp, None)
+        if other is None:
+            mine[stamp] = value
+            while len(mine) > MAX_UNPAIRED:
+                del mine[min(mine)]
+            return None
+        return (stamp, value, other) if joints_first else (stamp, other, value)
+
+
+#: Halves of a ground arm kept while waiting for their other half.
+MAX_UNPAIRED = 200
+
+
 class RerunLoggerNode(Node):
     """ROS 2 front end of :class:`TelemetryRecorder` (see the module docstring)."""
 
@@ -154,6 +190,23 @@ class RerunLoggerNode(Node):
         self.create_subscription(JointState, "wheel_states", self._on_wheel_states, qos)
         # goals are rare and must not be missed by a late logger: reliable, like rns_ptp's
         self.create_subscription(JointState, "ptp_goal", self._on_ptp_goal, 10)
+        ground = params["ground_namespace"].strip("/")
+        if ground:
+            arms = (("predicted", f"/{ground}/predicted"), ("telemetry", f"/{ground}"))
+            for kind, prefix in arms:
+                pairs = _StampPairs()
+                self.create_subscription(
+                    JointState,
+                    f"{prefix}/joint_states",
+                    lambda msg, k=kind, p=pairs: self._on_ground_joints(k, p, msg),
+                    qos,
+                )
+                self.create_subscription(
+                    Odometry,
+                    f"{prefix}/base_odom",
+                    lambda msg, k=kind, p=pairs: self._on_ground_odom(k, p, msg),
+                    qos,
+                )
 
     def _subscribe_contact(self, qos: QoSProfile, errors_topic: str) -> None:
         self._ee_frame = self.robot.model.frames[self.robot.ee_frame_id].name
@@ -185,6 +238,35 @@ class RerunLoggerNode(Node):
         note = self._extra_joints.note(extras)
         if note is not None:
             self.get_logger().info(note)
+
+    def _on_ground_joints(self, kind: str, pairs: _StampPairs, msg: JointState) -> None:
+        try:
+            state, _ = match_joint_state(msg.name, self.robot.joint_names, positions=msg.position)
+            if state.positions is None:
+                raise InputError("no positions")
+        except InputError as exc:
+            self._ignored(f"{kind} joint_states", exc)
+            return
+        self._ground_pair(kind, pairs.joints(self._stamp_ns(msg.header), state.positions))
+
+    def _on_ground_odom(self, kind: str, pairs: _StampPairs, msg: Odometry) -> None:
+        p, o = msg.pose.pose.position, msg.pose.pose.orientation
+        pose = ([p.x, p.y, p.z], [o.x, o.y, o.z, o.w])
+        self._ground_pair(kind, pairs.pose(self._stamp_ns(msg.header), pose))
+
+    def _ground_pair(self, kind: str, pair) -> None:
+        """A ground arm whose joint_states and base_odom are both in: drawn at its stamp
+        (predicted) or at its receipt on this node's clock (telemetry)."""
+        if pair is None:
+            return
+        stamp, theta, (position, orientation) = pair
+        if kind == "telemetry":
+            stamp = self.get_clock().now().nanoseconds
+        try:
+            q = self.robot.configuration(theta, position, orientation)
+            self.recorder.ground_arm(kind, stamp, q)
+        except InputError as exc:
+            self._ignored(f"{kind} arm", exc)
 
     def _on_odom(self, msg: Odometry) -> None:
         pose, twist = msg.pose.pose, msg.twist.twist

@@ -67,6 +67,11 @@ PARAMETERS = (
         "DiagnosticArray status of the point-to-point node",
     ),
     ParameterSpec(
+        "ground_namespace",
+        "",
+        "Ground teleop: draw <ns>/predicted/* at their stamps and <ns>/joint_states as received",
+    ),
+    ParameterSpec(
         "default_twist_frame",
         TwistFrame.CAMERA.value,
         "Axes of cmd_twist with an empty header.frame_id (as the controller's parameter)",

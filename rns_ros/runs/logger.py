@@ -9,6 +9,7 @@ from pathlib import Path
 
 from rns_ros.core import RnsError
 from rns_ros.harness import Harness, ProcessStack
+from rns_ros.runs.link import GROUND, link_options
 from rns_ros.viz.readback import rrd_problem, storage_limit
 
 
@@ -57,6 +58,8 @@ def start_logger(
             "recording_name": name,
             **({"model_config": model_config} if model_config else {}),
             "use_sim_time": sim_time,
+            # behind a link: the predicted and the received telemetry arms beside the real one
+            **({"ground_namespace": GROUND} if link_options(args) is not None else {}),
         },
         ros_args=ros_args or [],
     )

@@ -78,6 +78,13 @@ PTP_PHASE = "plots/ptp/phase"
 PTP_PROGRESS = "plots/ptp/progress"
 PTP_GOAL = "world/ptp/goal"
 PTP_GOAL_JOINTS = "world/ptp/goal/joints"
+#: Teleoperation from the ground (rns_predictor, rns_link): the arm predicted for each on-board
+#: instant, logged at that instant, and the telemetry arm as the ground receives it, logged at
+#: its receipt.
+PREDICTED_ARM = "world/ground/predicted"
+PREDICTED_ARM_JOINTS = "world/ground/predicted/joints"
+TELEMETRY_ARM = "world/ground/telemetry"
+TELEMETRY_ARM_JOINTS = "world/ground/telemetry/joints"
 
 # --- Part II: contact tasks ----------------------------------------------------------------------
 ENVIRONMENT = "world/environment"

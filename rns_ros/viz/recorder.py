@@ -76,9 +76,16 @@ _STREAMS = (
     "ptp_goal",
     "energy",
     "wheels",
+    "predicted",
+    "telemetry",
 )
 #: Ghost arm of a ptp goal: translucent so the real arm shows through it.
 GHOST_COLOR = (120, 170, 255, 110)
+#: The ground's arms (ground_arm): the prediction orange, the received telemetry grey.
+GROUND_ARMS = {
+    "predicted": (paths.PREDICTED_ARM, paths.PREDICTED_ARM_JOINTS, (255, 150, 40, 150)),
+    "telemetry": (paths.TELEMETRY_ARM, paths.TELEMETRY_ARM_JOINTS, (160, 160, 160, 130)),
+}
 GHOST_LINE_RADIUS = 0.03
 GHOST_JOINT_RADIUS = 0.06
 
@@ -491,6 +498,30 @@ class TelemetryRecorder:
                 paths.PTP_GOAL_JOINTS,
                 rr.Points3D(points, colors=[GHOST_COLOR], radii=[GHOST_JOINT_RADIUS]),
             )
+
+    def ground_arm(self, kind: str, stamp_ns: int, q) -> None:
+        """One of the ground's arms (:data:`GROUND_ARMS`): ``predicted``, rns_predictor's arm for
+        the on-board instant ``stamp_ns``; ``telemetry``, the arm the ground has received by
+        ``stamp_ns``. Drawn as a ghost (base, joint origins, camera) of configuration ``q``
+        (7 + n,) [m, rad].
+
+        Raises:
+            InputError: an unknown kind, or ``q`` of the wrong length or not finite.
+        """
+        if kind not in GROUND_ARMS:
+            raise InputError(f"ground arm must be one of {list(GROUND_ARMS)}, got {kind!r}")
+        q = as_vector(q, self.robot.model.nq, f"{kind} arm q")
+        path, joints_path, color = GROUND_ARMS[kind]
+        with self._lock:
+            if not self._accept(kind, stamp_ns):
+                return
+            self.counts[kind] += 1
+            self._set_time(stamp_ns)
+            points = self.robot.skeleton(q)
+            strip = rr.LineStrips3D([points], colors=[color], radii=[GHOST_LINE_RADIUS])
+            self.rec.log(path, strip)
+            spheres = rr.Points3D(points, colors=[color], radii=[GHOST_JOINT_RADIUS])
+            self.rec.log(joints_path, spheres)
 
     # --- sending, closing -----------------------------------------------------------------------
     @property

@@ -442,6 +442,30 @@ def test_ptp_phase_progress_and_log_follow_the_status(open_recorder):
     ]
 
 
+def test_the_grounds_arms_are_ghosts_of_their_configurations(open_recorder, robot):
+    """The predicted and the telemetry arm: base, joint origins and camera of the configuration
+    given, each under its own path, at its own stamp; a bad one is refused by name."""
+    recorder = open_recorder()
+    theta = np.radians([-120.0, 50.0, 0.0, -60.0, 180.0, 180.0, 0.0])
+    q = robot.configuration(theta, [0.3, -0.2, 0.1], _base_quaternion(500))
+    recorder.ground_arm("predicted", PERIOD_NS, q)
+    recorder.ground_arm("telemetry", 2 * PERIOD_NS, robot.configuration(robot.initial_theta))
+    with pytest.raises(InputError, match="ground arm must be one of"):
+        recorder.ground_arm("future", 3 * PERIOD_NS, q)
+    with pytest.raises(InputError, match="predicted arm q"):
+        recorder.ground_arm("predicted", 3 * PERIOD_NS, [math.nan] * robot.model.nq)
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    strips = [r for r in read_components(rrd, paths.PREDICTED_ARM) if "LineStrips3D:strips" in r]
+    assert len(strips) == 1
+    points = np.array(strips[0]["LineStrips3D:strips"][0])
+    camera = FreeFloatingState.compute(robot, q).camera.position
+    np.testing.assert_allclose(points[0], [0.3, -0.2, 0.1], atol=1e-6)
+    np.testing.assert_allclose(points[-1], camera, atol=1e-6)
+    telemetry = read_components(rrd, paths.TELEMETRY_ARM)
+    assert sum("LineStrips3D:strips" in r for r in telemetry) == 1
+
+
 def test_ptp_goal_ghost_arm_stands_on_the_newest_base_pose(open_recorder, robot):
     """The ghost starts at the base origin of the newest odometry and ends at the camera of the
     goal configuration there; consecutive points keep the arm's rigid joint offsets."""

@@ -50,13 +50,21 @@ PARAMETERS = (
         "ground",
         "The ground's side: /<ground_namespace>/<topic>; the spacecraft's: the node's namespace",
     ),
-    *_direction("uplink", ["cmd_twist:geometry_msgs/msg/TwistStamped"], "ground to spacecraft"),
+    *_direction(
+        "uplink",
+        [
+            "cmd_twist:geometry_msgs/msg/TwistStamped",
+            "rns_controller/camera_goal:geometry_msgs/msg/PoseStamped",
+        ],
+        "ground to spacecraft",
+    ),
     *_direction(
         "downlink",
         [
             "joint_states:sensor_msgs/msg/JointState",
             "base_odom:nav_msgs/msg/Odometry",
             "rns_controller/status:diagnostic_msgs/msg/DiagnosticArray",
+            "rns_controller/camera_goal_reached:geometry_msgs/msg/PoseStamped",
         ],
         "spacecraft to ground",
     ),

@@ -11,6 +11,8 @@ import re
 import pytest
 
 from rns_ros.apps.demo import main
+from rns_ros.viz import paths
+from rns_ros.viz.readback import read_components
 
 # this file's own domain (the DDS run below), apart from the other demo tests'
 DOMAIN = str(int(os.environ.get("ROS_DOMAIN_ID", "43")) + 5)
@@ -20,8 +22,8 @@ def test_behind_a_one_second_link_the_turn_is_reactionless_and_the_prediction_ex
     tmp_path, capfd
 ):
     summary = tmp_path / "summary.json"
-    argv = ["--link-delay", "1", "--methods", "dls", "--real-time-factor", "0", "--no-record"]
-    argv += ["--summary", str(summary), "--domain-id", DOMAIN]
+    argv = ["--link-delay", "1", "--methods", "dls", "--real-time-factor", "0"]
+    argv += ["--output", str(tmp_path), "--summary", str(summary), "--domain-id", DOMAIN]
     assert main(argv) == 0, capfd.readouterr()
     (row,) = json.loads(summary.read_text())
     assert row["link_delay_s"] == 1.0
@@ -31,6 +33,10 @@ def test_behind_a_one_second_link_the_turn_is_reactionless_and_the_prediction_ex
     # the same model and law on the ground: the prediction is the spacecraft's motion
     assert row["prediction_error_deg"] < 1e-6
     assert "pred. err [deg]" in capfd.readouterr().out
+    # the recording shows the predicted and the received telemetry arms beside the real one
+    for path in (paths.PREDICTED_ARM, paths.TELEMETRY_ARM):
+        strips = [r for r in read_components(row["recording"], path) if "LineStrips3D:strips" in r]
+        assert len(strips) > 100, path
 
 
 @pytest.mark.parametrize(

@@ -1,5 +1,5 @@
-"""rns_ros.runs.link: the demo's link options, the twists as they act, the prediction error
-measured from the recorded streams."""
+"""rns_ros.runs.link (the demo behind a delayed link): the link options, the twists as they act,
+the prediction error measured from the recorded streams."""
 
 from __future__ import annotations
 

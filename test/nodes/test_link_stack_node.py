@@ -13,7 +13,7 @@ from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rns_testing import Recorder
+from rns_testing import Recorder, simulated_camera
 from rosgraph_msgs.msg import Clock
 from trajectory_msgs.msg import JointTrajectory
 
@@ -37,12 +37,7 @@ def _node(ros, cls, **overrides):
 
 
 def _camera(simulator) -> np.ndarray:
-    with simulator._lock:
-        state = simulator.simulator.snapshot()
-    robot = simulator.robot
-    data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, state.q)
-    return data.oMf[robot.camera_frame_id].rotation.copy()
+    return simulated_camera(simulator)[1]
 
 
 def _rotation(msg: Odometry) -> np.ndarray:

@@ -14,6 +14,8 @@ from rns_ros.nodes.attitude_control import AttitudeControlNode
 from rns_ros.nodes.contact_simulator import ContactSimulatorNode
 from rns_ros.nodes.controller import ControllerNode
 from rns_ros.nodes.force_controller import ForceControllerNode
+from rns_ros.nodes.link import LinkNode
+from rns_ros.nodes.predictor import PredictorNode
 from rns_ros.nodes.ptp import PtpNode
 from rns_ros.nodes.rerun_logger import RerunLoggerNode
 from rns_ros.nodes.simulator import SimulatorNode
@@ -128,10 +130,36 @@ def test_attitude_control_rejects_malformed_inputs_and_runs_on(ros):
     _keeps_publishing(ros, status)
 
 
-def test_the_rerun_logger_rejects_malformed_inputs_and_records_on(ros, tmp_path):
+@pytest.mark.parametrize("ground", ["", "ground"], ids=["spacecraft", "with-ground-arms"])
+def test_the_rerun_logger_rejects_malformed_inputs_and_records_on(ros, tmp_path, ground):
     _node(ros, SimulatorNode)
-    node = _node(ros, RerunLoggerNode, sink="save", rrd_path=str(tmp_path / "x.rrd"))
+    node = _node(
+        ros,
+        RerunLoggerNode,
+        sink="save",
+        rrd_path=str(tmp_path / "x.rrd"),
+        ground_namespace=ground,
+    )
     assert ros.spin_until(lambda: node.recorder.counts["joints"] > 0, timeout=10.0)
     assert _flood(ros, node)
     count = node.recorder.counts["joints"]
     assert ros.spin_until(lambda: node.recorder.counts["joints"] > count, timeout=10.0)
+
+
+def test_the_link_carries_malformed_bytes_as_they_are_and_runs_on(ros):
+    """A radio link carries bits: the receivers judge them (the controller rejects them, above).
+    The link itself neither parses nor stops."""
+    node = _node(ros, LinkNode, status_period=0.1)
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_link/status")
+    assert _flood(ros, node)
+    _keeps_publishing(ros, status)
+    values = status_values(status.messages[-1])
+    assert int(values["uplink sent"]) > 0
+
+
+def test_the_predictor_rejects_malformed_inputs_and_runs_on(ros):
+    node = _node(ros, PredictorNode, status_period=0.1)
+    status = Recorder(ros.probe(), DiagnosticArray, "rns_predictor/status")
+    assert _flood(ros, node)
+    _keeps_publishing(ros, status)
+    assert status_values(status.messages[-1])["twists"] == "0"  # none taken

@@ -56,7 +56,7 @@ from rns_ros.ground.predictor import (
 from rns_ros.nodes import predictor_parameters
 from rns_ros.nodes.controller_parameters import controller_settings
 from rns_ros.nodes.parameters import declare_parameters, load_node_model
-from rns_ros.nodes.robot_io import base_pose
+from rns_ros.nodes.robot_io import StampPairs, base_pose
 from rns_ros.nodes.runner import run_node
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 
@@ -64,8 +64,6 @@ from rns_ros.nodes.sim_clock import stamp_from_seconds
 #: stamp): best effort (matches any sender), deep enough for 10 s of a 100 Hz stream while
 #: the prediction catches up.
 INPUT_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
-#: Telemetry halves (joint_states or base_odom) kept while waiting for their other half.
-MAX_UNPAIRED = 200
 #: Predicted ticks per timer call at most: a prediction that fell behind catches up over
 #: several calls, and the twists and telemetry are taken in between.
 MAX_TICKS_PER_CALL = 50
@@ -73,6 +71,10 @@ MAX_TICKS_PER_CALL = 50
 
 def _seconds(stamp) -> float:
     return stamp.sec + 1e-9 * stamp.nanosec
+
+
+def _stamp_ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 class PredictorNode(Node):
@@ -100,8 +102,7 @@ class PredictorNode(Node):
         self._world_frame = params["world_frame"]
         self.arm: PredictedArm | None = None
         self._early: list[tuple[float, np.ndarray, object]] = []  # twists before telemetry
-        self._joints: dict[int, np.ndarray] = {}  # stamp [ns] -> theta, unpaired
-        self._poses: dict[int, np.ndarray] = {}  # stamp [ns] -> (position, quaternion xyzw)
+        self._telemetry_pairs = StampPairs()  # joint_states and base_odom by stamp
         self.newest_telemetry = -math.inf  # [s]
         self.newest_twist = -math.inf  # [s], the newest twist's stamp
         self.twists = 0  # valid twists taken
@@ -159,7 +160,8 @@ class PredictorNode(Node):
                 "joint_states ignored: no finite positions", throttle_duration_sec=1.0
             )
             return
-        self._pair(self._joints, msg.header.stamp, np.asarray(named.positions, dtype=float))
+        stamp = _stamp_ns(msg.header.stamp)
+        self._pair(self._telemetry_pairs.joints(stamp, np.asarray(named.positions, dtype=float)))
 
     def _on_odom(self, msg: Odometry) -> None:
         p, o = msg.pose.pose.position, msg.pose.pose.orientation
@@ -169,17 +171,13 @@ class PredictorNode(Node):
                 "base_odom ignored: not a finite pose", throttle_duration_sec=1.0
             )
             return
-        self._pair(self._poses, msg.header.stamp, np.concatenate(pose))
+        self._pair(self._telemetry_pairs.pose(_stamp_ns(msg.header.stamp), pose))
 
-    def _pair(self, halves: dict[int, np.ndarray], stamp, value: np.ndarray) -> None:
-        key = stamp.sec * 1_000_000_000 + stamp.nanosec
-        halves[key] = value
-        if key in self._joints and key in self._poses:
-            theta, pose = self._joints.pop(key), self._poses.pop(key)
-            self._telemetry(key * 1e-9, self.robot.configuration(theta, pose[:3], pose[3:]))
-        for table in (self._joints, self._poses):
-            while len(table) > MAX_UNPAIRED:
-                del table[min(table)]
+    def _pair(self, pair) -> None:
+        """A telemetry sample once its joint_states and base_odom are both in."""
+        if pair is not None:
+            stamp, theta, (position, orientation) = pair
+            self._telemetry(stamp * 1e-9, self.robot.configuration(theta, position, orientation))
 
     def _telemetry(self, stamp: float, q: np.ndarray) -> None:
         self.newest_telemetry = max(self.newest_telemetry, stamp)

@@ -82,6 +82,7 @@ from rns_ros.core.fixed_base import FixedBaseModel
 from rns_ros.nodes import rerun_logger_parameters
 from rns_ros.nodes.parameters import declare_parameters, from_parameters
 from rns_ros.nodes.ptp import DEPLOY_GOAL
+from rns_ros.nodes.robot_io import StampPairs
 from rns_ros.nodes.runner import run_node
 from rns_ros.resources import default_model_config
 from rns_ros.viz.contact import (
@@ -97,36 +98,6 @@ from rns_ros.viz.sinks import SinkSettings
 #: Wall time between two checks whether a block of samples is due [s]: a sample waits at most
 #: the flush tick plus this before it is sent, also when no more messages come.
 DUE_CHECK_PERIOD = 0.1
-
-
-class _StampPairs:
-    """joint_states and base_odom halves of one ground arm, matched by stamp [ns] (at most
-    :data:`MAX_UNPAIRED` of each kept)."""
-
-    def __init__(self) -> None:
-        self._joints: dict[int, object] = {}
-        self._poses: dict[int, object] = {}
-
-    def joints(self, stamp: int, theta):
-        return self._add(self._joints, self._poses, stamp, theta, joints_first=True)
-
-    def pose(self, stamp: int, pose):
-        return self._add(self._poses, self._joints, stamp, pose, joints_first=False)
-
-    @staticmethod
-    def _add(mine: dict, theirs: dict, stamp: int, value, joints_first: bool):
-        """(stamp, theta, pose) once both halves of ``stamp`` are in, else None."""
-        other = theirs.pop(stamp, None)
-        if other is None:
-            mine[stamp] = value
-            while len(mine) > MAX_UNPAIRED:
-                del mine[min(mine)]
-            return None
-        return (stamp, value, other) if joints_first else (stamp, other, value)
-
-
-#: Halves of a ground arm kept while waiting for their other half.
-MAX_UNPAIRED = 200
 
 
 class RerunLoggerNode(Node):
@@ -194,7 +165,7 @@ class RerunLoggerNode(Node):
         if ground:
             arms = (("predicted", f"/{ground}/predicted"), ("telemetry", f"/{ground}"))
             for kind, prefix in arms:
-                pairs = _StampPairs()
+                pairs = StampPairs()
                 self.create_subscription(
                     JointState,
                     f"{prefix}/joint_states",
@@ -239,7 +210,7 @@ class RerunLoggerNode(Node):
         if note is not None:
             self.get_logger().info(note)
 
-    def _on_ground_joints(self, kind: str, pairs: _StampPairs, msg: JointState) -> None:
+    def _on_ground_joints(self, kind: str, pairs: StampPairs, msg: JointState) -> None:
         try:
             state, _ = match_joint_state(msg.name, self.robot.joint_names, positions=msg.position)
             if state.positions is None:
@@ -249,7 +220,7 @@ class RerunLoggerNode(Node):
             return
         self._ground_pair(kind, pairs.joints(self._stamp_ns(msg.header), state.positions))
 
-    def _on_ground_odom(self, kind: str, pairs: _StampPairs, msg: Odometry) -> None:
+    def _on_ground_odom(self, kind: str, pairs: StampPairs, msg: Odometry) -> None:
         p, o = msg.pose.pose.position, msg.pose.pose.orientation
         pose = ([p.x, p.y, p.z], [o.x, o.y, o.z, o.w])
         self._ground_pair(kind, pairs.pose(self._stamp_ns(msg.header), pose))

@@ -207,3 +207,33 @@ def measured_state_problem(
             f"base_odom {now - odom_received:.3f} s old (state_timeout {timeout} s)",
         )
     return None
+
+
+class StampPairs:
+    """joint_states and base_odom halves of one robot state, matched by stamp [ns] (a robot
+    publishes both per step; at most :data:`MAX_UNPAIRED` of each kept while waiting)."""
+
+    def __init__(self) -> None:
+        self._joints: dict[int, object] = {}
+        self._poses: dict[int, object] = {}
+
+    def joints(self, stamp: int, theta):
+        return self._add(self._joints, self._poses, stamp, theta, joints_first=True)
+
+    def pose(self, stamp: int, pose):
+        return self._add(self._poses, self._joints, stamp, pose, joints_first=False)
+
+    @staticmethod
+    def _add(mine: dict, theirs: dict, stamp: int, value, joints_first: bool):
+        """(stamp, theta, pose) once both halves of ``stamp`` are in, else None."""
+        other = theirs.pop(stamp, None)
+        if other is None:
+            mine[stamp] = value
+            while len(mine) > MAX_UNPAIRED:
+                del mine[min(mine)]
+            return None
+        return (stamp, value, other) if joints_first else (stamp, other, value)
+
+
+#: Halves of a robot state kept while waiting for their other half.
+MAX_UNPAIRED = 200

@@ -21,6 +21,7 @@ import numpy as np
 from rns_ros.core import FreeFloatingModel, FreeFloatingState
 from rns_ros.core.integration import attitude_deviation
 from rns_ros.harness import ProcessStack, TopicLog
+from rns_ros.nodes import predictor_parameters
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 
 GROUND = "ground"
@@ -82,25 +83,7 @@ def start_link_nodes(
         },
         ros_args=ros_args,
     )
-    shared = {
-        key: value
-        for key, value in controller.items()
-        if key
-        in (
-            "model_config",
-            "method",
-            "rate",
-            "epsilon",
-            "lambda2_max",
-            "sc_gain",
-            "wrist_gain",
-            "max_angular_speed",
-            "command_timeout",
-            "stop_deceleration",
-            "start_acceleration",
-            "default_twist_frame",
-        )
-    }
+    shared = {key: value for key, value in controller.items() if key in predictor_parameters.SHARED}
     # a lockstep controller's output acts one output_lead after its tick: so does each twist
     delay = link.execution_delay + float(controller.get("output_lead", 0.0))
     processes.start(

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from rns_ros.control.camera_law import THESIS_EPSILON, wrist_offset
 from rns_ros.control.controller import TwistFrame
@@ -53,6 +54,11 @@ class RunFigures:
     #: faster above (None: not computed)
     min_singular_product: float | None = None
     max_singular_product: float | None = None
+    #: camera orientation at the end vs the attitude the recorded cmd_twist samples add up to
+    #: (:func:`commanded_rotation`) [deg]: what the controller was asked for, which differs
+    #: from the scenario's target when the operator's stream was late or thinned out (a
+    #: starved operator on the wall clock); None: no command recorded
+    commanded_camera_error_deg: float | None = None
 
 
 def run_figures(
@@ -128,7 +134,48 @@ def run_figures(
         singular_time_s=float(held[sigma < singular_threshold].sum()),
         min_singular_product=float(np.prod(singular, axis=1).min()),
         max_singular_product=float(np.prod(singular, axis=1).max()),
+        commanded_camera_error_deg=None
+        if len(command_times) == 0
+        else float(
+            np.rad2deg(
+                attitude_deviation(
+                    commanded_rotation(
+                        scenario,
+                        first.camera.rotation,
+                        first.base_rotation,
+                        command_times,
+                        commands,
+                    ),
+                    last.camera.rotation,
+                )
+            )
+        ),
     )
+
+
+def commanded_rotation(
+    scenario: Scenario,
+    camera_0: np.ndarray,
+    base_0: np.ndarray,
+    command_times: np.ndarray,
+    commands: np.ndarray,
+) -> np.ndarray:
+    """The camera attitude (world <- camera, (3, 3)) the recorded commands add up to: the
+    initial camera rotation ``camera_0`` (3, 3) turned by each command [rad/s] (c, 3), in
+    ``scenario.frame`` axes, held from its stamp to the next one's (``command_times`` [s] (c,);
+    the last one counts for nothing: the operator's stream ends in zeros). The base is taken as
+    not turning (``base_0`` (3, 3)), as in :meth:`Scenario.target_rotation`."""
+    rotation = np.array(camera_0, dtype=float)
+    times = np.asarray(command_times, dtype=float)
+    for omega, dt in zip(np.asarray(commands, dtype=float), np.diff(times), strict=False):
+        turn = pin.exp3(omega * max(float(dt), 0.0))
+        if scenario.frame is TwistFrame.WORLD:
+            rotation = turn @ rotation
+        elif scenario.frame is TwistFrame.CAMERA:
+            rotation = rotation @ turn
+        else:
+            rotation = base_0 @ turn @ base_0.T @ rotation
+    return rotation
 
 
 def _rms_tracking_error(

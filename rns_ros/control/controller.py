@@ -204,7 +204,7 @@ class ReactionlessController:
         """The longest hold [s] :meth:`end_hold` takes: max(MAX_HOLD_PERIODS T, MAX_HOLD_FLOOR)."""
         return max(MAX_HOLD_PERIODS * self.settings.period, MAX_HOLD_FLOOR)
 
-    def end_hold(self, elapsed: float) -> bool:
+    def end_hold(self, elapsed: float, limit: float | None = None) -> bool:
         """End the hold in progress after ``elapsed`` [s], which may differ from the period T.
 
         A plant holds theta_dot until the next output arrives, and outputs do not come exactly T
@@ -213,18 +213,20 @@ class ReactionlessController:
         theta_ref = theta_ref,start + elapsed * theta_dot, so a position-tracking servo follows
         the motion the arm actually made.
 
-        ``elapsed`` outside [0, :attr:`max_hold`] (or not finite) is a clock that went back or
-        jumped, or a node that stalled: the hold is dropped, theta_ref stays where it started
-        (never moved on by a clock difference), and False is returned: the caller restarts
-        theta_ref at the measured angles (:meth:`resync`). Without a hold in progress this does
-        nothing (True).
+        ``elapsed`` outside [0, ``limit``] (default :attr:`max_hold`; or not finite) is a clock
+        that went back or jumped, or a node that stalled: the hold is dropped, theta_ref stays
+        where it started (never moved on by a clock difference), and False is returned: the
+        caller restarts theta_ref at the measured angles (:meth:`resync`). A caller that has
+        checked ``elapsed`` on a steady clock (a stall, not a jump) may pass a longer ``limit``
+        [s]. Without a hold in progress this does nothing (True).
         """
         if self._open_hold is None:
             return True
         start, theta_dot = self._open_hold
         self._open_hold = None
         elapsed = float(elapsed)
-        if not 0.0 <= elapsed <= self.max_hold:
+        limit = self.max_hold if limit is None else limit
+        if not 0.0 <= elapsed <= limit:
             self._reference = start
             return False
         self._reference = start + elapsed * theta_dot

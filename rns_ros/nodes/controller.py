@@ -113,6 +113,9 @@ from rns_ros.nodes.parameters import (
 from rns_ros.nodes.robot_io import base_pose
 from rns_ros.nodes.runner import publish_last, run_node
 
+#: How closely [-, relative] the node clock and the steady clock must agree on the time
+#: between two ticks for a long one to count as a stall rather than a clock jump.
+STEADY_AGREEMENT = 0.05
 #: Measured and integrated angles further apart than this [rad] restart the reference.
 RESYNC_TOLERANCE = 0.2
 #: Shortest interval between two ticks when commands are served at once [s]: a command flood
@@ -151,6 +154,7 @@ class ControllerNode(Node):
         self._stopped = True  # the last output was zero velocity: the next one ramps up
         self._singular_time = 0.0  # [s] of outputs served in the singular region
         self._resync = False  # the reference restarts at the measured angles this tick
+        self._steady_tick: float | None = None  # time.monotonic() of the last served tick [s]
         self._served: tuple[np.ndarray, TwistFrame] | None = None  # (angular, frame) last tick
         self._predict = params["predict_state"]
         self._sim_time = bool(self.get_parameter("use_sim_time").value)
@@ -373,8 +377,17 @@ class ControllerNode(Node):
             self._hold_still(ControllerState.CLOCK_FAULT, clock_fault, at=tick)
             return
         # the previous output was held this long on the plant's clock (sim time: /clock)
-        if held is not None and not self.controller.end_hold(held):
-            self._lost_hold(held)
+        steady = time.monotonic()
+        steady_held = None if self._steady_tick is None else steady - self._steady_tick
+        self._steady_tick = steady
+        limit = self._hold_limit(held, steady_held) if held is not None else None
+        if held is not None and not self.controller.end_hold(held, limit):
+            self._lost_hold(held, limit)
+            if not self._sim_time:
+                # the node itself stalled: the executor runs this timer before the samples that
+                # came meanwhile, so the state would look stale and stop the arm; the next
+                # period is judged on them (the plant ended the last output at rest)
+                return
         now = self._input_clock.now()
         self._measured.drop_future_receipts(now)
         fault = self._measured.fault(
@@ -487,14 +500,29 @@ class ControllerNode(Node):
         if not self._lead:
             self._hold_still(ControllerState.CLOCK_FAULT, text)
 
-    def _lost_hold(self, held: float) -> None:
+    def _hold_limit(self, held: float, steady: float | None) -> float:
+        """The longest hold [s] the reference moves on over: ``max_hold``; on the wall clock, up
+        to ``state_hold_age`` when the steady clock saw the same interval ``steady`` [s] (the
+        node stalled, the clock did not jump): the plant held the output that long (velocity
+        interface), or ended its trajectory early and its position loop catches up with the
+        next one, so the motion commanded over the stall is not lost."""
+        if (
+            self._sim_time
+            or steady is None
+            or abs(held - steady) > STEADY_AGREEMENT * max(held, self._period)
+        ):
+            return self.controller.max_hold
+        return max(self.controller.max_hold, self._params["state_hold_age"])
+
+    def _lost_hold(self, held: float, limit: float) -> None:
         """The ticks came ``held`` [s] apart, outside what the controller integrates a held
         output over (the clock went back or jumped less than max_clock_jump, or the node
         stalled): where the held output took the arm is not known, so the reference restarts
-        at the measured angles this tick. A stall shorter than state_timeout is ridden through
+        at the measured angles (on the wall clock at the next tick, after the samples that came
+        during the stall). A stall shorter than state_timeout is ridden through
         like a gap in joint_states (the command goes on); a clock fault stops the arm."""
         self.get_logger().warn(
-            f"{held:.4g} s between two ticks, outside [0, {self.controller.max_hold:.3g}] s (the "
+            f"{held:.4g} s between two ticks, outside [0, {limit:.3g}] s (the "
             "clock jumped or the node stalled): the reference restarts at the measured angles",
             throttle_duration_sec=5.0,
         )

@@ -137,7 +137,8 @@ PARAMETERS = (
         "state_hold_age",
         0.1,
         "joint_states or base_odom older than this hold the arm (STATE_GAP, zero velocity) "
-        "until fresh",
+        "until fresh; on the wall clock, also the longest stall of this node the reference "
+        "moves on over by the held rate",
         "[s]",
         0.005,
         10.0,

@@ -111,6 +111,7 @@ class OperatorNode(Node):
         # a motion/force scenario, started the force task) yet
         self._last_instant: int | None = None
         self._moved = False
+        self._last_tick: int | None = None  # without lead: the previous tick [ns], node clock
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
         self._min_subscribers = params["min_subscribers"]
@@ -193,6 +194,8 @@ class OperatorNode(Node):
         if self._lead:
             now = now + Duration(nanoseconds=self._lead)
             self._resume_after_a_stall(now)
+        else:
+            self._start_after_a_stall(now)
         t = (now - self._start).nanoseconds * 1e-9
         if t < 0.0:
             if self._lead:  # zeros until the profile starts: a controller awaits them
@@ -243,11 +246,28 @@ class OperatorNode(Node):
                 "moved: it starts that much later"
             )
 
+    def _start_after_a_stall(self, now: Time) -> None:
+        """Without lead (the wall clock): ticks that came late before any motion was published
+        (this process waited for a core while the nodes started) shift the profile's start by
+        the time skipped instead of cutting its start off (the first sample played would be
+        one from mid-profile); the robot is at rest until then, so the shift is exact."""
+        previous, self._last_tick = self._last_tick, now.nanoseconds
+        if self._moved or previous is None:
+            return
+        skipped = now.nanoseconds - previous - self._period_ns
+        if skipped >= self._period_ns and now > self._start:  # a sample's instant was missed
+            late = min(skipped, (now - self._start).nanoseconds)
+            self._start = self._start + Duration(nanoseconds=late)
+            self.get_logger().warn(
+                f"waited {late * 1e-9:.3f} s for a core as the profile was to start: it "
+                "starts that much later"
+            )
+
     def _publish(self, omega, stamp: Time) -> None:
         """One TwistStamped with angular velocity ``omega`` [rad/s], shape (3,)."""
+        self._moved = self._moved or any(float(w) != 0.0 for w in omega)
         if self._lead:
             self._last_instant = stamp.nanoseconds
-            self._moved = self._moved or any(float(w) != 0.0 for w in omega)
         if self._twist_template is not None:
             values = {"twist": np.concatenate((np.zeros(3), omega))}
             self._publisher.publish(
@@ -268,9 +288,10 @@ class OperatorNode(Node):
         the twists from the first zero on but cannot wait on a force stream that has not
         started; the twist of an instant, published after its setpoint, then makes the
         controller wait until that setpoint has been sent."""
+        # the force task is on from here: a stall is no longer a shift of a robot at rest
+        self._moved = True
         if self._lead:
-            # the force task is on from here: a stall is no longer a shift of a robot at rest
-            self._last_instant, self._moved = stamp.nanoseconds, True
+            self._last_instant = stamp.nanoseconds
         twist = TwistStamped()
         twist.header.stamp = stamp.to_msg()
         twist.header.frame_id = self._frame_id

@@ -158,6 +158,15 @@ def camera_notes(
                 f"{f.max_joint_speed:.3g} rad/s), which scales the commanded rate down; not a "
                 f"singular region (sigma_min of J-bar >= {f.min_sigma:.2g})"
             )
+        elif (
+            f.commanded_camera_error_deg is not None
+            and f.commanded_camera_error_deg < COMMANDED_SHARE * f.final_camera_error_deg
+        ):
+            notes.append(
+                f"{head} but {f.commanded_camera_error_deg:.3g} deg off what the recorded "
+                "cmd_twist samples add up to: the operator's stream fell short of the scenario "
+                "(samples late or missing: on the wall clock, an operator that waited for a core)"
+            )
         else:
             notes.append(
                 f"{head} with sigma_min of J-bar >= {f.min_sigma:.2g} (never below {threshold:g}):"
@@ -165,6 +174,10 @@ def camera_notes(
             )
     return notes
 
+
+#: A camera this much closer to what the recorded twists add up to than to the scenario's
+#: target [-, share] puts the error on the operator's stream.
+COMMANDED_SHARE = 0.5
 
 #: An SC speed scale this far from 1 [-] explains a camera off its target.
 SC_SCALE_OFF = 0.1

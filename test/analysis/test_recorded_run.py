@@ -66,3 +66,48 @@ def test_the_singular_value_products_are_determinant_roots(robot):
     figures = run_figures(robot, scenario, **_record(robot, path))
     assert figures.min_singular_product == pytest.approx(min(roots), rel=1e-6, abs=1e-12)
     assert figures.max_singular_product == pytest.approx(max(roots), rel=1e-6)
+
+
+@pytest.mark.parametrize("frame", ["world", "camera", "base"])
+def test_the_commanded_attitude_is_the_integral_of_the_held_rates(frame):
+    """A rate held over stamps 0 .. T turns the camera by exp(omega T) in its frame's axes
+    (world: on the left; camera: on the right; base: conjugated by the base rotation); the
+    last sample counts for nothing (the stream's end)."""
+    from types import SimpleNamespace
+
+    import pinocchio as pin
+
+    from rns_ros.analysis.recorded_run import commanded_rotation
+    from rns_ros.control.controller import TwistFrame
+
+    scenario = SimpleNamespace(frame=TwistFrame(frame))
+    camera_0 = pin.exp3(np.array([0.3, -0.2, 0.5]))
+    base_0 = pin.exp3(np.array([-0.1, 0.4, 0.2]))
+    omega = np.array([0.2, -0.1, 0.05])
+    times = np.linspace(0.0, 2.0, 41)
+    commands = np.tile(omega, (41, 1))
+    commands[-1] = [50.0, 0.0, 0.0]  # held for nothing
+    turn = pin.exp3(2.0 * omega)
+    expected = {
+        "world": turn @ camera_0,
+        "camera": camera_0 @ turn,
+        "base": base_0 @ turn @ base_0.T @ camera_0,
+    }[frame]
+    got = commanded_rotation(scenario, camera_0, base_0, times, commands)
+    np.testing.assert_allclose(got, expected, atol=1e-12)
+
+
+def test_the_sampled_profile_adds_up_to_the_scenarios_target():
+    """The scenario's rates sampled every 1 ms and held add up to its target attitude
+    (Scenario.target_rotation, from the closed-form progress), to the hold's O(dt) error."""
+    from rns_ros.analysis.recorded_run import commanded_rotation
+    from rns_ros.core.integration import attitude_deviation
+
+    scenario = load_scenario(scenario_path("satellite_observation"))
+    times = np.arange(0.0, scenario.duration + 0.0015, 0.001)
+    commands = np.array([scenario.angular_velocity(t) for t in times])
+    camera_0, base_0 = np.eye(3), np.eye(3)
+    target = scenario.target_rotation(camera_0, base_0, scenario.duration)
+    got = commanded_rotation(scenario, camera_0, base_0, times, commands)
+    assert attitude_deviation(target, got) < 1e-3
+    assert attitude_deviation(target, camera_0) > 0.1  # it turned

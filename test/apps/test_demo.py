@@ -121,7 +121,12 @@ def test_demo_in_dynamic_mode_reaches_the_target(tmp_path, clock):
         *clock, "--ros-args", "-p", "state_timeout:=0.5",
     )  # fmt: skip
     row = rows["dls"]
-    assert row["final_camera_error_deg"] < 0.1
+    # the camera ends where the operator's recorded twists take it; on the wall clock the
+    # scripted operator's own samples can come late (a process that waited for a core), which
+    # changes what was commanded, not how it is followed
+    assert row["commanded_camera_error_deg"] < 0.1
+    if "--wall-clock" not in clock:
+        assert row["final_camera_error_deg"] < 0.1
     assert row["max_base_deviation_deg"] < 5e-3
     assert row["angular_momentum_drift"] < 1e-9
 

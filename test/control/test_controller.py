@@ -135,6 +135,24 @@ def test_end_hold_is_a_no_op_without_a_hold_and_never_goes_back(robot):
     assert np.allclose(controller.reference_positions, before + 0.05 * step.joint_velocity)
 
 
+def test_end_hold_takes_a_longer_limit_for_a_stall_checked_on_a_steady_clock(robot):
+    """0.08 s between two outputs is past max_hold (a jump or a stall): by default the hold is
+    dropped (theta_ref stays where it started); with the caller's longer limit (a stall its
+    steady clock saw) theta_ref moves on over it, as a plant holding theta_dot did."""
+    state = FreeFloatingState.compute(robot, robot.configuration(THETA_0))
+    controller = ReactionlessController(robot, ControllerSettings(period=0.01))
+    controller.reset(state)
+    before = controller.reference_positions.copy()
+    controller.step(state, [0.1, 0.0, 0.0])
+    assert not controller.end_hold(0.08)
+    assert np.array_equal(controller.reference_positions, before)
+    step = controller.step(state, [0.1, 0.0, 0.0])
+    assert controller.end_hold(0.08, limit=0.1)
+    assert np.allclose(controller.reference_positions, before + 0.08 * step.joint_velocity)
+    controller.step(state, [0.1, 0.0, 0.0])
+    assert not controller.end_hold(0.12, limit=0.1)
+
+
 def test_bad_settings_are_rejected():
     with pytest.raises(ConfigError, match="hold_iterations"):
         ControllerSettings(hold_iterations=0)

@@ -590,6 +590,68 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
     assert first < 0.25 * moving, f"resumed at {first:.3f} rad/s, not ramped (full {moving:.3f})"
 
 
+def _stall_executor(ros, streams, seconds: float) -> int:
+    """The arm turning at 0.2 rad/s about world x, this process's executor (controller and
+    recorders) then stops for ``seconds`` of wall time while the simulator's loop thread runs on,
+    as when a loaded machine gives the controller no core; returns the index of the first
+    output published after the stall."""
+    assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
+    ros.spin_for(0.3)
+    count = len(streams["references"].messages)
+    time.sleep(seconds)  # nothing of this process runs: no tick, no sample taken
+    assert ros.spin_until(lambda: len(streams["references"].messages) > count + 20, timeout=10.0)
+    return count
+
+
+def test_a_stall_of_the_controller_moves_the_reference_on_by_the_held_rate(ros):
+    """The controller's process stalls for 0.08 s (more than max_hold, 0.05 s, within
+    state_hold_age) while the plant ran out its last trajectory: its steady clock saw the stall,
+    so the reference moves on over it by the held joint rate, as over any late tick, and the
+    next output starts where the operator's command took it, not where the arm stopped (which
+    would lose the motion of the stall)."""
+    stack = _stack(ros)
+    operator = Operator(stack.probe)
+    operator.angular, operator.active = (0.2, 0.0, 0.0), True
+    after = _stall_executor(ros, stack.streams, 0.08)
+    outputs = stack.streams["references"].messages
+    before = outputs[after - 1]
+    gap = _seconds(outputs[after].header.stamp) - _seconds(before.header.stamp)
+    assert gap >= 0.07  # the stall, on the node clock
+    theta_dot = np.array(before.points[0].velocities)
+    moved = np.array(outputs[after].points[0].positions) - np.array(before.points[0].positions)
+    # theta_ref + gap theta_dot; a restart at the measured angles would move it by about the
+    # trajectory's 0.02 s
+    np.testing.assert_allclose(moved, gap * theta_dot, atol=0.1 * gap * np.abs(theta_dot).max())
+    seen = [status_values(m)["state"] for m in stack.streams["status"].messages[-30:]]
+    assert set(seen) <= {"OK"}
+
+
+def test_after_a_long_stall_the_controller_takes_the_waiting_samples_before_judging_them(ros):
+    """A stall of 0.3 s, past state_hold_age (0.1 s here): the first tick after it runs before
+    the joint states that came meanwhile are taken, so it skips its period (the reference
+    restarts at the measured angles at the next) instead of reading them as a gap in the
+    state stream, which held the arm and ramped it up from rest (a quarter second of motion
+    lost)."""
+    simulator = _node(ros, SimulatorNode)
+    del simulator
+    _node(ros, ControllerNode, state_hold_age=0.1)
+    probe = ros.probe()
+    streams = {
+        "references": Recorder(probe, JointTrajectory, "joint_references"),
+        "status": Recorder(probe, DiagnosticArray, "rns_controller/status"),
+    }
+    operator = Operator(probe)
+    operator.angular, operator.active = (0.2, 0.0, 0.0), True
+    after = _stall_executor(ros, streams, 0.3)
+    states = [status_values(m)["state"] for m in streams["status"].messages]
+    assert "OK" in states
+    resumed = states[states.index("OK") :]
+    assert "STATE_GAP" not in resumed
+    assert "RAMPING" not in resumed
+    speeds = _speeds(streams["references"].messages[after : after + 5])
+    assert speeds.min() > 0.5 * _speeds(streams["references"].messages[after - 5 : after]).min()
+
+
 def test_a_state_is_stale_once_older_than_the_timeout():
     """The watchdog rule on given receipt times [s]: joint_states (and base_odom, once it came)
     older than state_timeout make the state stale, not a moment before; two joint_states

@@ -144,18 +144,22 @@ def test_with_lead_zeros_go_out_before_the_start_condition_and_no_profile(ros, t
     assert not operator.started
 
 
-def test_with_lead_a_stall_before_the_first_motion_shifts_the_profile(ros, tmp_path):
-    """lead: the operator's process waited for a core after its first sample (a rest) while the
-    simulation ran on (/clock 10.0 -> 11.0; no controller awaited it yet): the profile goes on
-    from its next sample, later, instead of from where the clock got to. Once it moved, a jump
-    is not shifted (an awaiting controller would have held the clock)."""
+@pytest.mark.parametrize("lead", [0.04, 0.0])
+def test_a_stall_before_the_first_motion_shifts_the_profile(ros, tmp_path, lead):
+    """The operator's process waited for a core after its first sample (a rest) while time ran
+    on (/clock 10.0 -> 11.0 here; the wall clock as the nodes start, no controller awaiting
+    it): the profile goes on from its next sample, later, instead of from where the clock got
+    to (a profile entered mid-way would cut its start off while the robot stood still). Once
+    it moved, a jump is not shifted (an awaiting controller would have held the clock; on the
+    wall clock the controller holds the newest rate). With ``lead`` each sample is stamped
+    that much ahead."""
     path = tmp_path / "rest.yaml"
     path.write_text(yaml.safe_dump({**SCENARIO_FROM_REST}))
     scenario = load_scenario(path)
     twists = ros.record(TwistStamped, "cmd_twist")
     operator = ros.add(
         OperatorNode,
-        {"scenario": str(path), "start_delay": 0.0, "lead": 0.04, "use_sim_time": True},
+        {"scenario": str(path), "start_delay": 0.0, "lead": lead, "use_sim_time": True},
     )
     clock = ros.probe().create_publisher(Clock, "/clock", 10)
     ros.spin_until(lambda: operator.count_publishers("/clock") > 0, timeout=5.0)
@@ -166,11 +170,14 @@ def test_with_lead_a_stall_before_the_first_motion_shifts_the_profile(ros, tmp_p
         assert ros.spin_until(lambda count=count: len(twists) > count, timeout=2.0), t
         msg = twists.messages[-1]
         samples[round(twists.stamps()[-1], 6)] = msg.twist.angular.y
-    expected = {10.04: 0.0, 11.04: 0.02, 11.06: 0.04, 12.04: 1.02}  # stamp: profile time
+    # stamp: profile time
+    expected = {
+        round(c + lead, 6): t for c, t in ((10.0, 0.0), (11.0, 0.02), (11.02, 0.04), (12.0, 1.02))
+    }
     assert list(samples) == list(expected)
     for stamp, t in expected.items():
         assert samples[stamp] == pytest.approx(scenario.angular_velocity(t)[1], abs=1e-12)
-    assert samples[11.04] > 0.0
+    assert samples[round(11.0 + lead, 6)] > 0.0
 
 
 #: The roll of SCENARIO with a quintic profile: it starts (and ends) at rest.

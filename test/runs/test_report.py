@@ -8,7 +8,15 @@ from rns_ros.runs.inspection import DemoRow
 from rns_ros.runs.report import CAMERA_OFF_DEG, camera_notes, format_table
 
 
-def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None, products=(None, None)):
+def _row(
+    method,
+    camera_deg,
+    singular_s=0.0,
+    min_sigma=0.5,
+    ended=None,
+    products=(None, None),
+    commanded_deg=None,
+):
     figures = RunFigures(
         max_base_deviation_deg=1e-6,
         final_camera_error_deg=camera_deg,
@@ -21,6 +29,7 @@ def _row(method, camera_deg, singular_s=0.0, min_sigma=0.5, ended=None, products
         singular_time_s=singular_s,
         min_singular_product=products[0],
         max_singular_product=products[1],
+        commanded_camera_error_deg=commanded_deg,
     )
     return DemoRow(method, figures, 1.0, None, ended=ended)
 
@@ -54,6 +63,17 @@ def test_an_sc_camera_off_because_of_its_speed_scale_says_so():
     assert "so the camera turns slower than commanded" in slow
     # a scale within 10 % of 1 explains nothing: the generic line
     (other,) = camera_notes([_row("sc", 9.0, products=(0.56, 0.62))], 0.2, sc_gain=1.7)
+    assert "not a singular region; see the RMS" in other
+
+
+def test_a_camera_on_what_the_operator_sent_puts_the_error_on_the_operators_stream():
+    """1.14 deg off the scenario's target, 0.003 deg off what the recorded twists add up to
+    (an operator that waited for a core on the wall clock): the stream fell short, not the
+    control; a camera off both gets the generic line."""
+    (note,) = camera_notes([_row("dls", 1.14, commanded_deg=0.003)], 0.2)
+    assert note.startswith("dls: the camera ends 1.14 deg off its target but 0.003 deg off")
+    assert "the operator's stream fell short of the scenario" in note
+    (other,) = camera_notes([_row("dls", 1.14, commanded_deg=1.1)], 0.2)
     assert "not a singular region; see the RMS" in other
 
 

@@ -368,6 +368,14 @@ class FreeFloatingModel:
         points.append(data.oMf[self.camera_frame_id].translation.copy())
         return np.array(points)
 
+    def camera_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The camera frame of configuration q (7 + n,) in world: rotation (3, 3) (world <-
+        camera) and position [m] (3,). Uses its own ``pin.Data``, like :meth:`skeleton`."""
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, np.asarray(q, dtype=float))
+        placement = data.oMf[self.camera_frame_id]
+        return placement.rotation.copy(), placement.translation.copy()
+
 
 def check_one_dof_joints(model: pin.Model, name: str, first: int, supported: str) -> None:
     """Every joint from index ``first`` on must have one position and one velocity coordinate

@@ -35,6 +35,11 @@ a busy logger catches up instead of dropping samples):
     <ground_namespace>/joint_states, <ground_namespace>/base_odom
                               the telemetry as the ground receives it, a grey ghost at its
                               receipt on this node's clock (each pair matched by stamp)
+    <ground_namespace>/<predictor_status_topic>, <link_status_topic>
+                              (with ``ground_namespace``) rns_predictor's prediction error and
+                              rns_link's delay, messages in flight and lost per direction,
+                              under plots/ground (the predicted camera is also drawn
+                              as a frustum)
 
 Part II contact mode (docs/part2_ros.md): when ``model_config`` is a fixed-base arm (its YAML has
 ``ee_frame``, e.g. config/lwr_7dof.yaml), the arm is drawn from ``joint_states`` with its base link
@@ -178,6 +183,16 @@ class RerunLoggerNode(Node):
                     lambda msg, k=kind, p=pairs: self._on_ground_odom(k, p, msg),
                     qos,
                 )
+            predictor = params["predictor_status_topic"]
+            if not predictor.startswith("/"):
+                predictor = f"/{ground}/{predictor}"
+            for source, topic in (("predictor", predictor), ("link", params["link_status_topic"])):
+                self.create_subscription(
+                    DiagnosticArray,
+                    topic,
+                    lambda msg, s=source: self._on_ground_status(s, msg),
+                    qos,
+                )
 
     def _subscribe_contact(self, qos: QoSProfile, errors_topic: str) -> None:
         self._ee_frame = self.robot.model.frames[self.robot.ee_frame_id].name
@@ -262,6 +277,14 @@ class RerunLoggerNode(Node):
                     self._stamp_ns(msg.header), values, level, status.message
                 )
                 return
+
+    def _on_ground_status(self, source: str, msg: DiagnosticArray) -> None:
+        """rns_predictor's or rns_link's status (``source``): the ground's figures (prediction
+        error; link delay, in flight, lost) as time series."""
+        for status in msg.status:
+            self.recorder.ground_status(
+                source, self._stamp_ns(msg.header), {kv.key: kv.value for kv in status.values}
+            )
 
     def _on_energy(self, msg: Float64MultiArray) -> None:
         labels = msg.layout.dim[0].label.split() if msg.layout.dim else []

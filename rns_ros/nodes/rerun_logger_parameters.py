@@ -72,6 +72,17 @@ PARAMETERS = (
         "Ground teleop: draw <ns>/predicted/* at their stamps and <ns>/joint_states as received",
     ),
     ParameterSpec(
+        "predictor_status_topic",
+        "rns_predictor/status",
+        "Ground teleop: rns_predictor's status (prediction error), under ground_namespace "
+        "unless absolute",
+    ),
+    ParameterSpec(
+        "link_status_topic",
+        "/rns_link/status",
+        "Ground teleop: rns_link's status (delay, in flight, lost per direction)",
+    ),
+    ParameterSpec(
         "default_twist_frame",
         TwistFrame.CAMERA.value,
         "Axes of cmd_twist with an empty header.frame_id (as the controller's parameter)",

@@ -85,6 +85,16 @@ PREDICTED_ARM = "world/ground/predicted"
 PREDICTED_ARM_JOINTS = "world/ground/predicted/joints"
 TELEMETRY_ARM = "world/ground/telemetry"
 TELEMETRY_ARM_JOINTS = "world/ground/telemetry/joints"
+#: The predicted camera's frustum (a pinhole at the predicted camera pose, +z forward).
+PREDICTED_CAMERA = "world/ground/predicted/camera"
+#: rns_predictor's prediction error (predicted at t vs the telemetry of t, once it arrived).
+PREDICTION_ERROR = "plots/ground/prediction_error"
+PREDICTION_ERROR_CAMERA = "plots/ground/prediction_error/camera_deg"
+PREDICTION_ERROR_BASE = "plots/ground/prediction_error/base_deg"
+#: rns_link's state, per direction (uplink, downlink): one-way delay of the newest message
+#: delivered [s], messages in flight, messages lost so far.
+LINK = "plots/ground/link"
+LINK_FIGURES = ("delay_s", "in_flight", "lost")
 
 # --- Part II: contact tasks ----------------------------------------------------------------------
 ENVIRONMENT = "world/environment"

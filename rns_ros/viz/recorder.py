@@ -27,6 +27,7 @@ Methods are thread-safe (one lock: the node's executor may run callbacks on seve
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 import uuid
@@ -78,6 +79,8 @@ _STREAMS = (
     "wheels",
     "predicted",
     "telemetry",
+    "ground_predictor",
+    "ground_link",
 )
 #: Ghost arm of a ptp goal: translucent so the real arm shows through it.
 GHOST_COLOR = (120, 170, 255, 110)
@@ -88,6 +91,19 @@ GROUND_ARMS = {
 }
 GHOST_LINE_RADIUS = 0.03
 GHOST_JOINT_RADIUS = 0.06
+#: The predicted camera's frustum, drawn for orientation only (the thesis gives no camera
+#: model): vertical field of view [rad], width / height, and the drawn depth [m].
+FRUSTUM_FOV_Y = np.deg2rad(60.0)
+FRUSTUM_ASPECT = 4.0 / 3.0
+FRUSTUM_DEPTH = 0.4
+#: rns_predictor's status keys logged under paths.PREDICTION_ERROR.
+PREDICTION_ERROR_KEYS = {
+    "prediction_error_camera_deg": paths.PREDICTION_ERROR_CAMERA,
+    "prediction_error_base_deg": paths.PREDICTION_ERROR_BASE,
+}
+#: rns_link's status keys ("<direction> <key>") logged under paths.LINK/<direction>/<figure>.
+LINK_KEYS = {"last delay [s]": "delay_s", "in flight": "in_flight", "lost": "lost"}
+LINK_DIRECTIONS = ("uplink", "downlink")
 
 
 @dataclass(frozen=True)
@@ -522,6 +538,56 @@ class TelemetryRecorder:
             self.rec.log(path, strip)
             spheres = rr.Points3D(points, colors=[color], radii=[GHOST_JOINT_RADIUS])
             self.rec.log(joints_path, spheres)
+            if kind == "predicted":
+                rotation, position = self.robot.camera_pose(q)
+                self.rec.log(
+                    paths.PREDICTED_CAMERA,
+                    rr.Transform3D(translation=position, mat3x3=rotation),
+                    rr.Pinhole(
+                        fov_y=FRUSTUM_FOV_Y,
+                        aspect_ratio=FRUSTUM_ASPECT,
+                        camera_xyz=rr.ViewCoordinates.RDF,  # +z forward: the optical axis
+                        image_plane_distance=FRUSTUM_DEPTH,
+                        color=color,
+                    ),
+                )
+
+    def ground_status(self, source: str, stamp_ns: int, values: Mapping[str, str]) -> int:
+        """The ground's figures from one status of ``source``: ``predictor`` (rns_predictor:
+        the prediction error, :data:`PREDICTION_ERROR_KEYS`) or ``link`` (rns_link: per
+        direction the newest delay, the messages in flight and those lost, :data:`LINK_KEYS`),
+        key/values as published. Values that do not parse as finite numbers are skipped.
+        Returns the number of scalars logged.
+
+        Raises:
+            InputError: an unknown source.
+        """
+        if source == "predictor":
+            scalars = {path: values.get(key) for key, path in PREDICTION_ERROR_KEYS.items()}
+        elif source == "link":
+            scalars = {
+                f"{paths.LINK}/{direction}/{figure}": values.get(f"{direction} {key}")
+                for direction in LINK_DIRECTIONS
+                for key, figure in LINK_KEYS.items()
+            }
+        else:
+            raise InputError(f"ground status source must be 'predictor' or 'link', got {source!r}")
+        logged = 0
+        with self._lock:
+            if not self._accept(f"ground_{source}", stamp_ns):
+                return 0
+            for path, text in scalars.items():
+                try:
+                    value = float(text) if text is not None else math.nan
+                except ValueError:
+                    continue
+                if math.isfinite(value):
+                    self._scalar(path, stamp_ns, value)
+                    logged += 1
+            if logged:
+                self.counts[f"ground_{source}"] += 1
+            self._send_if_due()
+        return logged
 
     # --- sending, closing -----------------------------------------------------------------------
     @property

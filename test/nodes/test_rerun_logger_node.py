@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -91,6 +92,42 @@ def test_ptp_goal_becomes_a_ghost_arm_and_the_phases_are_plotted(ros, tmp_path):
     assert progress.max() == pytest.approx(1.0)
     log = [row["TextLog:text"][0] for row in read_components(rrd, paths.PTP_LOG)]
     assert any(line.startswith("phase JS-C") for line in log), log
+
+
+def test_the_grounds_prediction_error_and_link_state_are_plotted(ros, tmp_path):
+    """With ground_namespace: rns_predictor's status (under it) and rns_link's give the
+    prediction error and, per direction, the link's delay, messages in flight and lost."""
+    rrd = tmp_path / "ground.rrd"
+    logger = _node(ros, RerunLoggerNode, sink="save", rrd_path=str(rrd), ground_namespace="ground")
+    probe = ros.probe()
+    predictor = probe.create_publisher(DiagnosticArray, "/ground/rns_predictor/status", 10)
+    link = probe.create_publisher(DiagnosticArray, "/rns_link/status", 10)
+    ros.spin_until(lambda: logger.count_publishers("/rns_link/status") > 0, timeout=5.0)
+
+    def status(values):
+        message = DiagnosticArray(
+            status=[DiagnosticStatus(values=[KeyValue(key=k, value=v) for k, v in values])]
+        )
+        message.header.stamp.sec = 100
+        return message
+
+    counts = logger.recorder.counts
+
+    def both_taken():
+        return counts["ground_predictor"] > 0 and counts["ground_link"] > 0
+
+    for _ in range(20):  # best effort: until both were taken
+        predictor.publish(status([("prediction_error_camera_deg", "7.2e-10")]))
+        link.publish(status([("uplink last delay [s]", "3.0"), ("downlink lost", "4")]))
+        if ros.spin_until(both_taken, timeout=0.5):
+            break
+    _close(ros, logger)
+    _, error = read_scalars(rrd, paths.PREDICTION_ERROR_CAMERA)
+    assert error[0] == pytest.approx(7.2e-10)
+    _, delay = read_scalars(rrd, f"{paths.LINK}/uplink/delay_s")
+    assert delay[0] == pytest.approx(3.0)
+    _, lost = read_scalars(rrd, f"{paths.LINK}/downlink/lost")
+    assert lost[0] == 4.0
 
 
 def test_records_the_simulator_at_its_publish_rate_in_sim_time(ros, tmp_path):

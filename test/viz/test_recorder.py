@@ -21,6 +21,7 @@ from rns_ros.viz.readback import (
     recording_ids,
     recording_summary,
 )
+from rns_ros.viz.recorder import FRUSTUM_DEPTH
 
 PERIOD_NS = 10_000_000  # 100 Hz
 STATUS = {
@@ -464,6 +465,46 @@ def test_the_grounds_arms_are_ghosts_of_their_configurations(open_recorder, robo
     np.testing.assert_allclose(points[-1], camera, atol=1e-6)
     telemetry = read_components(rrd, paths.TELEMETRY_ARM)
     assert sum("LineStrips3D:strips" in r for r in telemetry) == 1
+
+
+def test_the_predicted_camera_is_a_frustum_at_the_predicted_camera_pose(open_recorder, robot):
+    """A pinhole (+z forward) under the camera pose of the predicted configuration: the pose is
+    the one FreeFloatingState computes for that configuration."""
+    recorder = open_recorder()
+    theta = np.radians([-120.0, 50.0, 0.0, -60.0, 180.0, 180.0, 0.0])
+    q = robot.configuration(theta, [0.3, -0.2, 0.1], _base_quaternion(500))
+    recorder.ground_arm("predicted", PERIOD_NS, q)
+    recorder.ground_arm("telemetry", 2 * PERIOD_NS, q)  # the telemetry arm has none
+    recorder.close()
+    rows = read_components(recorder.sink.rrd_path, paths.PREDICTED_CAMERA)
+    (pose,) = [r for r in rows if "Transform3D:translation" in r]
+    camera = FreeFloatingState.compute(robot, q).camera
+    np.testing.assert_allclose(pose["Transform3D:translation"][0], camera.position, atol=1e-6)
+    matrix = np.array(pose["Transform3D:mat3x3"][0]).reshape(3, 3).T  # stored column-major
+    np.testing.assert_allclose(matrix, camera.rotation, atol=1e-6)
+    (pinhole,) = [r for r in rows if "Pinhole:image_from_camera" in r]
+    assert pinhole["Pinhole:image_plane_distance"] == [pytest.approx(FRUSTUM_DEPTH)]
+
+
+def test_the_grounds_status_figures_are_time_series(open_recorder):
+    """rns_predictor's prediction error and rns_link's delay, messages in flight and lost per
+    direction become scalars; a value that is not a finite number is skipped."""
+    recorder = open_recorder()
+    predictor = {"prediction_error_camera_deg": "0.0125", "prediction_error_base_deg": "nan"}
+    link = {"uplink last delay [s]": "3.0004", "uplink in flight": "151", "downlink lost": "x"}
+    assert recorder.ground_status("predictor", PERIOD_NS, predictor) == 1
+    assert recorder.ground_status("link", PERIOD_NS, link) == 2  # its own stream: same stamp
+    with pytest.raises(InputError, match="ground status source must be"):
+        recorder.ground_status("uplink", 2 * PERIOD_NS, link)
+    recorder.close()
+    rrd = recorder.sink.rrd_path
+    _, camera = read_scalars(rrd, paths.PREDICTION_ERROR_CAMERA)
+    assert camera.tolist() == [pytest.approx(0.0125)]
+    assert read_scalars(rrd, paths.PREDICTION_ERROR_BASE)[1].size == 0
+    _, delay = read_scalars(rrd, f"{paths.LINK}/uplink/delay_s")
+    assert delay.tolist() == [pytest.approx(3.0004)]
+    _, in_flight = read_scalars(rrd, f"{paths.LINK}/uplink/in_flight")
+    assert in_flight.tolist() == [151.0]
 
 
 def test_ptp_goal_ghost_arm_stands_on_the_newest_base_pose(open_recorder, robot):

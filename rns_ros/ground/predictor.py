@@ -37,6 +37,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from rns_ros.control.camera_goal import CameraGoal, GoalSettings
 from rns_ros.control.controller import (
     ControllerSettings,
     ReactionlessController,
@@ -88,6 +89,7 @@ class PredictorSettings:
     Attributes:
         controller: the on-board controller's method, gains and period T.
         gate: the on-board command gate.
+        goal: the on-board camera goal's law (rns_controller's goal_* parameters).
         time_tags: D, the execution delay, as the spacecraft applies it.
         resync_deg: re-anchor when the camera's or the base's attitude error exceeds this
             [deg], > 0.
@@ -98,6 +100,7 @@ class PredictorSettings:
 
     controller: ControllerSettings = field(default_factory=ControllerSettings)
     gate: GateSettings = field(default_factory=GateSettings)
+    goal: GoalSettings = field(default_factory=GoalSettings)
     time_tags: TimeTags = field(default_factory=TimeTags)
     resync_deg: float = 0.01
     resync_rad: float = 1e-3
@@ -139,12 +142,21 @@ class PredictionError(NamedTuple):
     resynced: bool
 
 
+class _Goal(NamedTuple):
+    """A camera goal among the commands: R_goal (world <- camera) (3, 3)."""
+
+    rotation: np.ndarray
+
+
 class _Tick(NamedTuple):
-    """The loop at the start of one tick: time [s], configuration q (7 + n,), the gate."""
+    """The loop at the start of one tick: time [s], configuration q (7 + n,), the gate, and
+    the newest camera goal (its execution time [s] and R_goal (3, 3), None once reached), if
+    one is in force."""
 
     time: float
     q: np.ndarray
     gate: CommandGate
+    goal: tuple[float, np.ndarray | None] | None = None
 
 
 class PredictedArm:
@@ -173,14 +185,15 @@ class PredictedArm:
         self._controller = ReactionlessController(robot, settings.controller)
         # the commands and their execution times [s], in execution order
         self._acts: list[float] = []
-        self._commands: list[TwistCommand] = []
+        self._commands: list[TwistCommand | _Goal] = []
         self._ticks: deque[_Tick] = deque()
         #: the newest prediction errors (at most MAX_ERRORS kept); their worst so far
         self.errors: deque[PredictionError] = deque(maxlen=MAX_ERRORS)
         self.worst = PredictionError(math.nan, 0.0, 0.0, 0.0, False)
         self.compared = 0  # telemetry samples compared
         self.resyncs = 0  # re-anchorings
-        self._anchor(float(t0), as_vector(q0, robot.model.nq, "q0"), settings.gate.gate(), True)
+        self._origin = float(t0)  # the first tick [s]
+        self._anchor(self._origin, as_vector(q0, robot.model.nq, "q0"), settings.gate.gate(), True)
 
     # --- inputs --------------------------------------------------------------------------------
     def command(self, stamp: float, angular, frame: TwistFrame = TwistFrame.WORLD) -> None:
@@ -191,7 +204,11 @@ class PredictedArm:
             raise InputError(f"command stamp must be finite, got {stamp!r}")
         angular = as_vector(angular, 3, "angular velocity")
         acts = self.settings.time_tags.execution_time(stamp)
-        command = TwistCommand(angular, np.zeros(3), TwistFrame.parse(frame), acts)
+        self._insert(acts, TwistCommand(angular, np.zeros(3), TwistFrame.parse(frame), acts))
+
+    def _insert(self, acts: float, command: TwistCommand | _Goal) -> None:
+        """``command`` acting from ``acts`` [s], in execution order; one acting before the
+        newest predicted tick re-runs the prediction from there."""
         position = bisect_right(self._acts, acts)
         self._acts.insert(position, acts)
         self._commands.insert(position, command)
@@ -199,6 +216,18 @@ class PredictedArm:
         if acts < self.time - GRID_TOLERANCE_S:
             tick = self._ticks[max(0, math.floor((acts - self._ticks[0].time) / self.period))]
             self._restart(tick.time, tick.q)
+
+    def goal(self, stamp: float, rotation) -> None:
+        """The operator's camera goal R_goal (world <- camera, (3, 3)) sent at ``stamp`` [s]:
+        turned to on board from stamp + D with the goal law (goals carry no time tag: they act
+        on arrival, which D bounds; the telemetry corrects the difference). A moving twist
+        acting later takes over, as on board."""
+        if not math.isfinite(stamp):
+            raise InputError(f"goal stamp must be finite, got {stamp!r}")
+        rotation = np.array(rotation, dtype=float).reshape(3, 3)
+        if not np.isfinite(rotation).all():
+            raise InputError("goal rotation must be finite")
+        self._insert(self.settings.time_tags.execution_time(stamp), _Goal(rotation))
 
     def advance(self, t: float) -> FreeFloatingState:
         """Predict up to on-board time ``t`` [s] (every tick t_k <= t); the newest predicted
@@ -262,7 +291,14 @@ class PredictedArm:
         return error
 
     # --- the loop ------------------------------------------------------------------------------
-    def _anchor(self, t: float, q: np.ndarray, gate: CommandGate, reset: bool) -> None:
+    def _anchor(
+        self,
+        t: float,
+        q: np.ndarray,
+        gate: CommandGate,
+        reset: bool,
+        goal: tuple[float, np.ndarray | None] | None = None,
+    ) -> None:
         q = pin.normalize(self.robot.model, q.copy())
         state = FreeFloatingState.compute(self.robot, q)
         if reset:
@@ -276,17 +312,37 @@ class PredictedArm:
             initial_q=q,
             initial_momentum=np.zeros(6),
         )
-        self._ticks.append(_Tick(t, q, gate))
+        self._ticks.append(_Tick(t, q, gate, goal))
 
     def _tick(self) -> None:
         """One period from the newest tick: gate, law, kinematic integration."""
-        t, q, gate = self._ticks[-1]
+        t, q, gate, goal = self._ticks[-1]
         gate = copy.deepcopy(gate)  # the kept tick stays as it was
-        # the newest command acting by t is in force, as the on-board gate's newest accepted
-        due = bisect_right(self._acts, t + GRID_TOLERANCE_S)
-        if due:
-            gate.accept(self._commands[due - 1])
         state = FreeFloatingState.compute(self.robot, q)
+        # the newest command acting by t is in force, as the on-board gate's newest accepted;
+        # a goal feeds the gate its law's rate every tick until reached, a moving twist ends it
+        due = bisect_right(self._acts, t + GRID_TOLERANCE_S)
+        # the inputs that came into force since the previous tick (all of them at the first)
+        since = (
+            0 if t <= self._origin else bisect_right(self._acts, t - self.period + GRID_TOLERANCE_S)
+        )
+        for acts, command in zip(self._acts[since:due], self._commands[since:due], strict=True):
+            if isinstance(command, _Goal):
+                goal = (acts, command.rotation)
+            elif np.any(command.angular) or np.any(command.linear):
+                goal = None  # a moving twist takes over from the goal
+        newest = next(
+            (c for c in reversed(self._commands[:due]) if isinstance(c, TwistCommand)), None
+        )
+        if newest is not None:
+            gate.accept(newest)
+        if goal is not None and goal[1] is not None:
+            law = CameraGoal(self.settings.goal)
+            law.set(goal[1])
+            step = law.step(state.camera.rotation)
+            gate.accept(TwistCommand(step.omega, np.zeros(3), TwistFrame.WORLD, t))
+            if step.reached:
+                goal = (goal[0], None)  # reached: this goal is done, the next one may come
         out = gate.update(t, self.period)
         if out.stopped:
             theta_dot = np.zeros(self.robot.n)
@@ -298,7 +354,7 @@ class PredictedArm:
         simulator.set_reference(velocities=theta_dot)
         for _ in range(self.settings.substeps):
             simulator.step()
-        self._ticks.append(_Tick(t + self.period, simulator.q.copy(), gate))
+        self._ticks.append(_Tick(t + self.period, simulator.q.copy(), gate, goal))
         while self._ticks[-1].time - self._ticks[0].time > self.settings.history:
             self._ticks.popleft()
 
@@ -318,7 +374,7 @@ class PredictedArm:
         while len(self._ticks) > 1 and self._ticks[-1].time > t + GRID_TOLERANCE_S:
             self._ticks.pop()
         start = self._ticks.pop()
-        self._anchor(start.time, q, start.gate, False)
+        self._anchor(start.time, q, start.gate, False, start.goal)
         self.advance(newest)
 
     def _forget_commands(self) -> None:

@@ -136,9 +136,8 @@ PARAMETERS = (
     ParameterSpec(
         "state_hold_age",
         0.1,
-        "joint_states or base_odom older than this hold the arm (STATE_GAP, zero velocity) "
-        "until fresh; on the wall clock, also the longest stall of this node the reference "
-        "moves on over by the held rate",
+        "joint_states or base_odom older than this hold the arm (STATE_GAP); also the "
+        "longest own stall ridden",
         "[s]",
         0.005,
         10.0,

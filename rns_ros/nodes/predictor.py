@@ -13,6 +13,11 @@ Run it in the ground's namespace (``-r __ns:=/ground``), beside ``rns_link``:
 Subscribes:
     cmd_twist              geometry_msgs/TwistStamped, the operator's (stamped with the issue
                            time; frames as rns_controller takes them)
+    rns_controller/camera_goal
+                           geometry_msgs/PoseStamped, the operator's camera goal (world frame,
+                           stamped with the issue time): predicted from its stamp + D with
+                           rns_controller's goal law (goal_gain, goal_max_speed,
+                           goal_tolerance), as the spacecraft turns to it on arrival
     joint_states           sensor_msgs/JointState, the telemetry (by joint name)
     base_odom              nav_msgs/Odometry, the telemetry; paired with joint_states by stamp
 Publishes:
@@ -34,15 +39,17 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
+from rns_ros.control.camera_goal import goal_rotation
 from rns_ros.control.teleop import twist_frame_ids, validate_twist
 from rns_ros.control.time_tags import TimeTags
 from rns_ros.core.commands import match_joint_state
@@ -55,6 +62,7 @@ from rns_ros.ground.predictor import (
 )
 from rns_ros.nodes import predictor_parameters
 from rns_ros.nodes.controller_parameters import controller_settings
+from rns_ros.nodes.controller_requests import goal_settings
 from rns_ros.nodes.parameters import declare_parameters, load_node_model
 from rns_ros.nodes.robot_io import StampPairs, base_pose
 from rns_ros.nodes.runner import run_node
@@ -89,6 +97,7 @@ class PredictorNode(Node):
             gate=GateSettings(
                 params["command_timeout"], params["stop_deceleration"], params["start_acceleration"]
             ),
+            goal=goal_settings(params),
             time_tags=TimeTags(params["execution_delay"]),
             resync_deg=params["resync_deg"],
             resync_rad=params["resync_rad"],
@@ -101,13 +110,17 @@ class PredictorNode(Node):
         self._max_speed = params["max_angular_speed"]
         self._world_frame = params["world_frame"]
         self.arm: PredictedArm | None = None
-        self._early: list[tuple[float, np.ndarray, object]] = []  # twists before telemetry
+        # the operator's twists and goals before the first telemetry, each to give the arm
+        self._early: list[Callable[[PredictedArm], None]] = []
         self._telemetry_pairs = StampPairs()  # joint_states and base_odom by stamp
         self.newest_telemetry = -math.inf  # [s]
         self.newest_twist = -math.inf  # [s], the newest twist's stamp
         self.twists = 0  # valid twists taken
+        self.goals = 0  # valid camera goals taken
         self._twist_received = -math.inf  # [s, monotonic] of the newest
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, INPUT_QOS)
+        # goals are rare and must not be missed: reliable, as rns_controller takes them
+        self.create_subscription(PoseStamped, "rns_controller/camera_goal", self._on_goal, 10)
         self.create_subscription(JointState, "joint_states", self._on_joints, INPUT_QOS)
         self.create_subscription(Odometry, "base_odom", self._on_odom, INPUT_QOS)
         self._joints_pub = self.create_publisher(JointState, "predicted/joint_states", 10)
@@ -140,14 +153,37 @@ class PredictorNode(Node):
         except InputError as exc:
             self.get_logger().error(f"cmd_twist ignored: {exc}", throttle_duration_sec=1.0)
             return
+        self.twists += 1
+        self._give(stamp, lambda arm: arm.command(stamp, command.angular, command.frame))
+
+    def _on_goal(self, msg: PoseStamped) -> None:
+        """The operator's camera goal (world frame, stamped with its issue time; unstamped:
+        now), predicted from its stamp + D as rns_controller turns to it once it arrives."""
+        o = msg.pose.orientation
+        try:
+            if msg.header.frame_id not in ("", self._world_frame):
+                raise InputError(
+                    f"frame_id {msg.header.frame_id!r} is not the world frame "
+                    f"{self._world_frame!r} (or empty)"
+                )
+            rotation = goal_rotation([o.x, o.y, o.z, o.w])
+        except InputError as exc:
+            self.get_logger().error(f"camera goal ignored: {exc}", throttle_duration_sec=1.0)
+            return
+        stamp = _seconds(msg.header.stamp) or self.now_s()
+        self.goals += 1
+        self._give(stamp, lambda arm: arm.goal(stamp, rotation))
+
+    def _give(self, stamp: float, give: Callable[[PredictedArm], None]) -> None:
+        """An operator input stamped ``stamp`` [s]: to the arm, or kept until the first
+        telemetry (the newest 1000)."""
         self.newest_twist = max(self.newest_twist, stamp)
         self._twist_received = time.monotonic()
-        self.twists += 1
         if self.arm is None:
-            self._early.append((stamp, command.angular, command.frame))
+            self._early.append(give)
             del self._early[:-1000]
         else:
-            self.arm.command(stamp, command.angular, command.frame)
+            give(self.arm)
 
     def _on_joints(self, msg: JointState) -> None:
         try:
@@ -183,8 +219,8 @@ class PredictorNode(Node):
         self.newest_telemetry = max(self.newest_telemetry, stamp)
         if self.arm is None:
             self.arm = PredictedArm(self.robot, self._settings, q, stamp)
-            for item in self._early:
-                self.arm.command(*item)
+            for give in self._early:
+                give(self.arm)
             self._early.clear()
             self.get_logger().info(f"first telemetry at {stamp:.3f} s: predicting")
             return
@@ -243,6 +279,7 @@ class PredictorNode(Node):
         values = {
             "predicted_time": "-" if arm is None else f"{arm.time:.3f}",
             "twists": str(self.twists),
+            "goals": str(self.goals),
         }
         if arm is not None and arm.errors:
             last, worst = arm.errors[-1], arm.worst

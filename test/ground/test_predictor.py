@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from rns_ros.control.camera_goal import CameraGoal
 from rns_ros.control.controller import (
     ControllerSettings,
     ReactionlessController,
@@ -187,3 +188,90 @@ def test_bad_inputs_are_named(robot):
     with pytest.raises(ConfigError, match="resync_deg"):
         PredictorSettings(resync_deg=0.0)
     assert GateSettings().gate().timeout == 0.5
+
+
+def _run_goal(robot: FreeFloatingModel, settings: PredictorSettings, goal, sent: float, until):
+    """The operator sends one camera goal ``goal`` (3, 3) at ``sent`` [s]; it reaches the
+    spacecraft D later (an uplink at its budget), where the camera goal law feeds the gate
+    every tick, as rns_controller does; telemetry DOWNLINK later. Returns (predictor, on-board
+    camera rotation at the end, largest base deviation on board [deg])."""
+    q0 = robot.configuration(robot.initial_theta)
+    gate = settings.gate.gate()
+    controller = ReactionlessController(robot, settings.controller)
+    state = FreeFloatingState.compute(robot, q0)
+    controller.reset(state)
+    base_0 = state.base_rotation
+    simulator = FreeFloatingSimulator(
+        robot, mode=SimulationMode.KINEMATIC, dt=PERIOD, initial_q=q0, initial_momentum=np.zeros(6)
+    )
+    uplink = LinkChannel(LinkSettings(delay=settings.time_tags.execution_delay))
+    downlink = LinkChannel(LinkSettings(delay=DOWNLINK))
+    arm = PredictedArm(robot, settings, q0, 0.0)
+    law, base = CameraGoal(settings.goal), 0.0
+    for k in range(round(until / PERIOD)):
+        t = k * PERIOD
+        if abs(t - sent) < 1e-9:
+            arm.goal(t, goal)
+            uplink.send(t, goal)
+        arm.advance(t + settings.time_tags.execution_delay)
+        for item in uplink.deliver(t + 1e-9):
+            law.set(item.message)
+        if law.active:
+            step = law.step(state.camera.rotation)
+            gate.accept(TwistCommand(step.omega, np.zeros(3), TwistFrame.WORLD, t))
+        out = gate.update(t, PERIOD)
+        if out.stopped:
+            theta_dot = np.zeros(robot.n)
+            controller.resync(state)
+        else:
+            omega = angular_velocity_in_world(state, out.angular, out.frame)
+            theta_dot = controller.step(state, omega).joint_velocity
+        simulator.set_reference(velocities=theta_dot)
+        simulator.step()
+        state = FreeFloatingState.compute(robot, simulator.q)
+        base = max(base, math.degrees(attitude_deviation(base_0, state.base_rotation)))
+        downlink.send(t + PERIOD, (t + PERIOD, simulator.q.copy()))
+        for item in downlink.deliver(t + PERIOD):
+            arm.telemetry(*item.message)
+    return arm, state.camera.rotation, base
+
+
+def test_a_camera_goal_is_predicted_as_the_spacecraft_turns_to_it(robot):
+    """A goal 10 deg away, sent at 0.5 s: the display shows the goal law turning the camera from
+    0.5 s + D on, as the spacecraft does once the goal arrives; the telemetry confirms every
+    predicted instant (no re-anchoring), the camera ends within the goal tolerance, the base
+    still."""
+    settings = _settings()
+    q0 = robot.configuration(robot.initial_theta)
+    camera_0 = FreeFloatingState.compute(robot, q0).camera.rotation
+    goal = pin.exp3(math.radians(10.0) * AXIS) @ camera_0
+    until = 0.5 + UPLINK_BUDGET + 10.0
+    arm, camera, base = _run_goal(robot, settings, goal, 0.5, until)
+    assert attitude_deviation(goal, camera) <= settings.goal.tolerance
+    assert base < 1e-4
+    assert arm.compared > 0.9 * (until - DOWNLINK) / PERIOD
+    assert not any(e.resynced for e in arm.errors)
+    assert max(e.camera_deg for e in arm.errors) < 1e-9
+    # the display got there first: the predicted camera at the end is on the goal too
+    assert attitude_deviation(goal, arm.state.camera.rotation) <= settings.goal.tolerance
+
+
+def test_a_moving_twist_after_a_goal_takes_over_on_the_display(robot):
+    settings = _settings()
+    q0 = robot.configuration(robot.initial_theta)
+    camera_0 = FreeFloatingState.compute(robot, q0).camera.rotation
+    arm = PredictedArm(robot, settings, q0, 0.0)
+    arm.goal(0.0, pin.exp3(math.radians(10.0) * AXIS) @ camera_0)
+    arm.command(1.0, 0.1 * np.array([0.0, 0.0, 1.0]))  # about world z, from 1 s + D on
+    arm.command(2.0, np.zeros(3))
+    state = arm.advance(2.0 + UPLINK_BUDGET + 2.0)
+    # the goal turned the camera for 1 s, then the twist about z took over: the goal is over,
+    # the camera stays off it however long the display runs on
+    goal = pin.exp3(math.radians(10.0) * AXIS) @ camera_0
+    off = attitude_deviation(goal, state.camera.rotation)
+    assert off > math.radians(1.0)
+    later = arm.advance(2.0 + UPLINK_BUDGET + 7.0)
+    assert attitude_deviation(goal, later.camera.rotation) == pytest.approx(off, abs=1e-9)
+    assert abs(pin.log3(state.camera.rotation @ camera_0.T)[2]) > 0.05
+    with pytest.raises(InputError, match="goal stamp must be finite"):
+        arm.goal(math.nan, np.eye(3))

@@ -7,9 +7,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rns_testing import Recorder, SimClock, status_values
@@ -105,6 +106,34 @@ def test_the_predicted_arm_moves_at_the_execution_time_at_the_commanded_rate(ros
     assert attitude_deviation(before, rest) < 1e-12
     turned = attitude_deviation(rest, later)
     assert turned == pytest.approx(RATE * 0.5 - RATE**2 / 2, abs=2e-3)
+
+
+def test_a_camera_goal_is_predicted_from_its_stamp_plus_the_delay(ros):
+    """A 5 deg goal stamped START: the predicted camera stands still until START + D, then the
+    goal law turns it onto the goal (within goal_tolerance), as the spacecraft will once the
+    goal arrives; the operator streams zeros meanwhile, which do not cancel it."""
+    ground = _Ground(ros, wrist_gain=0.0)
+    goals = ground.ros.probe().create_publisher(
+        PoseStamped, "/ground/rns_controller/camera_goal", 10
+    )
+    ground.clock.advance(0.0)
+    ground.telemetry(START, ground.theta)
+    ground.ros.spin_until(lambda: ground.node.arm is not None, 10.0)
+    before = ground.camera(JointState(position=ground.theta.tolist()))
+    goal = pin.exp3(np.array([0.0, 0.0, math.radians(5.0)])) @ before
+    x, y, z, w = pin.Quaternion(goal).coeffs()
+    msg = PoseStamped()
+    msg.header.stamp, msg.header.frame_id = stamp_from_seconds(START), "world"
+    o = msg.pose.orientation
+    o.x, o.y, o.z, o.w = float(x), float(y), float(z), float(w)
+    goals.publish(msg)
+    assert ground.ros.spin_until(lambda: ground.node.goals == 1, 10.0)
+    ground.step_to(START + 4.0, 0.0)
+    by_stamp = {round(_seconds(m.header.stamp), 6): m for m in ground.predicted.messages}
+    still = ground.camera(by_stamp[round(START + DELAY, 6)])
+    assert attitude_deviation(before, still) < 1e-12
+    end = ground.camera(by_stamp[round(START + 4.0 + DELAY - 0.01, 6)])
+    assert attitude_deviation(goal, end) <= 1e-3  # goal_tolerance [rad]
 
 
 def test_telemetry_that_disagrees_is_reported_and_re_anchors(ros):

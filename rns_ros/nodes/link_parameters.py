@@ -55,6 +55,7 @@ PARAMETERS = (
         [
             "cmd_twist:geometry_msgs/msg/TwistStamped",
             "rns_controller/camera_goal:geometry_msgs/msg/PoseStamped",
+            "ptp_goal:sensor_msgs/msg/JointState",
         ],
         "ground to spacecraft",
     ),
@@ -65,6 +66,7 @@ PARAMETERS = (
             "base_odom:nav_msgs/msg/Odometry",
             "rns_controller/status:diagnostic_msgs/msg/DiagnosticArray",
             "rns_controller/camera_goal_reached:geometry_msgs/msg/PoseStamped",
+            "rns_ptp/status:diagnostic_msgs/msg/DiagnosticArray",
         ],
         "spacecraft to ground",
     ),

@@ -97,6 +97,37 @@ def test_uplink_messages_arrive_their_delay_later_in_order_and_unchanged(stack):
         assert 2.0 - 1e-6 <= arrived - stamp <= 2.0 + 0.005 + 2 * STEP + 1e-6
 
 
+def test_a_point_to_point_goal_goes_up_and_its_status_comes_down_by_default(stack):
+    """rns_ptp behind the link with the default topics: a ptp_goal sent on the ground reaches
+    the spacecraft, rns_ptp's status reaches the ground, each one delay later."""
+    ros, probe, clock = stack
+    link = _link(ros, uplink_delay=1.0, downlink_delay=1.0, release_period=0.005)
+    goals = probe.create_publisher(JointState, "/ground/ptp_goal", 10)
+    statuses = probe.create_publisher(DiagnosticArray, "/rns_ptp/status", 10)
+    up = _Arrivals(probe, JointState, "/ptp_goal", clock)
+    down = _Arrivals(probe, DiagnosticArray, "/ground/rns_ptp/status", clock)
+    steps = _Stepper(ros, link, clock)
+    ros.spin_until(
+        lambda: goals.get_subscription_count() > 0 and statuses.get_subscription_count() > 0,
+        20.0,
+    )
+    goal = JointState(name=["joint_2"], position=[0.3])
+    goal.header.stamp = stamp_from_seconds(clock.seconds)
+
+    def publish(t, k):
+        if k == 0:
+            goals.publish(goal)
+            statuses.publish(DiagnosticArray(header=goal.header))
+
+    steps.run(publish, START + 1.5)
+    ros.spin_until(lambda: up.items and down.items, 20.0)
+    assert [msg for _, msg in up.items] == [goal]
+    for arrivals in (up, down):
+        (arrived, msg), *_ = arrivals.items
+        stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+        assert 1.0 - 1e-6 <= arrived - stamp <= 1.0 + 0.005 + 2 * STEP + 1e-6
+
+
 def test_an_outage_loses_what_is_sent_in_it_and_the_status_says_so(stack):
     ros, probe, clock = stack
     link = _link(

@@ -47,6 +47,21 @@ def goal_settings(params: dict) -> GoalSettings:
     return GoalSettings(params["goal_gain"], speed, params["goal_tolerance"])
 
 
+def camera_goal_rotation(msg: PoseStamped, world_frame: str) -> np.ndarray:
+    """R_goal (world <- camera, (3, 3)) of a camera goal message: its orientation, in
+    ``world_frame`` (or an empty frame_id).
+
+    Raises:
+        InputError: another frame, or not a usable quaternion (:func:`goal_rotation`).
+    """
+    if msg.header.frame_id not in ("", world_frame):
+        raise InputError(
+            f"frame_id {msg.header.frame_id!r} is not the world frame {world_frame!r} (or empty)"
+        )
+    o = msg.pose.orientation
+    return goal_rotation([o.x, o.y, o.z, o.w])
+
+
 class OperatorRequests:
     """``~/pause`` and ``~/camera_goal`` of ``node`` (module docstring).
 
@@ -88,12 +103,7 @@ class OperatorRequests:
     def _on_goal(self, msg: PoseStamped) -> None:
         o = msg.pose.orientation
         try:
-            if msg.header.frame_id not in ("", self._world_frame):
-                raise InputError(
-                    f"frame_id {msg.header.frame_id!r} is not the world frame "
-                    f"{self._world_frame!r} (or empty)"
-                )
-            rotation = goal_rotation([o.x, o.y, o.z, o.w])
+            rotation = camera_goal_rotation(msg, self._world_frame)
         except InputError as exc:
             self.goal.cancel()
             self._goal_msg, self._reached_goal = None, False

@@ -49,7 +49,6 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
-from rns_ros.control.camera_goal import goal_rotation
 from rns_ros.control.teleop import twist_frame_ids, validate_twist
 from rns_ros.control.time_tags import TimeTags
 from rns_ros.core.commands import match_joint_state
@@ -62,7 +61,7 @@ from rns_ros.ground.predictor import (
 )
 from rns_ros.nodes import predictor_parameters
 from rns_ros.nodes.controller_parameters import controller_settings
-from rns_ros.nodes.controller_requests import goal_settings
+from rns_ros.nodes.controller_requests import camera_goal_rotation, goal_settings
 from rns_ros.nodes.parameters import declare_parameters, load_node_model
 from rns_ros.nodes.robot_io import StampPairs, base_pose
 from rns_ros.nodes.runner import run_node
@@ -159,14 +158,8 @@ class PredictorNode(Node):
     def _on_goal(self, msg: PoseStamped) -> None:
         """The operator's camera goal (world frame, stamped with its issue time; unstamped:
         now), predicted from its stamp + D as rns_controller turns to it once it arrives."""
-        o = msg.pose.orientation
         try:
-            if msg.header.frame_id not in ("", self._world_frame):
-                raise InputError(
-                    f"frame_id {msg.header.frame_id!r} is not the world frame "
-                    f"{self._world_frame!r} (or empty)"
-                )
-            rotation = goal_rotation([o.x, o.y, o.z, o.w])
+            rotation = camera_goal_rotation(msg, self._world_frame)
         except InputError as exc:
             self.get_logger().error(f"camera goal ignored: {exc}", throttle_duration_sec=1.0)
             return

@@ -51,6 +51,43 @@ def _settings() -> PredictorSettings:
     )
 
 
+class _OnBoard:
+    """The spacecraft's loop written out from its parts: the command gate on execution times,
+    the reactionless controller, the kinematic free-floating simulator (one step a period)."""
+
+    def __init__(self, robot: FreeFloatingModel, settings: PredictorSettings, q0) -> None:
+        self.robot = robot
+        self.gate = settings.gate.gate()
+        self.controller = ReactionlessController(robot, settings.controller)
+        self.state = FreeFloatingState.compute(robot, q0)
+        self.controller.reset(self.state)
+        self.base_0, self.camera_0 = self.state.base_rotation, self.state.camera.rotation
+        self.base = 0.0  # largest base deviation so far [deg]
+        self.simulator = FreeFloatingSimulator(
+            robot,
+            mode=SimulationMode.KINEMATIC,
+            dt=PERIOD,
+            initial_q=q0,
+            initial_momentum=np.zeros(6),
+        )
+
+    def step(self, t: float) -> np.ndarray:
+        """The period from ``t`` [s] with the commands the gate has; q (7 + n,) at t + T."""
+        out = self.gate.update(t, PERIOD)
+        if out.stopped:
+            theta_dot = np.zeros(self.robot.n)
+            self.controller.resync(self.state)
+        else:
+            omega = angular_velocity_in_world(self.state, out.angular, out.frame)
+            theta_dot = self.controller.step(self.state, omega).joint_velocity
+        self.simulator.set_reference(velocities=theta_dot)
+        self.simulator.step()
+        self.state = FreeFloatingState.compute(self.robot, self.simulator.q)
+        deviation = math.degrees(attitude_deviation(self.base_0, self.state.base_rotation))
+        self.base = max(self.base, deviation)
+        return self.simulator.q.copy()
+
+
 def _run(
     onboard: FreeFloatingModel,
     ground: FreeFloatingModel,
@@ -62,22 +99,11 @@ def _run(
     [deg], on-board camera turn [deg])."""
     q0 = onboard.configuration(onboard.initial_theta)
     tags = settings.time_tags
-    gate = settings.gate.gate()
-    controller = ReactionlessController(onboard, settings.controller)
-    state = FreeFloatingState.compute(onboard, q0)
-    controller.reset(state)
-    base_0, camera_0 = state.base_rotation, state.camera.rotation
-    simulator = FreeFloatingSimulator(
-        onboard,
-        mode=SimulationMode.KINEMATIC,
-        dt=PERIOD,
-        initial_q=q0,
-        initial_momentum=np.zeros(6),
-    )
+    board = _OnBoard(onboard, settings, q0)
     uplink = LinkChannel(LinkSettings(delay=1.2, jitter=0.6, seed=1))  # within D
     downlink = LinkChannel(LinkSettings(delay=DOWNLINK))
     arm = PredictedArm(ground, settings, q0, 0.0)
-    base, waiting = 0.0, []
+    waiting = []
     for k in range(round(_end(turn) / PERIOD)):
         t = k * PERIOD
         if k % 2 == 0:  # the operator, 50 Hz
@@ -92,23 +118,12 @@ def _run(
             waiting.append((tags.execution_time(stamp), angular))
         while waiting and waiting[0][0] <= t + 1e-9:
             acts, angular = waiting.pop(0)
-            gate.accept(TwistCommand(angular, np.zeros(3), TwistFrame.WORLD, acts))
-        out = gate.update(t, PERIOD)
-        if out.stopped:
-            theta_dot = np.zeros(onboard.n)
-            controller.resync(state)
-        else:
-            omega = angular_velocity_in_world(state, out.angular, out.frame)
-            theta_dot = controller.step(state, omega).joint_velocity
-        simulator.set_reference(velocities=theta_dot)
-        simulator.step()
-        state = FreeFloatingState.compute(onboard, simulator.q)
-        base = max(base, math.degrees(attitude_deviation(base_0, state.base_rotation)))
-        downlink.send(t + PERIOD, (t + PERIOD, simulator.q.copy()))
+            board.gate.accept(TwistCommand(angular, np.zeros(3), TwistFrame.WORLD, acts))
+        downlink.send(t + PERIOD, (t + PERIOD, board.step(t)))
         for item in downlink.deliver(t + PERIOD):
             arm.telemetry(*item.message)
-    turned = math.degrees(attitude_deviation(camera_0, state.camera.rotation))
-    return arm, base, turned
+    turned = math.degrees(attitude_deviation(board.camera_0, board.state.camera.rotation))
+    return arm, board.base, turned
 
 
 def _heavier_arm(robot: FreeFloatingModel, factor: float) -> FreeFloatingModel:
@@ -196,18 +211,11 @@ def _run_goal(robot: FreeFloatingModel, settings: PredictorSettings, goal, sent:
     every tick, as rns_controller does; telemetry DOWNLINK later. Returns (predictor, on-board
     camera rotation at the end, largest base deviation on board [deg])."""
     q0 = robot.configuration(robot.initial_theta)
-    gate = settings.gate.gate()
-    controller = ReactionlessController(robot, settings.controller)
-    state = FreeFloatingState.compute(robot, q0)
-    controller.reset(state)
-    base_0 = state.base_rotation
-    simulator = FreeFloatingSimulator(
-        robot, mode=SimulationMode.KINEMATIC, dt=PERIOD, initial_q=q0, initial_momentum=np.zeros(6)
-    )
+    board = _OnBoard(robot, settings, q0)
     uplink = LinkChannel(LinkSettings(delay=settings.time_tags.execution_delay))
     downlink = LinkChannel(LinkSettings(delay=DOWNLINK))
     arm = PredictedArm(robot, settings, q0, 0.0)
-    law, base = CameraGoal(settings.goal), 0.0
+    law = CameraGoal(settings.goal)
     for k in range(round(until / PERIOD)):
         t = k * PERIOD
         if abs(t - sent) < 1e-9:
@@ -217,23 +225,12 @@ def _run_goal(robot: FreeFloatingModel, settings: PredictorSettings, goal, sent:
         for item in uplink.deliver(t + 1e-9):
             law.set(item.message)
         if law.active:
-            step = law.step(state.camera.rotation)
-            gate.accept(TwistCommand(step.omega, np.zeros(3), TwistFrame.WORLD, t))
-        out = gate.update(t, PERIOD)
-        if out.stopped:
-            theta_dot = np.zeros(robot.n)
-            controller.resync(state)
-        else:
-            omega = angular_velocity_in_world(state, out.angular, out.frame)
-            theta_dot = controller.step(state, omega).joint_velocity
-        simulator.set_reference(velocities=theta_dot)
-        simulator.step()
-        state = FreeFloatingState.compute(robot, simulator.q)
-        base = max(base, math.degrees(attitude_deviation(base_0, state.base_rotation)))
-        downlink.send(t + PERIOD, (t + PERIOD, simulator.q.copy()))
+            step = law.step(board.state.camera.rotation)
+            board.gate.accept(TwistCommand(step.omega, np.zeros(3), TwistFrame.WORLD, t))
+        downlink.send(t + PERIOD, (t + PERIOD, board.step(t)))
         for item in downlink.deliver(t + PERIOD):
             arm.telemetry(*item.message)
-    return arm, state.camera.rotation, base
+    return arm, board.state.camera.rotation, board.base
 
 
 def test_a_camera_goal_is_predicted_as_the_spacecraft_turns_to_it(robot):

@@ -7,6 +7,11 @@ and handed on to the spacecraft's, ``<topic>`` in the node's namespace, after th
 serialized bytes, so every field (the header stamp: a command's issue time, a measurement's
 time) arrives as sent.
 
+With ``ground_domain_id`` (>= 0, not the node's own domain) the ground's side is on that ROS
+domain, as a ground station's network is apart from the spacecraft's: the node opens a second
+Context there (a node ``rns_link_ground``, spun in its own thread) and the ground's topics,
+still ``/<ground_namespace>/<topic>``, are that domain's.
+
 Times are the node clock's: simulated time under ``use_sim_time`` (a lockstep run delays by
 simulated seconds), else the wall clock. Due messages are handed on every ``release_period``.
 A message larger than ``max_message_size``, or one more than ``max_in_flight`` waiting in its
@@ -26,11 +31,17 @@ Publishes:
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import threading
 
+import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy._rclpy_pybind11 import RCLError
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
 
 from rns_ros.core.errors import ConfigError
 from rns_ros.ground.link import LinkChannel, LinkSettings, parse_outages, parse_topic
@@ -67,9 +78,12 @@ class _Direction:
         params: dict,
         outages: tuple[tuple[float, float], ...],
         ground: str,
+        ground_node: Node,
     ) -> None:
         self.name = name
         self._node = node
+        # the ground node's callbacks may run in its own thread (another domain)
+        self._lock = threading.Lock()
         self.channel = LinkChannel(
             LinkSettings(
                 delay=params[f"{name}_delay"],
@@ -90,20 +104,24 @@ class _Direction:
                 f"{name}_topics: at most {link_parameters.MAX_TOPICS} topics, got {len(topics)}"
             )
         self.routes = []
+        self.giver = node if name == "uplink" else ground_node
         for index, spec in enumerate(topics):
             topic, type_name = parse_topic(spec)
             cls = message_class(type_name)
             on_ground = f"/{ground}/{topic.lstrip('/')}"
             source, sink = (on_ground, topic) if name == "uplink" else (topic, on_ground)
-            node.create_subscription(
+            taker, giver = (ground_node, node) if name == "uplink" else (node, ground_node)
+            taker.create_subscription(
                 cls, source, lambda data, i=index: self._take(i, data), RECEIVE_QOS, raw=True
             )
-            self._publishers.append(node.create_publisher(cls, sink, SEND_QOS))
-            self.routes.append(
-                f"{node.resolve_topic_name(source)} -> {node.resolve_topic_name(sink)}"
-            )
+            self._publishers.append(giver.create_publisher(cls, sink, SEND_QOS))
+            self.routes.append(f"{_where(taker, source, node)} -> {_where(giver, sink, node)}")
 
     def _take(self, index: int, data: bytes) -> None:
+        with self._lock:
+            self._take_locked(index, data)
+
+    def _take_locked(self, index: int, data: bytes) -> None:
         if len(data) > self._max_size or self.channel.in_flight >= self._max_in_flight:
             self.refused += 1
             self._node.get_logger().warn(
@@ -116,11 +134,17 @@ class _Direction:
         self.channel.send(self._node.now_s(), (index, data), len(data))
 
     def release(self, now: float) -> None:
-        for item in self.channel.deliver(now):
+        with self._lock:
+            due = self.channel.deliver(now)
+        for item in due:
             index, data = item.message
             self._publishers[index].publish(data)
 
     def status(self) -> list[KeyValue]:
+        with self._lock:
+            return self._status()
+
+    def _status(self) -> list[KeyValue]:
         counts = self.channel.counts
         values = {
             "sent": counts.sent,
@@ -137,6 +161,47 @@ class _Direction:
         ]
 
 
+def _where(node: Node, topic: str, home: Node) -> str:
+    """``topic`` as ``node`` resolves it, with ``node``'s domain when it is not ``home``."""
+    name = node.resolve_topic_name(topic)
+    return name if node is home else f"{name} (domain {node.context.get_domain_id()})"
+
+
+class _GroundSide:
+    """The ground's side on its own ROS domain: a node in a Context of that domain, spun by
+    its own executor in a thread (a Context's nodes take its executor only)."""
+
+    def __init__(self, domain: int) -> None:
+        self.context = rclpy.Context()
+        # rclpy's signal handlers stay out: the node's runner owns Ctrl-C and SIGTERM
+        rclpy.init(
+            context=self.context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO
+        )
+        try:
+            self.node = Node(f"{link_parameters.NODE_NAME}_ground", context=self.context)
+            self.executor = SingleThreadedExecutor(context=self.context)
+            self.executor.add_node(self.node)
+        except BaseException:
+            self.context.try_shutdown()
+            raise
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, name="rns_link ground", daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        with contextlib.suppress(ExternalShutdownException, RCLError):
+            while not self._stop.is_set() and self.context.ok():
+                self.executor.spin_once(timeout_sec=0.05)
+
+    def close(self) -> None:
+        """Stop the thread, then the node, then the Context."""
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
 class LinkNode(Node):
     """ROS 2 wrapper of two :class:`LinkChannel` (module docstring)."""
 
@@ -147,12 +212,26 @@ class LinkNode(Node):
         if not ground:
             raise ConfigError("ground_namespace must not be empty (the two sides would be one)")
         self._outages = parse_outages(params["outages"])
-        self._directions = [
-            _Direction(self, name, params, self._outages, ground) for name in ("uplink", "downlink")
-        ]
+        domain = params["ground_domain_id"]
+        self._ground = None
+        if domain >= 0 and domain != self.context.get_domain_id():
+            self._ground = _GroundSide(domain)
+        ground_node = self if self._ground is None else self._ground.node
+        try:
+            self._directions = [
+                _Direction(self, name, params, self._outages, ground, ground_node)
+                for name in ("uplink", "downlink")
+            ]
+        except BaseException:
+            self._close_ground()
+            raise
         self._down = False
         self._status_pub = self.create_publisher(DiagnosticArray, "~/status", QoSProfile(depth=10))
         self.create_timer(params["release_period"], self._on_release)
+        if self._ground is not None:  # the ground's publishers are used from its thread only
+            self._ground.node.create_timer(
+                params["release_period"], lambda: self._release(self._ground.node, self.now_s())
+            )
         self.create_timer(params["status_period"], self._on_status)
         for direction in self._directions:
             settings = direction.channel.settings
@@ -161,15 +240,29 @@ class LinkNode(Node):
                 f"loss {settings.loss:g}): {', '.join(direction.routes) or 'no topics'}"
             )
 
+    def _close_ground(self) -> None:
+        if self._ground is not None:
+            self._ground.close()
+            self._ground = None
+
+    def destroy_node(self) -> None:
+        self._close_ground()
+        super().destroy_node()
+
     def now_s(self) -> float:
         """The node clock [s]."""
         return self.get_clock().now().nanoseconds * 1e-9
 
+    def _release(self, giver: Node, now: float) -> None:
+        """Hand on the messages due at ``now`` [s] of the directions ``giver`` publishes."""
+        for direction in self._directions:
+            if direction.giver is giver:
+                direction.release(now)
+
     def _on_release(self) -> None:
         now = self.now_s()
-        for direction in self._directions:
-            direction.release(now)
-        down = direction.channel.settings.down(now)
+        self._release(self, now)
+        down = self._directions[0].channel.settings.down(now)
         if down != self._down:
             self._down = down
             if down:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from rns_ros.cli import DDS_MAX_DOMAIN_ID
 from rns_ros.ground.link import MAX_DELAY_S
 from rns_ros.nodes.parameters import ParameterSpec, specs_by_name
 
@@ -49,6 +50,15 @@ PARAMETERS = (
         "ground_namespace",
         "ground",
         "The ground's side: /<ground_namespace>/<topic>; the spacecraft's: the node's namespace",
+    ),
+    ParameterSpec(
+        "ground_domain_id",
+        -1,
+        "The ground's side on this ROS domain (its own, as a ground station's network); "
+        "-1: the node's domain",
+        "[-]",
+        -1,
+        DDS_MAX_DOMAIN_ID,
     ),
     *_direction(
         "uplink",

@@ -4,6 +4,8 @@ oversized messages and bad parameters are refused with their reason."""
 
 from __future__ import annotations
 
+import os
+
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistStamped
@@ -13,6 +15,7 @@ from rns_testing import SimClock
 from sensor_msgs.msg import JointState
 
 from rns_ros.core.errors import ConfigError
+from rns_ros.harness import Harness
 from rns_ros.nodes.link import LinkNode
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 
@@ -185,6 +188,54 @@ def test_an_oversized_message_is_refused_and_counted(stack):
     ros.spin_until(lambda: statuses and statuses[-1].status[0].values, 20.0)
     values = {kv.key: kv.value for kv in statuses[-1].status[0].values}
     assert values["downlink refused"] == "1"
+
+
+def test_the_ground_side_on_its_own_domain(ros):
+    """ground_domain_id: the ground's topics are another ROS domain's (a ground station's
+    network): a twist published there reaches the spacecraft's domain, a joint state goes back,
+    and the ground topic on the spacecraft's own domain is not carried."""
+    domain = int(os.environ["ROS_DOMAIN_ID"])
+    ground_domain = domain ^ 1  # the neighbour in this test's block of domains
+    link = ros.add(
+        LinkNode(
+            context=ros.context,
+            parameter_overrides=[Parameter("ground_domain_id", value=ground_domain)],
+        )
+    )
+    probe = ros.probe()
+    onboard_twists = ros.record(TwistStamped, "/cmd_twist")
+    joints = probe.create_publisher(JointState, "/joint_states", 10)
+    stray = probe.create_publisher(TwistStamped, "/ground/cmd_twist", 10)
+    with Harness(ground_domain) as ground:
+        twists = ground.probe().create_publisher(TwistStamped, "/ground/cmd_twist", 10)
+        ground_joints = ground.record(JointState, "/ground/joint_states")
+        ground_probe = ground.probe("ground_probe")
+        assert ground.spin_until(
+            lambda: (
+                twists.get_subscription_count() > 0
+                and ground_probe.count_publishers("/ground/joint_states") > 0
+            ),
+            20.0,
+        )
+        assert ros.spin_until(
+            lambda: joints.get_subscription_count() > 0 and probe.count_publishers("/cmd_twist"),
+            20.0,
+        )
+        assert stray.get_subscription_count() == 0  # nothing takes it on this domain
+        sent, state = _twist(1.0, 7), JointState(name=["joint_1"], position=[0.25])
+        for _ in range(200):  # best effort both ways: until each got through once
+            twists.publish(sent)
+            stray.publish(_twist(2.0, 9))
+            joints.publish(state)
+            ground.spin_until(lambda: len(ground_joints.messages) > 0, 0.05)
+            if ros.spin_until(lambda: len(onboard_twists.messages) > 0, 0.05) and len(
+                ground_joints.messages
+            ):
+                break
+        assert onboard_twists.messages[0] == sent
+        assert all(msg == sent for msg in onboard_twists.messages)  # never the stray one
+        assert ground_joints.messages[0] == state
+    assert any("(domain" in route for d in link._directions for route in d.routes)
 
 
 @pytest.mark.parametrize(

@@ -68,6 +68,7 @@ from std_msgs.msg import Float64MultiArray
 from rns_ros.core import FreeFloatingState, load_model
 from rns_ros.nodes import controller_parameters, ptp_parameters
 from rns_ros.resources import default_model_config
+from rns_ros.runs.inspection import AWAIT_TIMEOUT
 
 REPO = Path(__file__).resolve().parents[1]
 BIN = REPO / ".venv" / "bin"
@@ -414,7 +415,12 @@ def clock_time(seconds: float):
 #: rns_simulator and rns_controller parameters of the lockstep pair (rns_demo's, with the
 #: controller's output_interface position).
 LOCKSTEP_SIM = {"publish_clock": True, "lockstep_period": PERIOD, "step_size": PERIOD}
-LOCKSTEP_CTRL = {"use_sim_time": True, "output_lead": PERIOD, "await_commands": True}
+LOCKSTEP_CTRL = {
+    "use_sim_time": True,
+    "output_lead": PERIOD,
+    "await_commands": True,
+    "await_timeout": AWAIT_TIMEOUT,
+}
 
 
 def run_clock(probe: Probe, groups: Groups, env: dict[str, str], method: str) -> dict:

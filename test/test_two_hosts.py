@@ -209,7 +209,7 @@ def _run(hosts: TwoHosts, scenario: Path, report_file: Path) -> dict:
             "controller", hosts.b, env_b, "rns_ros.nodes.controller",
             "--ros-args", "-p", "wrist_gain:=0.0", "-p", "use_sim_time:=true",
             "-p", f"output_lead:={PERIOD}", "-p", "await_commands:=true",
-            "-p", "clock_timeout:=30.0",
+            "-p", "clock_timeout:=30.0", "-p", "await_timeout:=5.0",
         )  # fmt: skip
         # The operator starts once the observer has the robot (its first recorded state
         # precedes the motion) and the controller publishes (it has the robot's joint states).

@@ -8,7 +8,7 @@ a known frame, its angular speed scaled to ``max_angular_speed``) and handed to 
 rejected one is handed to the gate (INVALID_COMMAND). With ``await_commands`` (use_sim_time,
 ``output_lead`` > 0, stamped twists) the operator is in the lockstep: twists wait for their
 stamps and each tick for the twist in force (:class:`rns_ros.control.ticks.AwaitedTicks`), given
-up after ``command_timeout`` of wall time without a sample.
+up after ``await_timeout`` of wall time without a sample.
 
 :class:`CommandTracking` integrates the commanded rates over their stamps
 (:class:`rns_ros.control.command_tracking.CommandedAttitude`) and gives each tick the correction
@@ -92,6 +92,7 @@ class OperatorTwists:
         self._reject, self._serve_ready = reject, serve_ready
         self.max_angular_speed = params["max_angular_speed"]  # [rad/s]; parameter changes
         self.command_timeout = params["command_timeout"]  # [s]; parameter changes
+        self.await_timeout = params["await_timeout"]  # [s] of wall time (await_commands)
         #: with execution_delay > 0: when a twist acts, which stamps are refused; else None
         self.time_tags = time_tags(params)
         if self.time_tags is not None and not params["twist_stamped"]:
@@ -112,7 +113,7 @@ class OperatorTwists:
         self.topic = node.resolve_topic_name("cmd_twist")
 
     def _awaited_ticks(self, params: dict, lead: float) -> AwaitedTicks[TwistFields] | None:
-        """await_commands: ticks wait for the twist in force, at most command_timeout of wall
+        """await_commands: ticks wait for the twist in force, at most await_timeout of wall
         time after the operator's last sample; None when not used."""
         if not params["await_commands"]:
             return None
@@ -121,7 +122,7 @@ class OperatorTwists:
                 "await_commands needs use_sim_time, output_lead > 0 and twist_stamped: not used"
             )
             return None
-        return awaited_commands(self._node, params["command_timeout"], self._on_await_timeout)
+        return awaited_commands(self._node, self.await_timeout, self._on_await_timeout)
 
     def _on_stamped(self, data: bytes) -> None:
         try:
@@ -181,14 +182,14 @@ class OperatorTwists:
             self.take(fields.angular, fields.linear, fields.frame_id, fields.stamp)
 
     def _on_await_timeout(self) -> None:
-        """await_commands: no twist came for command_timeout (wall clock) while ticks waited:
+        """await_commands: no twist came for await_timeout (wall clock) while ticks waited:
         the operator stalled or its stream ended on a motion; serve with the newest (the gate
         then stops a stale command as usual)."""
         waiting = self.awaited.oldest_waiting
         if waiting is not None:
             self._node.get_logger().warn(
                 f"no cmd_twist stamped at or after {waiting * 1e-9:.3f} s within "
-                f"command_timeout ({self.command_timeout} s wall clock): served "
+                f"await_timeout ({self.await_timeout} s wall clock): served "
                 "with the newest one",
                 throttle_duration_sec=1.0,
             )

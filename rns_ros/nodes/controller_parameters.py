@@ -209,6 +209,15 @@ PARAMETERS = (
         "With use_sim_time, output_lead and twist_stamped: twists act at their stamps, ticks wait "
         "for the twist in force",
     ),
+    ParameterSpec(
+        "await_timeout",
+        0.5,
+        "With await_commands: wall time a tick waits for the next twist after a moving one, "
+        "then served with the newest",
+        "[s]",
+        0.01,
+        60.0,
+    ),
     ParameterSpec("twist_stamped", True, "cmd_twist is TwistStamped (false: plain Twist)"),
     ParameterSpec(
         "execution_delay",

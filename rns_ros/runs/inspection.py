@@ -443,6 +443,7 @@ def _controller_parameters(
         # and serves each tick with the operator's sample in force then, published ahead
         # (OPERATOR_LEAD): a run's figures do not depend on when the operator got a core
         parameters["await_commands"] = True
+        parameters["await_timeout"] = AWAIT_TIMEOUT
     link = link_options(args)
     if link is not None:
         parameters.update(controller_parameters(link, OPERATOR_LEAD))
@@ -641,6 +642,11 @@ LOGGER_CLOSED_LINE = "recording closed"
 TASK_MARGIN = 0.2
 #: Zero twists the operator sends after the profile [s] (its default).
 OPERATOR_ZERO_DURATION = 1.0
+#: How long [s, wall clock] a lockstep tick waits for the operator's next sample after a moving
+#: one: a tick served without it runs a period off the operator's plan (and off rns_predictor's
+#: prediction), so a process starved on a loaded machine is waited for; 0.5 s (rns_controller's
+#: default) was given up on in a loaded run, 0.2 deg off the prediction.
+AWAIT_TIMEOUT = 5.0
 #: The operator's rate [Hz] (its default) and, in lockstep side by side, how far ahead [s] it
 #: publishes each sample (two samples), the first at the start condition (its start_delay).
 OPERATOR_RATE = 50.0

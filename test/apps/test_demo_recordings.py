@@ -57,6 +57,15 @@ def _decoded(path: Path, topic: str) -> list:
         return [msg for *_, msg in reader.iter_decoded_messages(topics=[topic])]
 
 
+def _header_seconds(msg) -> float:
+    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+
+
+def _is_moving(twist) -> bool:
+    w = twist.twist.angular
+    return (w.x, w.y, w.z) != (0.0, 0.0, 0.0)
+
+
 def _verified(path: Path) -> bool:
     """``rerun rrd verify`` (rerun's own CLI) accepts the file."""
     done = subprocess.run(
@@ -165,8 +174,12 @@ def test_ctrl_c_mid_task_keeps_the_figures_so_far_and_closes_both_recordings(tmp
     assert "rns_demo: dls: interrupted" in output
     assert "s into the task" in output
     assert any(line.startswith("dls *") for line in output.splitlines())  # its figures so far
-    joints = _decoded(mcap, "/joint_states")
-    assert len(joints) > 100
+    # the joint states so far: from before the task to past the moving twists the MCAP showed
+    joints = [_header_seconds(m) for m in _decoded(mcap, "/joint_states")]
+    moving = [_header_seconds(m) for m in _decoded(mcap, "/cmd_twist") if _is_moving(m)]
+    assert len(moving) >= 20
+    assert joints[0] < moving[0]
+    assert joints[-1] >= moving[19]
     assert _verified(tmp_path / "out" / "dls.rrd")
 
 

@@ -884,7 +884,7 @@ def test_with_await_commands_a_tick_waits_for_the_twist_in_force_and_twists_wait
     there is known, and with the newest twist stamped at or before it. A moving twist, or a
     rest before any motion (a profile's start), is waited on; without the wait the tick at 1.03
     would run on with the twist of 1.02 whenever the operator's sample came late."""
-    plant = _LockstepPlant(ros, await_commands=True, command_timeout=5.0)
+    plant = _LockstepPlant(ros, await_commands=True, command_timeout=5.0, await_timeout=5.0)
     plant.state(1.0)
     plant.clock(1.0)  # no operator yet: nothing to wait for (output for 1.01)
     plant.twist(1.0, 0.0)  # the profile starts at rest
@@ -905,11 +905,11 @@ def test_with_await_commands_a_tick_waits_for_the_twist_in_force_and_twists_wait
     assert plant.output_stamps() == [1.01, 1.02, 1.03, 1.04]
 
 
-def test_with_await_commands_a_stalled_operator_is_waited_for_command_timeout_at_most(ros):
+def test_with_await_commands_a_stalled_operator_is_waited_for_await_timeout_at_most(ros):
     """A moving twist whose successor never comes (the operator stalled or died mid-profile):
-    the tick waits command_timeout of wall time, then is served with the newest twist (the
+    the tick waits await_timeout of wall time, then is served with the newest twist (the
     gate then stops a stale command as usual). A stop after motion is not waited on."""
-    plant = _LockstepPlant(ros, await_commands=True, command_timeout=0.6)
+    plant = _LockstepPlant(ros, await_commands=True, await_timeout=0.6)
     plant.state(1.0)
     plant.twist(1.0, 0.5)
     plant.clock(1.0)
@@ -919,9 +919,9 @@ def test_with_await_commands_a_stalled_operator_is_waited_for_command_timeout_at
     plant.ros.spin_until(lambda: len(plant.references.messages) == 2, timeout=10.0)
     waited = time.monotonic() - start
     assert plant.output_stamps() == [1.01, 1.02]
-    # never before command_timeout; how much later depends on the machine (the give-up itself
+    # never before await_timeout; how much later depends on the machine (the give-up itself
     # on given instants: test/control/test_ticks.py)
-    print(f"the tick waited {waited:.3f} s (command_timeout 0.6 s)")
+    print(f"the tick waited {waited:.3f} s (await_timeout 0.6 s)")
     assert waited >= 0.6 - 0.05  # (the wait may start just before `start`)
     plant.twist(1.02, 0.0)  # a stop after motion: the stream may end here
     plant.state(1.02)

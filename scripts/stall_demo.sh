@@ -10,6 +10,7 @@
 #
 # AFTER counts from the process's start: on a quiet 2-core machine the roll runs from about
 # 4.3 s to 7.3 s after rns_controller appears; on a busy one it starts later.
+# STALL_DEMO_ROS_ARGS adds --ros-args for every node (e.g. "-p state_hold_age:=0.5").
 # Loopback only, on its own ROS domain (91 unless ROS_DOMAIN_ID is set).
 set -euo pipefail
 if [ $# -lt 3 ]; then
@@ -34,7 +35,7 @@ with open(sys.argv[1], "w") as stream:
 PY
 "$repo/.venv/bin/rns_demo" --scenario "$out/short.yaml" --summary "$out/summary.json" \
     --domain-id "$ROS_DOMAIN_ID" --output "$out" --mode dynamic --methods dls --wall-clock "$@" \
-    --ros-args -p state_timeout:=0.5 > "$out/demo.log" 2>&1 &
+    --ros-args -p state_timeout:=0.5 ${STALL_DEMO_ROS_ARGS:-} > "$out/demo.log" 2>&1 &
 demo=$!
 pid=
 for _ in $(seq 300); do

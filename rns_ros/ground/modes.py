@@ -179,58 +179,99 @@ class _Run:
         )
 
 
+class _MoveAndWait:
+    """Move and wait: a burst from the newest telemetry, then a round trip and ``settle``."""
+
+    def __init__(self, task: GroundTask) -> None:
+        self.task, self.bursts = task, 0
+        self._burst_end, self._next_plan, self._omega = -math.inf, 0.0, np.zeros(3)
+
+    def act(self, run: _Run, t: float, seen: tuple | None) -> None:
+        if seen is None:
+            return
+        task = self.task
+        if t >= self._next_plan:
+            error, _, q = seen
+            e = run.error_of(FreeFloatingState.compute(run.robot, q))
+            self._omega, self._burst_end = task.max_speed * e / error, t + error / task.max_speed
+            self._next_plan = self._burst_end + 2.0 * task.delay + task.settle
+            self.bursts += 1
+        if t < self._burst_end:
+            run.send(t, self._omega)
+        elif t < self._burst_end + task.settle:
+            run.send(t, np.zeros(3))  # a clean stop, not a stale command ramping down
+
+
+class _PredictiveRate:
+    """Predictive rate teleop: omega = k e_pred from the display, until e_pred is small."""
+
+    def __init__(self, task: GroundTask) -> None:
+        self.task, self.bursts = task, 1
+        self._stopped_at, self._streaming = math.inf, True
+
+    def act(self, run: _Run, t: float, seen: tuple | None) -> None:
+        task = self.task
+        if seen is None or not self._streaming:
+            return  # not the operator's tick, or done streaming
+        e = run.error_of(run.display.advance(t + task.delay))
+        error = float(np.linalg.norm(e))
+        if error <= task.stop_tolerance and self._stopped_at == math.inf:
+            self._stopped_at = t
+        if self._stopped_at < math.inf:
+            run.send(t, np.zeros(3))
+            self._streaming = t < self._stopped_at + task.settle
+        else:
+            run.send(t, min(task.gain * error, task.max_speed) * e / error)
+
+
+class _SupervisoryGoal:
+    """A supervisory goal: sent once; on board the goal law turns the camera from D on."""
+
+    def __init__(self, task: GroundTask) -> None:
+        self.task, self.bursts = task, 1
+        self._goal = CameraGoal(
+            GoalSettings(max_speed=task.max_speed, tolerance=task.stop_tolerance)
+        )
+        self._sent = False
+
+    def act(self, run: _Run, t: float, seen: tuple | None) -> None:
+        if not self._sent:
+            run.commands += 1  # the goal, on its way up
+            self._sent = True
+        if t < self.task.delay - 1e-9:
+            return
+        goal = self._goal
+        if not goal.active and goal.error is None:
+            goal.set(run.goal)
+        if goal.active:
+            step = goal.step(FreeFloatingState.compute(run.robot, run.board.q).camera.rotation)
+            # acts on board now: issued D earlier in the time-tag sense
+            run.board.command(t - self.task.delay, step.omega, TwistFrame.WORLD)
+
+
+#: The scripted operator of each mode.
+_OPERATORS = {
+    "move_and_wait": _MoveAndWait,
+    "predictive_rate": _PredictiveRate,
+    "supervisory_goal": _SupervisoryGoal,
+}
+
+
 def run_mode(robot: FreeFloatingModel, mode: str, task: GroundTask, q0) -> ModeResult:
     """``mode`` (one of :data:`MODES`) on ``task`` from configuration ``q0`` (7 + n,)."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {list(MODES)}, got {mode!r}")
     run = _Run(robot, task, np.asarray(q0, dtype=float))
+    operator = _OPERATORS[mode](task)
     every = round(task.operator_period / task.period)
-    steps = round(task.timeout / task.period)
-    goal = CameraGoal(GoalSettings(max_speed=task.max_speed, tolerance=task.stop_tolerance))
-    burst_end, next_plan, omega, bursts = -math.inf, 0.0, np.zeros(3), 0
-    streaming, stopped_at = True, math.inf
-    for k in range(steps):
+    for k in range(round(task.timeout / task.period)):
         t = k * task.period
-        operator_tick = k % every == 0
-        seen = run.seen(t) if operator_tick else None
+        seen = run.seen(t) if k % every == 0 else None  # what the operator sees on its tick
         if seen is not None and seen[0] <= task.tolerance and seen[1]:
-            return run.result(mode, t, max(bursts, 1))
-        if mode == "move_and_wait" and operator_tick:
-            if t >= next_plan:
-                error, _, q = seen
-                e = run.error_of(FreeFloatingState.compute(robot, q))
-                duration = error / task.max_speed
-                omega, burst_end = task.max_speed * e / error, t + duration
-                next_plan = burst_end + 2.0 * task.delay + task.settle
-                bursts += 1
-            if t < burst_end:
-                run.send(t, omega)
-            elif t < burst_end + task.settle:
-                run.send(t, np.zeros(3))  # a clean stop, not a stale command ramping down
-        elif mode == "predictive_rate" and operator_tick and streaming:
-            shown = run.display.advance(t + task.delay)
-            e = run.error_of(shown)
-            error = float(np.linalg.norm(e))
-            if error <= task.stop_tolerance and stopped_at == math.inf:
-                stopped_at = t
-            if stopped_at < math.inf:
-                run.send(t, np.zeros(3))
-                streaming = t < stopped_at + task.settle
-            else:
-                speed = min(task.gain * error, task.max_speed)
-                run.send(t, speed * e / error)
-        elif mode == "supervisory_goal":
-            if k == 0:
-                run.commands += 1  # the goal, on its way up
-            if t >= task.delay - 1e-9:
-                if not goal.active and goal.error is None:
-                    goal.set(run.goal)
-                if goal.active:
-                    step = goal.step(FreeFloatingState.compute(robot, run.board.q).camera.rotation)
-                    # acts on board now: issued D earlier in the time-tag sense
-                    run.board.command(t - task.delay, step.omega, TwistFrame.WORLD)
+            return run.result(mode, t, operator.bursts)
+        operator.act(run, t, seen)
         run.step(t)
-    return run.result(mode, math.nan, max(bursts, 1))
+    return run.result(mode, math.nan, operator.bursts)
 
 
 def compare(robot: FreeFloatingModel, task: GroundTask, q0) -> list[ModeResult]:

@@ -22,7 +22,7 @@ Subscribes:
     base_odom              nav_msgs/Odometry, the telemetry; paired with joint_states by stamp
 Publishes:
     predicted/joint_states sensor_msgs/JointState, one per predicted control period, stamped
-                           with the on-board time it stands for: up to the newest twist's
+                           with the on-board time it stands for: up to the newest twist or goal
                            stamp + D (twists come in stamp order; the later ones are not known
                            yet), or now + D once the operator has been silent for
                            ``command_timeout``
@@ -113,10 +113,10 @@ class PredictorNode(Node):
         self._early: list[Callable[[PredictedArm], None]] = []
         self._telemetry_pairs = StampPairs()  # joint_states and base_odom by stamp
         self.newest_telemetry = -math.inf  # [s]
-        self.newest_twist = -math.inf  # [s], the newest twist's stamp
+        self.newest_command = -math.inf  # [s], the newest twist or goal stamp
         self.twists = 0  # valid twists taken
         self.goals = 0  # valid camera goals taken
-        self._twist_received = -math.inf  # [s, monotonic] of the newest
+        self._command_received = -math.inf  # [s, monotonic] of the newest
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, INPUT_QOS)
         # goals are rare and must not be missed: reliable, as rns_controller takes them
         self.create_subscription(PoseStamped, "rns_controller/camera_goal", self._on_goal, 10)
@@ -170,8 +170,8 @@ class PredictorNode(Node):
     def _give(self, stamp: float, give: Callable[[PredictedArm], None]) -> None:
         """An operator input stamped ``stamp`` [s]: to the arm, or kept until the first
         telemetry (the newest 1000)."""
-        self.newest_twist = max(self.newest_twist, stamp)
-        self._twist_received = time.monotonic()
+        self.newest_command = max(self.newest_command, stamp)
+        self._command_received = time.monotonic()
         if self.arm is None:
             self._early.append(give)
             del self._early[:-1000]
@@ -227,7 +227,7 @@ class PredictorNode(Node):
 
     # --- outputs -------------------------------------------------------------------------------
     def _horizon(self) -> float:
-        """How far the prediction may go now [s, on-board time]: the newest twist's stamp + D,
+        """How far the prediction may go now [s, on-board time]: the newest command's stamp + D,
         since twists come in stamp order and the ones after it are not known yet (a prediction
         past it would be redone when they come); once the operator has been silent for
         ``command_timeout``, now + D (the gate then stops the arm as the spacecraft's does).
@@ -235,10 +235,10 @@ class PredictorNode(Node):
         taken while twists still wait in the queue."""
         delay = self._settings.time_tags.execution_delay
         now, timeout = self.now_s(), self._settings.gate.command_timeout
-        silent = now - self.newest_twist > timeout
-        if silent and time.monotonic() - self._twist_received > timeout:
+        silent = now - self.newest_command > timeout
+        if silent and time.monotonic() - self._command_received > timeout:
             return now + delay
-        return min(now, self.newest_twist) + delay
+        return min(now, self.newest_command) + delay
 
     def _on_tick(self) -> None:
         """Predict up to the horizon, publishing every predicted tick (at most

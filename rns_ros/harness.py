@@ -505,6 +505,7 @@ class ProcessStack:
         self.processes: list[subprocess.Popen] = []
         self._logs: dict[int, Any] = {}
         self._names: dict[int, str] = {}  # pid -> executable, kept after stop()
+        self._stop_timeouts: dict[int, float] = {}  # pid -> [s], where not stop()'s timeout
 
     def command(
         self,
@@ -533,9 +534,18 @@ class ProcessStack:
         arguments += list(ros_args)
         return [program, *extra, *(["--ros-args", *arguments] if arguments else [])]
 
-    def start(self, executable: str, parameters=None, **options) -> subprocess.Popen:
+    def start(
+        self,
+        executable: str,
+        parameters=None,
+        *,
+        stop_timeout: float | None = None,
+        **options,
+    ) -> subprocess.Popen:
         """Start one executable (arguments as :meth:`command`). Its output goes to a temporary
-        file (a pipe nobody reads would block a chatty process): see :meth:`output`."""
+        file (a pipe nobody reads would block a chatty process): see :meth:`output`.
+        ``stop_timeout`` [s]: how long :meth:`stop` waits for it after SIGINT (default: its
+        ``timeout``), e.g. for a recorder that writes out what it holds as it closes."""
         log = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - closed on exit
         process = subprocess.Popen(
             self.command(executable, parameters, **options),
@@ -546,6 +556,8 @@ class ProcessStack:
         )
         self._logs[process.pid] = log
         self._names[process.pid] = executable
+        if stop_timeout is not None:
+            self._stop_timeouts[process.pid] = stop_timeout
         self.processes.append(process)
         return process
 
@@ -592,17 +604,22 @@ class ProcessStack:
         return f": {'; '.join(reports)}" if reports else ""
 
     def stop(self, timeout: float = 5.0) -> list[int]:
-        """SIGINT every process, wait up to ``timeout`` [s] each, kill the rest; exit codes."""
+        """SIGINT every process, wait up to ``timeout`` [s] each (or its own ``stop_timeout``),
+        kill the rest (an ERROR line in its output, for :meth:`problems`); exit codes."""
         for process in self.processes:
             if process.poll() is None:
                 process.send_signal(signal.SIGINT)
         codes = []
         for process in self.processes:
+            patience = self._stop_timeouts.get(process.pid, timeout)
             try:
-                codes.append(process.wait(timeout=timeout))
+                codes.append(process.wait(timeout=patience))
             except subprocess.TimeoutExpired:
                 process.kill()
                 codes.append(process.wait())
+                log = self._logs[process.pid]
+                log.seek(0, os.SEEK_END)
+                log.write(f"[ERROR] still running {patience:g} s after SIGINT: killed\n")
         self.processes.clear()
         return codes
 

@@ -167,6 +167,29 @@ def test_process_warnings_are_collected_after_stop():
     assert "output_lead is for use_sim_time" in problems[0]
 
 
+def test_stop_waits_for_a_process_its_own_stop_timeout_and_names_one_it_killed(tmp_path):
+    """ProcessStack.stop(): SIGINT, then a process gets its own ``stop_timeout`` (a recorder
+    writing out what it holds as it closes: killed at the default, its file would lack its
+    footer); one still running past its timeout is killed and said so among the problems."""
+    closing = tmp_path / "closing"  # exits 1 s after SIGINT, as a recorder closing its file
+    closing.write_text(
+        "#!/bin/sh\ntrap 'sleep 1; exit 0' INT\n"
+        f": > {tmp_path}/ready.$$\nwhile :; do sleep 0.05; done\n"
+    )
+    closing.chmod(0o755)
+    with ProcessStack(DOMAIN, bin_dir=tmp_path) as processes:
+        processes.start("closing")
+        processes.start("closing", stop_timeout=60.0)
+        deadline = time.monotonic() + 60.0
+        while len(list(tmp_path.glob("ready.*"))) < 2:  # both have set their trap
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        codes = processes.stop(timeout=0.2)
+        problems = processes.problems()
+    assert codes == [-9, 0]
+    assert problems == ["closing: [ERROR] still running 0.2 s after SIGINT: killed"]
+
+
 def test_environment_stays_on_localhost():
     base = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET", "ROS_STATIC_PEERS": "192.0.2.7"}
     env = ros_environment(12, base=base)

@@ -16,8 +16,9 @@ axes. Keys (all validated; unknown keys are rejected by name):
                                         durations summing to ``duration``, fractions of the
                                         angle summing to 1 (a fraction may be 0: a pause)
     controller: {method, wrist_gain, epsilon, lambda2_max, sc_gain, max_angular_speed,
-                 tracking_gain}         (controller overrides, optional; rns_demo runs the
-                                        thesis' law, tracking_gain 0, unless set here)
+                 tracking_gain}         (controller overrides, optional; rns_demo in
+                                        lockstep runs the thesis' law, tracking_gain 0,
+                                        on the wall clock the node's default, unless set)
 
 The peak commanded speed is known before anything runs (:meth:`Scenario.peak_angular_speed`):
 |angle| * max s_dot, i.e. 15/8 |angle| / duration for quintic, |angle| / duration for constant,

@@ -38,10 +38,10 @@ from rns_ros.nodes.input_clock import InputClock, awaited_commands
 
 #: Inputs: only the newest message matters; best effort also matches reliable publishers.
 INPUT_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
-#: cmd_twist under await_commands: best effort (matches the operators' best-effort publishers),
-#: deep enough for the samples an operator publishes ahead (each is one instant of its
-#: profile: none may be overwritten before it is read).
-SCHEDULED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: Stamped cmd_twist: best effort (matches the operators' best-effort publishers), deep enough
+#: for 1 s of a 50 Hz stream: the samples an operator publishes ahead, or those that come while
+#: this node waits for a core (each is one instant of the commanded profile).
+STAMPED_COMMAND_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
 NS_PER_S = 1_000_000_000  # nanoseconds per second (message stamps)
 #: Time-tagged twists waiting for their execution time at most: 100 s of a 100 Hz stream (the
 #: oldest is dropped beyond, so a flood cannot grow the queue).
@@ -103,11 +103,12 @@ class OperatorTwists:
         self.pending: CommandSchedule[TwistFields] = CommandSchedule(MAX_PENDING)
         self.message_type = TwistStamped if params["twist_stamped"] else Twist
         if params["twist_stamped"]:
-            # awaited and time-tagged twists are each one sample: none may be overwritten
-            # before it is read (a link hands on several at once)
-            scheduled = self.awaited is not None or self.time_tags is not None
-            qos = SCHEDULED_COMMAND_QOS if scheduled else INPUT_QOS
-            node.create_subscription(TwistStamped, "cmd_twist", self._on_stamped, qos, raw=True)
+            # each stamped twist is one sample of what was commanded (the tracked integral,
+            # the awaited ticks, the time tags): none may be overwritten before it is read, not
+            # while this node stalls, nor when a link hands on several at once
+            node.create_subscription(
+                TwistStamped, "cmd_twist", self._on_stamped, STAMPED_COMMAND_QOS, raw=True
+            )
         else:
             node.create_subscription(Twist, "cmd_twist", self._on_twist, INPUT_QOS)
         self.topic = node.resolve_topic_name("cmd_twist")

@@ -432,9 +432,10 @@ def _controller_parameters(
     parameters = {
         "method": method.removesuffix(WHEELS_SUFFIX),
         "rate": args.rate,
-        # the thesis' law, open in the rate: the figures are the law's, not a feedback's
-        "tracking_gain": 0.0,
-        **({"use_sim_time": True} if sim_time else {}),
+        # in lockstep the thesis' law, open in the rate: the figures are the law's, not a
+        # feedback's; on the wall clock the controller as a lab runs it, whose camera catches
+        # up with the commanded turn after a stall (tracking_gain at its default)
+        **({"use_sim_time": True, "tracking_gain": 0.0} if sim_time else {}),
     }
     if sim_time and args.output_lead:
         # each output acts one period after its tick: the simulator computes that period

@@ -20,6 +20,12 @@ def _recording(args: argparse.Namespace, name: str) -> tuple[Path, str]:
     return args.output / f"{name}.rrd", "spawn" if args.viewer else "save"
 
 
+#: How long a stopping run waits for rns_rerun_logger [s]: it sends what it still holds (a
+#: flush of up to 10 s), writes the file's footer and reads the file back as it closes; killed
+#: sooner, the file lacks its footer.
+LOGGER_CLOSE_TIMEOUT = 60.0
+
+
 def output_folder(args: argparse.Namespace) -> Path:
     """``--output``, made if it went away since the start-up check (one line if it cannot be).
 
@@ -62,6 +68,7 @@ def start_logger(
             **({"ground_namespace": GROUND} if link_options(args) is not None else {}),
         },
         ros_args=ros_args or [],
+        stop_timeout=LOGGER_CLOSE_TIMEOUT,
     )
     return (str(path) if sink == "save" else None), process
 

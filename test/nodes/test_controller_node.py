@@ -1295,6 +1295,45 @@ def test_the_camera_ends_where_the_commanded_rate_adds_up_over_the_stamps(ros, s
     assert math.degrees(deviation) < 1e-3
 
 
+def test_twists_that_came_while_the_controller_stalled_each_count_in_the_commanded_turn(ros, stack):
+    """Stamped twists that arrive while the controller gets no core (here: while nothing spins)
+    wait in the subscription's queue, and each counts in the commanded attitude R_cmd over its
+    own stamp interval: R_cmd advances by the sum of omega_k dt_k, about world x. Keeping only
+    the newest would extend the last rate before the burst over the whole stall (0.021 rad off
+    here): a camera that, after a 0.33 s stall of rns_controller, caught up with that instead
+    ended 0.56 deg off a 30 deg roll."""
+    assert ros.spin_until(lambda: _latest_state(stack.streams) == "IDLE", timeout=10.0)
+    publisher = stack.probe.create_publisher(TwistStamped, "cmd_twist", 50)
+    attitude = stack.controller._tracking.attitude
+    start = stack.probe.get_clock().now().nanoseconds * 1e-9 - 0.4  # stamps in the past
+    dt, burst = 0.02, [0.05 + 0.01 * k for k in range(1, 16)]  # [s], [rad/s]
+
+    def send(stamp: float, rate: float) -> None:
+        msg = TwistStamped()
+        msg.header.frame_id = "world"
+        msg.header.stamp = stamp_from_seconds(stamp)
+        msg.twist.angular.x = rate
+        publisher.publish(msg)
+
+    def held_stamp() -> float | None:
+        return None if attitude._held is None else attitude._held.stamp
+
+    send(start, 0.05)
+    assert ros.spin_until(
+        lambda: attitude.active and held_stamp() == pytest.approx(start, abs=1e-6), timeout=10.0
+    )
+    before = attitude._committed.copy()
+    for k, rate in enumerate(burst, start=1):  # the controller does not run meanwhile
+        send(start + k * dt, rate)
+    last = start + len(burst) * dt
+    assert ros.spin_until(lambda: held_stamp() == pytest.approx(last, abs=1e-6), timeout=10.0)
+    turned = pin.log3(attitude._committed @ before.T)
+    expected = dt * (0.05 + sum(burst[:-1]))  # each rate until the next stamp; the last held
+    newest_only = 0.05 * len(burst) * dt
+    assert abs(expected - newest_only) > 0.02
+    np.testing.assert_allclose(turned, [expected, 0.0, 0.0], atol=1e-6)  # ns stamps
+
+
 def test_after_a_gap_in_the_state_stream_the_camera_catches_up_with_the_commands(ros):
     """joint_states stop for 1.2 s (> state_timeout) in the middle of a 3 s turn: the arm is
     held (STATE_GAP after state_hold_age 0.1 s, then STALE_STATE; zero velocity) while the

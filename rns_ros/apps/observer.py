@@ -13,8 +13,9 @@ the robot took to appear, and, with ``--scenario``, the run's figures
 and the last robot state. See docs/two_hosts.md.
 
 Without ``--scenario`` it records for ``--duration`` seconds after the robot appears. With it, it
-records until the operator has sent commands and then fallen silent for ``--idle`` seconds (the
-scripted operator stops publishing after its zeros), so start it before the operator.
+records until the operator has played the scenario's profile (by its twists' stamps) and then
+fallen silent for ``--idle`` seconds (the scripted operator stops publishing after its zeros), so
+start it before the operator.
 
 Prints ``rns_observer: robot seen ...`` once the first joint state arrives, and
 ``rns_observer: first <topic> ...`` for each topic's first message (``joint_references`` shows
@@ -137,7 +138,10 @@ def observe(args: argparse.Namespace) -> dict[str, Any]:
                 spin_until(lambda: False, min(deadline, time.monotonic() + args.duration))
                 done = True
             else:
-                done = spin_until(lambda: _commands_done(logs["commands"], args.idle), deadline)
+                duration = load_scenario(scenario_path(args.scenario)).duration
+                done = spin_until(
+                    lambda: _commands_done(logs["commands"], args.idle, duration), deadline
+                )
                 spin_until(lambda: False, time.monotonic() + args.settle)
         else:
             print(f"rns_observer: no joint_states within {args.wait:g} s", flush=True)
@@ -182,9 +186,21 @@ def _first(log: TopicLog, start: float, size) -> float | None:
     return None
 
 
-def _commands_done(commands: TopicLog, idle: float) -> bool:
-    """The operator has sent commands and then nothing for ``idle`` [s]."""
-    return len(commands) > 0 and time.monotonic() - commands.received[-1] > idle
+def _commands_done(commands: TopicLog, idle: float, duration: float) -> bool:
+    """The operator has played its profile and then sent nothing for ``idle`` [s] of wall time:
+    its newest twist is at rest and stamped at least ``duration`` [s] (the scenario's) after its
+    first moving one. The stamps count, not the arrivals: on simulated time a loaded machine
+    can hold the operator for longer than ``idle`` mid-profile (receipt times stand in for
+    unstamped twists)."""
+    if not len(commands) or time.monotonic() - commands.received[-1] <= idle:
+        return False
+    moving = [_norm(m.twist.angular) + _norm(m.twist.linear) > 0.0 for m in commands.messages]
+    if moving[-1] or not any(moving):
+        return False
+    stamps = commands.stamps()
+    if not np.all(stamps > 0.0):
+        stamps = np.asarray(commands.received, dtype=float)
+    return bool(stamps[-1] - stamps[moving.index(True)] >= duration)
 
 
 def _rate(times: np.ndarray) -> float:
@@ -262,7 +278,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--duration", type=float, default=3.0, help="record this long without --scenario [s]"
     )
     parser.add_argument(
-        "--idle", type=float, default=0.5, help="operator silent this long = done [s]"
+        "--idle",
+        type=float,
+        default=0.5,
+        help="the operator is done when silent this long after its profile's stamps [s]",
     )
     parser.add_argument("--settle", type=float, default=0.3, help="record this long after [s]")
     parser.add_argument("--timeout", type=float, default=120.0, help="overall limit [s]")

@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import pytest
+from geometry_msgs.msg import TwistStamped
 from sensor_msgs.msg import JointState
 
 from rns_ros.apps import observer
@@ -26,6 +27,35 @@ def test_unknown_scenario_is_reported_at_once(capsys):
 def test_bad_ros_arguments_are_reported(capsys):
     assert observer.main(["--wait", "1", "--ros-args", "-p", "no_value"]) == 2
     assert "invalid ROS arguments" in capsys.readouterr().err
+
+
+def _twists(rates: list[float], period: float = 0.02, age: float = 1.0) -> TopicLog:
+    """cmd_twist as the observer logs it: one twist per ``rates`` entry [rad/s] about x,
+    stamped ``period`` [s] apart on simulated time, the last received ``age`` [s] ago."""
+    log = TopicLog("/cmd_twist")
+    for k, rate in enumerate(rates):
+        msg = TwistStamped()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(
+            10_000_000_000 + k * 20_000_000, 10**9
+        )
+        msg.twist.angular.x = rate
+        log._append(msg)
+    log.received[:] = [value - age for value in log.received]
+    return log
+
+
+def test_the_operator_is_done_after_its_profile_by_the_stamps_not_after_any_silence():
+    """With --scenario the observer stops once the operator's twists have covered the profile
+    (stamps) and are at rest, then silent for --idle: a loaded machine that holds the operator
+    for a second mid-profile (lockstep) no longer ends the recording a third into a roll."""
+    duration = 3.0  # [s] of the scenario, 150 samples at 50 Hz
+    before, profile, after = [0.0], [0.17] * 150, [0.0] * 50
+    assert observer._commands_done(_twists(before + profile + after), 0.5, duration)
+    assert not observer._commands_done(_twists(before + profile[:50]), 0.5, duration)  # a stall
+    paused = before + profile[:50] + [0.0] * 25  # a segment at rest mid-profile
+    assert not observer._commands_done(_twists(paused), 0.5, duration)
+    assert not observer._commands_done(_twists(before + profile + after, age=0.1), 0.5, duration)
+    assert not observer._commands_done(_twists([0.0] * 300), 0.5, duration)  # never moved
 
 
 def test_remapped_robot_topics_are_watched(tmp_path):

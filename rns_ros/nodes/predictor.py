@@ -76,6 +76,12 @@ INPUT_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
 MAX_TICKS_PER_CALL = 50
 
 
+#: Ticks further apart than this many control periods (and MIN_STALL [s]) on the steady clock
+#: mean this process stalled.
+STALL_PERIODS = 5
+MIN_STALL = 0.05
+
+
 def _seconds(stamp) -> float:
     return stamp.sec + 1e-9 * stamp.nanosec
 
@@ -117,6 +123,9 @@ class PredictorNode(Node):
         self.twists = 0  # valid twists taken
         self.goals = 0  # valid camera goals taken
         self._command_received = -math.inf  # [s, monotonic] of the newest
+        # [s, monotonic]: this process's last tick, and its first tick after it stalled
+        self._last_tick = self._awake_since = -math.inf
+        self._stall = max(STALL_PERIODS * self._settings.controller.period, MIN_STALL)
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, INPUT_QOS)
         # goals are rare and must not be missed: reliable, as rns_controller takes them
         self.create_subscription(PoseStamped, "rns_controller/camera_goal", self._on_goal, 10)
@@ -231,18 +240,26 @@ class PredictorNode(Node):
         since twists come in stamp order and the ones after it are not known yet (a prediction
         past it would be redone when they come); once the operator has been silent for
         ``command_timeout``, now + D (the gate then stops the arm as the spacecraft's does).
-        Silent on the node clock and on the wall clock alike: on a busy machine /clock may be
-        taken while twists still wait in the queue."""
+        Silent on the node clock and on the wall clock alike, the wall clock counting from this
+        process's first tick after a stall of its own: on a busy machine /clock may be taken
+        while twists still wait in the queue."""
         delay = self._settings.time_tags.execution_delay
         now, timeout = self.now_s(), self._settings.gate.command_timeout
         silent = now - self.newest_command > timeout
-        if silent and time.monotonic() - self._command_received > timeout:
+        # wall silence counts while this process ran: after a stall of its own, the twists of
+        # meanwhile still wait in the queue (the executor runs this timer before them)
+        heard = max(self._command_received, self._awake_since)
+        if silent and time.monotonic() - heard > timeout:
             return now + delay
         return min(now, self.newest_command) + delay
 
     def _on_tick(self) -> None:
         """Predict up to the horizon, publishing every predicted tick (at most
         :data:`MAX_TICKS_PER_CALL` per call: the subscriptions are served in between)."""
+        steady = time.monotonic()
+        if steady - self._last_tick > self._stall:
+            self._awake_since = steady
+        self._last_tick = steady
         arm = self.arm
         if arm is None:
             return

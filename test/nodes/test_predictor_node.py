@@ -5,6 +5,7 @@ the commanded rate, and compares and re-anchors on the telemetry it is given."""
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pinocchio as pin
@@ -155,3 +156,27 @@ def test_telemetry_that_disagrees_is_reported_and_re_anchors(ros):
     assert float(values["max_prediction_error_camera_deg"]) == pytest.approx(
         math.degrees(RATE * 0.5 - RATE**2 / 2), abs=0.2
     )
+
+
+def test_after_a_stall_of_its_own_the_predictor_takes_the_waiting_twists_before_judging_silence(
+    ros,
+):
+    """The operator's twists stop coming for longer than command_timeout on both clocks, but
+    only because this process stalled (its ticks 1 s apart on the steady clock): the twists of
+    meanwhile still wait in the queue, so the prediction goes no further than the newest twist's
+    stamp + D until the process has run command_timeout without one (predicted on to now + D
+    with a stale command, a 1 s SIGSTOP of rns_predictor made a 1 deg prediction error)."""
+    ground = _Ground(ros)
+    node = ground.node
+    timeout = node._settings.gate.command_timeout
+    ground.telemetry(START, ground.theta)
+    ground.step_to(START + 0.5, RATE)
+    ground.ros.spin_until(lambda: node.arm is not None and node.twists > 0, 10.0)
+    newest = node.newest_command
+    ground.clock.advance(2.0)  # the rest of the run went on meanwhile
+    ground.ros.spin_until(lambda: node.now_s() >= newest + 2.0 - 1e-9, 10.0)
+    node._command_received = node._last_tick = time.monotonic() - 2 * timeout  # stalled
+    node._on_tick()
+    assert node._horizon() == pytest.approx(newest + DELAY)
+    node._awake_since -= 2 * timeout  # ran command_timeout since, no twist came: silent
+    assert node._horizon() == pytest.approx(node.now_s() + DELAY)

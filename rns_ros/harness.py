@@ -63,6 +63,8 @@ from rns_ros.resources import apply_loopback_profile
 
 #: DDS discovery never leaves the machine.
 DISCOVERY_RANGE = "LOCALHOST"
+#: Name of the node a :class:`Harness` records and publishes with (:meth:`Harness.probe`).
+PROBE_NODE = "rns_harness_probe"
 #: Executors a :class:`Harness` can spin its nodes on.
 EXECUTORS = ("single_threaded", "events")
 #: Recording QoS: best effort matches reliable and best-effort publishers alike; the history
@@ -344,7 +346,7 @@ class Harness:
         self.executor.remove_node(node)
         self.nodes.remove(node)
 
-    def probe(self, name: str = "rns_harness_probe") -> Node:
+    def probe(self, name: str = PROBE_NODE) -> Node:
         """A plain node of the harness for recording and publishing (created once per name)."""
         if self._probe is None or self._probe.get_name() != name:
             self._probe = self.add(rclpy.create_node(name, context=self.context))

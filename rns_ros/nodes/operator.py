@@ -115,6 +115,8 @@ class OperatorNode(Node):
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
         self._min_subscribers = params["min_subscribers"]
+        names = params["subscriber_nodes"].split(",")
+        self._subscriber_nodes = {name.strip() for name in names if name.strip()}
         self._start: Time | None = None
         self.finished = False
         # True while the last thing published was part of the profile (motion or its zeros).
@@ -167,13 +169,19 @@ class OperatorNode(Node):
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
     def _subscribed(self) -> bool:
-        """cmd_twist (motion_force: and force_setpoint) has ``min_subscribers`` subscribers."""
+        """cmd_twist (motion_force: and force_setpoint) has ``min_subscribers`` subscribers,
+        ``subscriber_nodes`` among those of cmd_twist (a stranger's subscriber, a plot or an
+        echo, is not the one the run waits for)."""
         publishers = (self._publisher, self._force_publisher)
-        return all(
+        counted = all(
             publisher.get_subscription_count() >= self._min_subscribers
             for publisher in publishers
             if publisher is not None
         )
+        if not counted or not self._subscriber_nodes:
+            return counted
+        infos = self.get_subscriptions_info_by_topic(self._publisher.topic_name)
+        return self._subscriber_nodes <= {info.node_name for info in infos}
 
     def _on_tick(self) -> None:
         self._play(self.get_clock().now())

@@ -58,6 +58,12 @@ PARAMETERS = (
         100,
     ),
     ParameterSpec(
+        "subscriber_nodes",
+        "",
+        "With wait_for_subscriber: also wait until these nodes (names, comma-separated) "
+        "subscribe to cmd_twist",
+    ),
+    ParameterSpec(
         "zero_duration",
         1.0,
         "Publish zero twists (motion_force: and the held force setpoint) this long after the "

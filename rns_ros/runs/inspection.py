@@ -29,7 +29,7 @@ from rns_ros.analysis.recorded_run import RunFigures, run_figures
 from rns_ros.cli import signals_held
 from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import FreeFloatingModel, RnsError, load_model
-from rns_ros.harness import Harness, ProcessStack, TopicLog, header_seconds
+from rns_ros.harness import PROBE_NODE, Harness, ProcessStack, TopicLog, header_seconds
 from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
@@ -483,7 +483,8 @@ def _start_nodes(
     if logger:
         listeners.append(NODE_NAMES["logger"])
     # the operator's twists go to the ground's topic: the link and the predictor take them
-    operator_subscribers = 2 if link is not None else len(listeners)
+    twist_takers = ["rns_link", "rns_predictor"] if link is not None else list(listeners)
+    operator_subscribers = len(twist_takers)
     if link is not None:
         listeners.append("rns_link")
     operator_timing = dict(timing)
@@ -506,8 +507,10 @@ def _start_nodes(
             "start_delay": 0.5,
             "zero_duration": OPERATOR_ZERO_DURATION,
             # the controller, this process and the logger: the first to be matched no
-            # longer starts the profile while the controller still misses it
+            # longer starts the profile while the controller still misses it; named, so a
+            # stranger's subscriber (a plot, an echo) does not stand in for one of them
             "min_subscribers": operator_subscribers + 1,
+            "subscriber_nodes": ",".join([*twist_takers, PROBE_NODE]),
             **operator_timing,
             **model,  # the operator's base and camera frame ids
         },

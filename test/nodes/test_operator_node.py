@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import rclpy
 import yaml
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.parameter import Parameter
@@ -256,6 +257,20 @@ def test_operator_waits_for_a_subscriber(ros):
     ros.spin_for(0.3)
     assert not operator.started
     ros.record(TwistStamped, "cmd_twist")
+    assert ros.spin_until(lambda: operator.started, timeout=5.0)
+
+
+def test_a_strangers_subscriber_does_not_start_the_profile_for_a_named_one(ros):
+    """subscriber_nodes: a plot or an echo on cmd_twist (here the probe node) is counted by
+    min_subscribers but is not the recorder the run waits for; the profile starts once the
+    named node subscribes (rns_demo names its controller, logger and recorder)."""
+    operator = ros.add(OperatorNode, {"start_delay": 0.0, "subscriber_nodes": "the_recorder"})
+    ros.record(TwistStamped, "cmd_twist")  # the stranger: rns_harness_probe
+    ros.spin_for(0.3)
+    assert not operator.started
+    ros.add(rclpy.create_node("the_recorder", context=ros.context)).create_subscription(
+        TwistStamped, "cmd_twist", lambda _msg: None, 1
+    )
     assert ros.spin_until(lambda: operator.started, timeout=5.0)
 
 

@@ -132,6 +132,11 @@ def check_scenarios(files: list[Path]) -> list[Scenario]:
     return scenarios
 
 
+#: A scenario's start within this of the model's, joint by joint [deg], is the model's (angles
+#: written to a file in degrees and read back differ by rounding).
+SAME_START_DEG = 1e-5
+
+
 def _degrees(theta: np.ndarray) -> str:
     return ", ".join(f"{value:.4g}" for value in np.rad2deg(theta))
 
@@ -162,7 +167,7 @@ def start_configuration(scenario: Scenario, robot: FreeFloatingModel) -> tuple[n
             if not low <= value <= high
         ]
         why = f"puts joints {outside} outside their limits"
-    elif np.allclose(theta, own, rtol=0.0, atol=1e-9):
+    elif np.allclose(np.rad2deg(theta - own), 0.0, rtol=0.0, atol=SAME_START_DEG):
         return theta, ""
     else:
         return theta, (

@@ -56,6 +56,23 @@ def test_the_thesis_scenario_on_the_thesis_arm_starts_where_both_say_without_a_n
     assert note == ""
 
 
+def test_a_scenario_that_writes_the_models_start_in_rounded_degrees_needs_no_note(tmp_path):
+    """The model's own start written to a scenario file to 6 decimals in degrees (as a user or
+    scripts/arm_table.py does) is the model's start, not another one to note; 0.01 deg off is
+    another start."""
+    model = six_joint_model(tmp_path, wrist_frame=None)
+    start = {"joint_1": 0.17669333, "joint_2": -0.36242853, "joint_4": -1.2}  # [rad]
+    model.write_text(model.read_text() + f"initial_joint_positions: {start}\n")
+    robot = load_model(model)
+    rounded = np.rad2deg(robot.initial_theta).round(6).tolist()
+    assert not np.allclose(np.deg2rad(rounded), robot.initial_theta, rtol=0.0, atol=1e-9)
+    _, note = start_configuration(load_scenario(_scenario(tmp_path, rounded)), robot)
+    assert note == ""
+    shifted = [rounded[0] + 0.01, *rounded[1:]]
+    _, note = start_configuration(load_scenario(_scenario(tmp_path, shifted)), robot)
+    assert note.startswith("starting from scenario")
+
+
 def test_a_scenario_for_another_arm_starts_from_the_models_configuration(tmp_path):
     robot = load_model(six_joint_model(tmp_path, wrist_frame=None))
     scenario = load_scenario(

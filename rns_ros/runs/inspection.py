@@ -35,6 +35,7 @@ from rns_ros.nodes.controller_status import TWISTS_RECEIVED
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.link import (
+    GROUND,
     GROUND_TWISTS,
     LinkOptions,
     acting,
@@ -252,7 +253,14 @@ def run_method(
             awaited = None
             if sim_time and args.output_lead:
                 awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
-            _wait_for_start(stack, processes, streams, listeners, method, awaited=awaited)
+            # behind a link, the predictor too: started from its first telemetry, it knows
+            # nothing of a motion already under way
+            predicting = None
+            if link is not None:
+                predicting = stack.record(DiagnosticArray, f"/{GROUND}/rns_predictor/status")
+            _wait_for_start(
+                stack, processes, streams, listeners, method, awaited=awaited, predicting=predicting
+            )
             task, end, task_wall, limited = _run_task(
                 stack, processes, streams, scenario, args, method, link
             )
@@ -734,6 +742,13 @@ def _has_twist(status: TopicLog | None) -> bool:
     return int(latest_status_values(status).get(TWISTS_RECEIVED, "0")) > 0
 
 
+def _predicts(status: TopicLog | None) -> bool:
+    """rns_predictor's newest status (``status``) says it predicts; True without a predictor."""
+    if status is None:
+        return True
+    return bool(status.messages) and status.messages[-1].status[0].message == "PREDICTING"
+
+
 def _wait_for_start(
     stack: Harness,
     processes: ProcessStack,
@@ -742,12 +757,14 @@ def _wait_for_start(
     method: str,
     timeout: float = 60.0,
     awaited: TopicLog | None = None,
+    predicting: TopicLog | None = None,
 ) -> None:
     """Until this process records the robot state and ``listeners`` subscribe to it; with
     ``awaited`` (rns_controller's status, when it awaits the operator's twists), until the
     controller has received a twist: from then on its every tick waits for the twist in force,
     so the profile (released by this process's cmd_twist subscription, made after this) cannot
-    start on ticks served without it."""
+    start on ticks served without it; with ``predicting`` (rns_predictor's status), until the
+    predictor has its first telemetry and predicts."""
     probe = stack.probe()
     state_streams = ("joints", "odom", "momentum")
 
@@ -759,6 +776,7 @@ def _wait_for_start(
             *(f"no {streams[name].topic} recorded" for name in state_streams if not streams[name]),
             *(f"{name} not subscribed to base_odom" for name in listeners if name not in nodes),
             *(["rns_controller has received no cmd_twist"] if not _has_twist(awaited) else []),
+            *(["rns_predictor has no telemetry yet"] if not _predicts(predicting) else []),
         ]
 
     if not stack.spin_until(lambda: processes.exited() or not missing(), timeout=timeout):

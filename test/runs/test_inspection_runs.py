@@ -15,6 +15,7 @@ from rns_ros.core import RnsError
 from rns_ros.harness import TopicLog
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 from rns_ros.resources import scenario_path
+from rns_ros.runs import inspection
 from rns_ros.runs.inspection import profile_start
 
 
@@ -140,3 +141,21 @@ def test_the_joint_limit_watch_takes_the_first_stop_whenever_it_looks():
     assert watch.at == pytest.approx(1.0)
     log._append_raw(serialize_message(_status("JOINT_LIMIT", 2.0)))
     assert watch.at == pytest.approx(1.0)
+
+
+def test_behind_a_link_the_task_waits_for_a_predicting_predictor():
+    """rns_predictor starts from its first telemetry and knows nothing of a motion already
+    under way (a predictor that got its first telemetry mid-roll, late on a busy machine,
+    re-anchored every second: 13.7 deg of prediction error): the task waits until its newest
+    status says PREDICTING; without a link there is nothing to wait for."""
+
+    def status(message: str) -> DiagnosticArray:
+        return DiagnosticArray(status=[DiagnosticStatus(message=message)])
+
+    log = TopicLog("/ground/rns_predictor/status")
+    assert inspection._predicts(None)
+    assert not inspection._predicts(log)
+    log._append(status("WAITING_FOR_TELEMETRY"))
+    assert not inspection._predicts(log)
+    log._append(status("PREDICTING"))
+    assert inspection._predicts(log)

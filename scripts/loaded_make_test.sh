@@ -25,7 +25,9 @@ for _ in 1 2; do
     setsid timeout 10000 sh -c 'while :; do :; done' &
     groups+=("$!")
 done
-ROS_DOMAIN_ID=57 setsid timeout 10000 sh -c \
+# the second stack runs this checkout's code (PYTHONPATH): a worktree may share another
+# checkout's editable .venv
+PYTHONPATH="$repo" ROS_DOMAIN_ID=57 setsid timeout 10000 sh -c \
     "while :; do '$demo' --no-record --real-time-factor 0 --domain-id 57 >/dev/null 2>&1; sleep 0.2; done" &
 groups+=("$!")
 failed=0

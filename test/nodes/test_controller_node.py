@@ -593,8 +593,8 @@ def test_state_loss_stops_the_arm_and_a_fresh_state_resumes_with_a_ramp(ros):
 def _stall_executor(ros, streams, seconds: float) -> int:
     """The arm turning at 0.2 rad/s about world x, this process's executor (controller and
     recorders) then stops for ``seconds`` of wall time while the simulator's loop thread runs on,
-    as when a loaded machine gives the controller no core; returns the index of the first
-    output published after the stall."""
+    as when a loaded machine gives the controller no core; returns how many outputs were
+    recorded before the stall (outputs in flight then are recorded after it)."""
     assert ros.spin_until(lambda: _latest_state(streams) == "OK", timeout=10.0)
     ros.spin_for(0.3)
     count = len(streams["references"].messages)
@@ -612,10 +612,14 @@ def test_a_stall_of_the_controller_moves_the_reference_on_by_the_held_rate(ros):
     stack = _stack(ros)
     operator = Operator(stack.probe)
     operator.angular, operator.active = (0.2, 0.0, 0.0), True
-    after = _stall_executor(ros, stack.streams, 0.08)
+    count = _stall_executor(ros, stack.streams, 0.08)
     outputs = stack.streams["references"].messages
+    # the stall: the widest stamp gap around it (outputs still in flight as it began are
+    # recorded after it)
+    stamps = [_seconds(m.header.stamp) for m in outputs]
+    after = max(range(max(count - 10, 1), count + 20), key=lambda i: stamps[i] - stamps[i - 1])
     before = outputs[after - 1]
-    gap = _seconds(outputs[after].header.stamp) - _seconds(before.header.stamp)
+    gap = stamps[after] - stamps[after - 1]
     assert gap >= 0.07  # the stall, on the node clock
     theta_dot = np.array(before.points[0].velocities)
     moved = np.array(outputs[after].points[0].positions) - np.array(before.points[0].positions)

@@ -63,6 +63,12 @@ MAX_HOLD_FLOOR = 0.05
 HOLD_SPEED_FLOOR = 0.1
 
 
+def max_hold(period: float) -> float:
+    """max(MAX_HOLD_PERIODS T, MAX_HOLD_FLOOR) [s] for the control period T = ``period`` [s]:
+    ticks further apart than this are no late tick but a stall (or a clock jump)."""
+    return max(MAX_HOLD_PERIODS * period, MAX_HOLD_FLOOR)
+
+
 class HoldCorrection(Choice):
     """Where the law is evaluated for an output held over one control period."""
 
@@ -201,8 +207,8 @@ class ReactionlessController:
 
     @property
     def max_hold(self) -> float:
-        """The longest hold [s] :meth:`end_hold` takes: max(MAX_HOLD_PERIODS T, MAX_HOLD_FLOOR)."""
-        return max(MAX_HOLD_PERIODS * self.settings.period, MAX_HOLD_FLOOR)
+        """The longest hold [s] :meth:`end_hold` takes: :func:`max_hold` of the period T."""
+        return max_hold(self.settings.period)
 
     def end_hold(self, elapsed: float, limit: float | None = None) -> bool:
         """End the hold in progress after ``elapsed`` [s], which may differ from the period T.

@@ -49,6 +49,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
+from rns_ros.control.controller import max_hold
 from rns_ros.control.teleop import twist_frame_ids, validate_twist
 from rns_ros.control.time_tags import TimeTags
 from rns_ros.core.commands import match_joint_state
@@ -74,12 +75,6 @@ INPUT_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: Predicted ticks per timer call at most: a prediction that fell behind catches up over
 #: several calls, and the twists and telemetry are taken in between.
 MAX_TICKS_PER_CALL = 50
-
-
-#: Ticks further apart than this many control periods (and MIN_STALL [s]) on the steady clock
-#: mean this process stalled.
-STALL_PERIODS = 5
-MIN_STALL = 0.05
 
 
 def _seconds(stamp) -> float:
@@ -125,7 +120,8 @@ class PredictorNode(Node):
         self._command_received = -math.inf  # [s, monotonic] of the newest
         # [s, monotonic]: this process's last tick, and its first tick after it stalled
         self._last_tick = self._awake_since = -math.inf
-        self._stall = max(STALL_PERIODS * self._settings.controller.period, MIN_STALL)
+        # ticks further apart on the steady clock: this process stalled (as rns_controller's)
+        self._stall = max_hold(self._settings.controller.period)
         self.create_subscription(TwistStamped, "cmd_twist", self._on_twist, INPUT_QOS)
         # goals are rare and must not be missed: reliable, as rns_controller takes them
         self.create_subscription(PoseStamped, "rns_controller/camera_goal", self._on_goal, 10)

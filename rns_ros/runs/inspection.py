@@ -661,8 +661,8 @@ TASK_MARGIN = 0.2
 OPERATOR_ZERO_DURATION = 1.0
 #: How long [s, wall clock] a lockstep tick waits for the operator's next sample after a moving
 #: one: a tick served without it runs a period off the operator's plan (and off rns_predictor's
-#: prediction), so a process starved on a loaded machine is waited for; 0.5 s (rns_controller's
-#: default) was given up on in a loaded run, 0.2 deg off the prediction.
+#: prediction), so a process starved on a loaded machine for longer than rns_controller's
+#: default (0.5 s) is waited for.
 AWAIT_TIMEOUT = 5.0
 #: The operator's rate [Hz] (its default) and, in lockstep side by side, how far ahead [s] it
 #: publishes each sample (two samples), the first at the start condition (its start_delay).

@@ -30,8 +30,12 @@ from rns_ros.cli import signals_held
 from rns_ros.control.scenario import Scenario, check_speed_limit, load_scenario
 from rns_ros.core import FreeFloatingModel, RnsError, load_model
 from rns_ros.harness import PROBE_NODE, Harness, ProcessStack, TopicLog, header_seconds
+from rns_ros.nodes.controller_parameters import NODE_NAME as CONTROLLER_NODE
 from rns_ros.nodes.controller_parameters import SPECS as CONTROLLER_SPECS
 from rns_ros.nodes.controller_status import TWISTS_RECEIVED
+from rns_ros.nodes.link_parameters import NODE_NAME as LINK_NODE
+from rns_ros.nodes.predictor_parameters import NODE_NAME as PREDICTOR_NODE
+from rns_ros.nodes.rerun_logger_parameters import NODE_NAME as LOGGER_NODE
 from rns_ros.resources import default_model_config
 from rns_ros.runs.clock import lockstep
 from rns_ros.runs.link import (
@@ -252,12 +256,12 @@ def run_method(
             # this subscription among its min_subscribers
             awaited = None
             if sim_time and args.output_lead:
-                awaited = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status")
+                awaited = stack.record(DiagnosticArray, f"{CONTROLLER_NODE}/status")
             # behind a link, the predictor too: started from its first telemetry, it knows
             # nothing of a motion already under way
             predicting = None
             if link is not None:
-                predicting = stack.record(DiagnosticArray, f"/{GROUND}/rns_predictor/status")
+                predicting = stack.record(DiagnosticArray, f"/{GROUND}/{PREDICTOR_NODE}/status")
             _wait_for_start(
                 stack, processes, streams, listeners, method, awaited=awaited, predicting=predicting
             )
@@ -492,14 +496,14 @@ def _start_nodes(
     # competed for the cores with a lockstep run stepping the idle robot as fast as it can:
     # ~2 s of each run's wall time); its profile still waits for this process's cmd_twist
     # subscription, made once the robot state is recorded
-    listeners = [NODE_NAMES["controller"]]
+    listeners = [CONTROLLER_NODE]
     if logger:
-        listeners.append(NODE_NAMES["logger"])
+        listeners.append(LOGGER_NODE)
     # the operator's twists go to the ground's topic: the link and the predictor take them
-    twist_takers = ["rns_link", "rns_predictor"] if link is not None else list(listeners)
+    twist_takers = [LINK_NODE, PREDICTOR_NODE] if link is not None else list(listeners)
     operator_subscribers = len(twist_takers)
     if link is not None:
-        listeners.append("rns_link")
+        listeners.append(LINK_NODE)
     operator_timing = dict(timing)
     if sim_time and args.output_lead:
         # the profile on the controller's period grid: the same samples in each tick, however
@@ -574,7 +578,7 @@ def _run_task(
     commands = streams["commands"] = stack.record(TwistStamped, topic, raw=True)
     # serialized: only the newest is read (JointLimitWatch); deserializing each status in the
     # executor would cost it the time it needs to record every cmd_twist
-    status = stack.record(DiagnosticArray, f"{NODE_NAMES['controller']}/status", raw=True)
+    status = stack.record(DiagnosticArray, f"{CONTROLLER_NODE}/status", raw=True)
     shift = 0.0 if link is None else link.execution_delay  # when a twist acts on board
     budget = 60.0 + (scenario.duration + 2.0 + 2 * shift) / max(args.real_time_factor, 1.0)
     if not stack.spin_until(lambda: _moving(commands.latest()), timeout=budget):
@@ -729,10 +733,6 @@ def profile_start(commands: TopicLog, scenario: Scenario, rate: float) -> float:
         if np.any(scenario.angular_velocity(k / rate) != 0.0):
             return header_seconds(first) - k / rate
     raise RnsError(f"scenario {scenario.name!r} never moves at {rate:g} Hz")
-
-
-#: Node names of the processes whose subscriptions the demo waits for.
-NODE_NAMES = {"controller": "rns_controller", "logger": "rns_rerun_logger"}
 
 
 def _has_twist(status: TopicLog | None) -> bool:

@@ -41,6 +41,8 @@ setpoint) while the arm stops; releasing the push is the controller's business (
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.duration import Duration
@@ -56,7 +58,7 @@ from rns_ros.control.contact_scenarios import (
 )
 from rns_ros.control.controller import TwistFrame
 from rns_ros.control.scenario import Scenario
-from rns_ros.core.errors import InputError
+from rns_ros.core.errors import ConfigError, InputError
 from rns_ros.nodes import operator_parameters
 from rns_ros.nodes.cdr import (
     SerializedTemplate,
@@ -76,6 +78,25 @@ FINAL_ZERO_GAP = 0.02
 #: Under use_sim_time: missed sample instants played at once after the process waited for a core
 #: (the ten of a depth-10 /clock queue before; farther behind, the profile skips ahead).
 OPERATOR_CATCH_UP = 10
+
+
+#: How often a waiting operator says what it waits for [s] (wall time).
+WAIT_REPORT_PERIOD = 5.0
+#: A ROS node's base name: letters, digits and underscores, not starting with a digit.
+NODE_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def node_names(text: str) -> frozenset[str]:
+    """The node base names of ``subscriber_nodes`` (comma-separated, blanks ignored); a
+    :class:`ConfigError` names one that no ROS node can have."""
+    names = frozenset(name.strip() for name in text.split(",") if name.strip())
+    for name in sorted(names):
+        if not NODE_NAME_PATTERN.fullmatch(name):
+            raise ConfigError(
+                f"subscriber_nodes: {name!r} is no node name (letters, digits and underscores, "
+                "not starting with a digit; the base name, without a namespace)"
+            )
+    return names
 
 
 class OperatorNode(Node):
@@ -115,8 +136,7 @@ class OperatorNode(Node):
         self._zero_duration = params["zero_duration"]
         self._wait = params["wait_for_subscriber"]
         self._min_subscribers = params["min_subscribers"]
-        names = params["subscriber_nodes"].split(",")
-        self._subscriber_nodes = {name.strip() for name in names if name.strip()}
+        self._subscriber_nodes = node_names(params["subscriber_nodes"])
         self._start: Time | None = None
         self.finished = False
         # True while the last thing published was part of the profile (motion or its zeros).
@@ -168,6 +188,18 @@ class OperatorNode(Node):
             return 0.0
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
+    def _report_waiting(self) -> None:
+        """Every WAIT_REPORT_PERIOD [s] of wall time while waiting: what the profile waits for
+        (a misspelt name in ``subscriber_nodes`` would otherwise wait in silence)."""
+        missing = self.missing_subscriber_nodes()
+        count = self._publisher.get_subscription_count()
+        self.get_logger().info(
+            f"waiting for subscribers of {self._publisher.topic_name}: {count} of "
+            f"min_subscribers {self._min_subscribers}"
+            + (f"; not yet subscribed: {', '.join(missing)}" if missing else ""),
+            throttle_duration_sec=WAIT_REPORT_PERIOD,
+        )
+
     def _subscribed(self) -> bool:
         """cmd_twist (motion_force: and force_setpoint) has ``min_subscribers`` subscribers,
         ``subscriber_nodes`` among those of cmd_twist (a stranger's subscriber, a plot or an
@@ -178,10 +210,14 @@ class OperatorNode(Node):
             for publisher in publishers
             if publisher is not None
         )
-        if not counted or not self._subscriber_nodes:
-            return counted
+        return counted and not self.missing_subscriber_nodes()
+
+    def missing_subscriber_nodes(self) -> list[str]:
+        """The ``subscriber_nodes`` not (yet) subscribed to cmd_twist, sorted."""
+        if not self._subscriber_nodes:
+            return []
         infos = self.get_subscriptions_info_by_topic(self._publisher.topic_name)
-        return self._subscriber_nodes <= {info.node_name for info in infos}
+        return sorted(self._subscriber_nodes - {info.node_name for info in infos})
 
     def _on_tick(self) -> None:
         self._play(self.get_clock().now())
@@ -191,6 +227,7 @@ class OperatorNode(Node):
         that instant."""
         if self._start is None:
             if self._wait and not self._subscribed():
+                self._report_waiting()
                 if self._lead:
                     # zeros from the first tick on: a controller awaiting the stream waits on
                     # every tick from the first sample it holds, long before the profile starts

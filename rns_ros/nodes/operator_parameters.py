@@ -60,7 +60,7 @@ PARAMETERS = (
     ParameterSpec(
         "subscriber_nodes",
         "",
-        "With wait_for_subscriber: also wait until these nodes (names, comma-separated) "
+        "With wait_for_subscriber: also wait until these nodes (base names, comma-separated) "
         "subscribe to cmd_twist",
     ),
     ParameterSpec(

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 import rclpy
@@ -15,7 +17,7 @@ from rns_ros.control.contact_scenarios import load_motion_force_scenario, operat
 from rns_ros.control.scenario import load_scenario
 from rns_ros.core import ConfigError
 from rns_ros.harness import ProcessStack
-from rns_ros.nodes.operator import FINAL_ZEROS, OperatorNode
+from rns_ros.nodes.operator import FINAL_ZEROS, OperatorNode, node_names
 from rns_ros.nodes.sim_clock import stamp_from_seconds
 
 SCENARIO = {
@@ -268,10 +270,23 @@ def test_a_strangers_subscriber_does_not_start_the_profile_for_a_named_one(ros):
     ros.record(TwistStamped, "cmd_twist")  # the stranger: rns_harness_probe
     ros.spin_for(0.3)
     assert not operator.started
+    assert operator.missing_subscriber_nodes() == ["the_recorder"]
     ros.add(rclpy.create_node("the_recorder", context=ros.context)).create_subscription(
         TwistStamped, "cmd_twist", lambda _msg: None, 1
     )
     assert ros.spin_until(lambda: operator.started, timeout=5.0)
+    assert operator.missing_subscriber_nodes() == []
+
+
+@pytest.mark.parametrize("bad", ["/ns/the_recorder", "2nd_recorder", "the recorder"])
+def test_a_subscriber_node_no_node_can_be_named_is_refused_by_name(ros, bad):
+    """subscriber_nodes takes node base names: one no node can have would wait forever."""
+    with pytest.raises(ConfigError, match=f"subscriber_nodes: '{re.escape(bad)}' is no node name"):
+        OperatorNode(
+            context=ros.context,
+            parameter_overrides=[Parameter("subscriber_nodes", value=f"rns_controller,{bad}")],
+        )
+    assert node_names(" rns_controller, ,the_recorder ") == {"rns_controller", "the_recorder"}
 
 
 def test_unknown_scenario_is_a_clear_error(ros):

@@ -5,7 +5,9 @@ Each topic gets a publisher with the QoS rosbag2's player restores from the reco
 history keep_last 10). Message ``k`` is published ``(t_k - t_0) / rate`` after playback
 started, ``t`` being its receipt time in the bag; with a clock rate, ``/clock`` carries the
 bag's time (``t_0`` plus the elapsed wall time times ``rate``) that often, as
-``ros2 bag play --clock`` does.
+``ros2 bag play --clock`` does, but never past the next message to publish: a player that runs
+late (a busy machine) holds the clock at that message's time until it is out, so no message
+arrives older than a clock already sent, and the last clock is at most the bag's end.
 """
 
 from __future__ import annotations
@@ -109,7 +111,7 @@ class Player:
             while True:
                 now = time.monotonic()
                 if self.clock is not None and now >= next_clock:
-                    self._tick(start_bag, start_wall, now)
+                    self._tick(start_bag, start_wall, now, message.log_time)
                     # a late tick is not made up for: no burst of clocks after a stall
                     next_clock += self.clock_period
                     if next_clock <= now:
@@ -124,8 +126,10 @@ class Player:
             self.published += 1
         return count
 
-    def _tick(self, start_bag: int, start_wall: float, now: float) -> None:
-        stamp = start_bag + round((now - start_wall) * self.rate * 1e9)
+    def _tick(self, start_bag: int, start_wall: float, now: float, upcoming: int) -> None:
+        """Publish the bag's time [ns] at wall time ``now`` [s], held at ``upcoming`` (the
+        next message's bag time [ns]) while that message is late."""
+        stamp = min(start_bag + round((now - start_wall) * self.rate * 1e9), upcoming)
         self.clock.publish(
             Clock(clock=TimeMsg(sec=stamp // 1_000_000_000, nanosec=stamp % 1_000_000_000))
         )

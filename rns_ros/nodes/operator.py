@@ -188,29 +188,26 @@ class OperatorNode(Node):
             return 0.0
         return (self.get_clock().now() - self._start).nanoseconds * 1e-9
 
-    def _report_waiting(self) -> None:
-        """Every WAIT_REPORT_PERIOD [s] of wall time while waiting: what the profile waits for
-        (a misspelt name in ``subscriber_nodes`` would otherwise wait in silence)."""
-        missing = self.missing_subscriber_nodes()
-        count = self._publisher.get_subscription_count()
-        self.get_logger().info(
-            f"waiting for subscribers of {self._publisher.topic_name}: {count} of "
-            f"min_subscribers {self._min_subscribers}"
-            + (f"; not yet subscribed: {', '.join(missing)}" if missing else ""),
-            throttle_duration_sec=WAIT_REPORT_PERIOD,
-        )
-
-    def _subscribed(self) -> bool:
-        """cmd_twist (motion_force: and force_setpoint) has ``min_subscribers`` subscribers,
-        ``subscriber_nodes`` among those of cmd_twist (a stranger's subscriber, a plot or an
-        echo, is not the one the run waits for)."""
+    def _waiting_for(self) -> str:
+        """What the profile still waits for, "" for nothing: cmd_twist (motion_force: and
+        force_setpoint) to have ``min_subscribers`` subscribers, ``subscriber_nodes`` among
+        those of cmd_twist (a stranger's subscriber, a plot or an echo, is not the one the run
+        waits for)."""
         publishers = (self._publisher, self._force_publisher)
         counted = all(
             publisher.get_subscription_count() >= self._min_subscribers
             for publisher in publishers
             if publisher is not None
         )
-        return counted and not self.missing_subscriber_nodes()
+        missing = self.missing_subscriber_nodes()
+        if counted and not missing:
+            return ""
+        count = self._publisher.get_subscription_count()
+        return (
+            f"subscribers of {self._publisher.topic_name}: {count} of min_subscribers "
+            f"{self._min_subscribers}"
+            + (f"; not yet subscribed: {', '.join(missing)}" if missing else "")
+        )
 
     def missing_subscriber_nodes(self) -> list[str]:
         """The ``subscriber_nodes`` not (yet) subscribed to cmd_twist, sorted."""
@@ -226,8 +223,13 @@ class OperatorNode(Node):
         """The sample of the instant ``now`` (node clock) plus ``lead``, published stamped with
         that instant."""
         if self._start is None:
-            if self._wait and not self._subscribed():
-                self._report_waiting()
+            waiting_for = self._waiting_for() if self._wait else ""
+            if waiting_for:
+                # every WAIT_REPORT_PERIOD of wall time: a misspelt name in subscriber_nodes
+                # would otherwise wait in silence
+                self.get_logger().info(
+                    f"waiting for {waiting_for}", throttle_duration_sec=WAIT_REPORT_PERIOD
+                )
                 if self._lead:
                     # zeros from the first tick on: a controller awaiting the stream waits on
                     # every tick from the first sample it holds, long before the profile starts
